@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs splineviz into ./.venv on Debian/Ubuntu with Python >= 3.11.
+#   ./install.sh          the application
+#   ./install.sh --dev    the application, its tests and the first-party plugins
+# System packages (headless OpenGL, Xvfb for Qt windows, binutils for the PoCL OpenCL
+# compiler, python3-venv) are installed with apt when missing and we are root or have sudo.
+set -euo pipefail
+cd "$(dirname "$0")"
+
+APT_PACKAGES=(python3-venv binutils xvfb xauth libgl1 libegl1 libegl-mesa0 libgl1-mesa-dri
+              libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
+              libxcb-render-util0 libxcb-shape0 libxcb-xinerama0 libxcb-randr0 libdbus-1-3
+              libfontconfig1)
+
+missing=()
+if command -v dpkg-query >/dev/null 2>&1; then
+  for p in "${APT_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+fi
+if [ ${#missing[@]} -gt 0 ]; then
+  SUDO=""
+  [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  if [ -z "$SUDO" ] || command -v sudo >/dev/null 2>&1; then
+    echo "install.sh: apt-get install ${missing[*]}"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  else
+    echo "install.sh: please install these system packages: ${missing[*]}" >&2
+  fi
+fi
+
+PY=${PYTHON:-python3}
+[ -x .venv/bin/python ] || "$PY" -m venv .venv
+.venv/bin/python -m pip install -q --upgrade pip
+target="."
+[ "${1:-}" = "--dev" ] && target=".[dev]"
+.venv/bin/python -m pip install -q -e "$target"
+for plugin in plugins/*/; do
+  if [ -f "$plugin/pyproject.toml" ]; then .venv/bin/python -m pip install -q -e "$plugin"; fi
+done
+echo "install.sh: splineviz installed in .venv"

@@ -1,0 +1,37 @@
+"""splineviz: smooth trivariate spline isosurfaces and high-quality meshes from point clouds.
+
+The public API is imported lazily so that ``import splineviz`` stays cheap and never pulls in
+Qt, VTK or OpenCL before they are needed.
+"""
+
+from importlib import import_module
+
+__version__ = "0.1.0"
+
+# public name -> "module:attribute"
+_LAZY = {
+    "Volume": "splineviz.core.volume:Volume",
+    "VolumeError": "splineviz.core.volume:VolumeError",
+    "PointCloud": "splineviz.core.points:PointCloud",
+    "PointCloudError": "splineviz.core.points:PointCloudError",
+    "build_spline": "splineviz.core.splines:build_spline",
+    "testfunctions": "splineviz.core.testfunctions:",
+}
+
+__all__ = sorted(_LAZY) + ["__version__"]
+
+
+def __getattr__(name):
+    try:
+        target = _LAZY[name]
+    except KeyError:
+        raise AttributeError(f"module 'splineviz' has no attribute {name!r}") from None
+    module_name, _, attr = target.partition(":")
+    module = import_module(module_name)
+    value = getattr(module, attr) if attr else module
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return __all__

@@ -1,0 +1,4 @@
+"""Pure NumPy/SciPy mathematics: Bernstein-Bezier forms, partitions, splines, data model.
+
+Nothing in this package imports Qt, VTK or OpenCL (checked by an import-linter contract).
+"""
