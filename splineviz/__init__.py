@@ -11,6 +11,7 @@ __version__ = "0.1.0"
 # public name -> "module:attribute"
 _LAZY = {
     "Volume": "splineviz.core.volume:Volume",
+    "SplinevizError": "splineviz.core.errors:SplinevizError",
     "VolumeError": "splineviz.core.volume:VolumeError",
     "PointCloud": "splineviz.core.points:PointCloud",
     "PointCloudError": "splineviz.core.points:PointCloudError",

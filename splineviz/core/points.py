@@ -6,8 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from splineviz.core.errors import SplinevizError
 
-class PointCloudError(ValueError):
+
+class PointCloudError(SplinevizError, ValueError):
     """A point set that cannot be used (wrong shape, non-finite values, mismatched normals)."""
 
 

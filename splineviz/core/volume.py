@@ -9,8 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from splineviz.core.errors import SplinevizError
 
-class VolumeError(ValueError):
+
+class VolumeError(SplinevizError, ValueError):
     """A volume that cannot be used (wrong shape, no finite samples, bad spacing)."""
 
 

@@ -1,0 +1,62 @@
+"""The ``splineviz`` command line.
+
+``splineviz [FILE|SESSION]`` opens the viewer; sub-commands (``render``, ``remesh``, ``info``,
+``bench``) are registered in :data:`SUBCOMMANDS` by the package that implements them: each entry
+names a function ``register(subparsers)`` that adds its parser and sets ``func`` (called with the
+parsed arguments, returns an exit code). User errors (:class:`SplinevizError`, ``OSError``)
+are printed as one line on stderr with exit code 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from importlib import import_module
+
+from splineviz import __version__
+from splineviz.core.errors import SplinevizError
+
+# sub-command name -> "module:register_function"
+SUBCOMMANDS: dict[str, str] = {}
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="splineviz",
+        description="Smooth spline isosurfaces of volume data and meshes from point clouds.",
+    )
+    parser.add_argument("--version", action="version", version=f"splineviz {__version__}")
+    sub = parser.add_subparsers(dest="command")
+    for target in SUBCOMMANDS.values():
+        module_name, _, func = target.partition(":")
+        getattr(import_module(module_name), func)(sub)
+    return parser
+
+
+def _viewer_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="splineviz", description="Open the splineviz viewer.")
+    parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
+    parser.add_argument("--iso", type=float, default=None, help="isovalue")
+    parser.add_argument("--model", default="to-quadratic", help="spline model")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        if argv and (argv[0] in SUBCOMMANDS or argv[0] in ("-h", "--help", "--version")):
+            args = _build_parser().parse_args(argv)
+            return int(args.func(args) or 0)
+        args = _viewer_parser().parse_args(argv)
+        from splineviz.viewer import run_viewer
+
+        return int(run_viewer(args) or 0)
+    except (SplinevizError, OSError) as exc:
+        print(f"splineviz: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
