@@ -1,0 +1,277 @@
+"""NumPy reference ray caster for spline isosurfaces (thesis §6.2, done the slow, exact way).
+
+Used to test the OpenCL kernels and as the fallback when no OpenCL device works. It only uses
+the public :class:`~splineviz.core.splines.base.Spline` interface (``evaluate`` and
+``value_gradient``), so it works for every model, including future ones.
+
+Method: each ray is cut to the data box and to the kept side of every clip plane (a convex
+set, so one interval ``[t0, t1]``); ``s(x) - iso`` is sampled densely along it (``step``
+voxels apart); the first sample interval where the sign changes (or a sample that is exactly
+on the surface) brackets the first root, which bisection refines to the resolution of float64.
+A pair of roots closer than ``step`` can be missed; the kernels are exact there, and the tests
+allow for such grazing rays by the hit/miss agreement threshold.
+
+Conventions: world coordinates; images ``(H, W)`` with row 0 at the top; see
+:mod:`splineviz.core.camera`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from splineviz.core.camera import Camera, parse_size
+from splineviz.core.errors import SplinevizError
+
+
+class ClipPlaneError(SplinevizError, ValueError):
+    """Clip planes that are not (origin, normal) pairs with a non-zero normal."""
+
+
+#: Phong parameters of the headlight model shared by the reference and the kernels
+AMBIENT = 0.15
+DIFFUSE = 0.75
+SPECULAR = 0.35
+SHININESS = 24.0
+#: colour of the side the gradient points away from the viewer (for CT: the outside) ...
+FRONT_COLOR = (0.93, 0.78, 0.55)
+#: ... and of the other side (seen through clip planes)
+BACK_COLOR = (0.45, 0.62, 0.92)
+BACKGROUND = (0.10, 0.10, 0.14)
+
+#: bisection steps: enough to shrink any sampled bracket to float64 resolution
+BISECTION_STEPS = 52
+
+
+@dataclass
+class Frame:
+    """One rendered image of an isosurface (DESIGN.md, ``RayCaster.render``).
+
+    Attributes
+    ----------
+    hit : (H, W) bool
+    position : (H, W, 3) float64 world position of the first hit, NaN where no hit
+    normal : (H, W, 3) float64 normalised spline gradient at the hit, NaN where no hit
+    depth : (H, W) float32 OpenGL window depth in [0, 1], 1 where no hit
+    color : (H, W, 4) uint8 shaded RGBA image
+    """
+
+    hit: np.ndarray
+    position: np.ndarray
+    normal: np.ndarray
+    depth: np.ndarray
+    color: np.ndarray
+
+
+def normalize_clip_planes(clip_planes) -> np.ndarray:
+    """Clip planes as a ``(P, 2, 3)`` float64 array of (origin, unit normal).
+
+    A plane keeps the half-space its normal points to: ``dot(x - origin, normal) >= 0``.
+    """
+    planes = list(clip_planes or ())
+    if not planes:
+        return np.zeros((0, 2, 3))
+    try:
+        arr = np.array([np.asarray(p, dtype=np.float64).reshape(2, 3) for p in planes])
+    except (ValueError, TypeError):
+        raise ClipPlaneError(
+            "each clip plane must be an (origin, normal) pair of 3-vectors"
+        ) from None
+    norms = np.linalg.norm(arr[:, 1], axis=1)
+    if not np.all(np.isfinite(arr)) or np.any(norms == 0):
+        raise ClipPlaneError("clip plane origins and normals must be finite, normals non-zero")
+    arr[:, 1] /= norms[:, None]
+    return arr
+
+
+def ray_intervals(origin, directions, bounds, planes) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter interval of each ray inside the box and on the kept side of all planes.
+
+    Parameters
+    ----------
+    origin : (3,) float64
+    directions : (N, 3) float64 (any length; t is in units of it)
+    bounds : ((xmin, xmax), (ymin, ymax), (zmin, zmax))
+    planes : (P, 2, 3) from :func:`normalize_clip_planes`
+
+    Returns
+    -------
+    t0, t1 : (N,) float64; the interval is empty where ``t0 > t1``. ``t0 >= 0``.
+    """
+    d = np.asarray(directions, dtype=np.float64)
+    lo = np.asarray(bounds, dtype=np.float64)[:, 0]
+    hi = np.asarray(bounds, dtype=np.float64)[:, 1]
+    t0 = np.zeros(len(d))
+    t1 = np.full(len(d), np.inf)
+    for a in range(3):
+        da = d[:, a]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ta = (lo[a] - origin[a]) / da
+            tb = (hi[a] - origin[a]) / da
+        par = da == 0
+        inside = (lo[a] <= origin[a]) & (origin[a] <= hi[a])
+        near = np.where(par, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb))
+        far = np.where(par, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb))
+        t0 = np.maximum(t0, near)
+        t1 = np.minimum(t1, far)
+    for p_origin, normal in planes:
+        a0 = float(np.dot(origin - p_origin, normal))  # signed distance of the eye
+        b = d @ normal
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tc = -a0 / b
+        t0 = np.where(b > 0, np.maximum(t0, tc), t0)
+        t1 = np.where(b < 0, np.minimum(t1, tc), t1)
+        blocked = (b == 0) & (a0 < 0)
+        t1 = np.where(blocked, -np.inf, t1)
+    return t0, t1
+
+
+def phong_shade(hit, normal, directions) -> np.ndarray:
+    """Headlight Phong shading of a hit image.
+
+    The light sits at the eye, so light and view direction are both ``-d``; shading is two
+    sided (``|n . d|``). The face colour tells the sides apart: :data:`FRONT_COLOR` where
+    the gradient points away from the viewer (``n . d > 0``), else :data:`BACK_COLOR`.
+
+    Parameters
+    ----------
+    hit : (H, W) bool
+    normal : (H, W, 3) unit normals (ignored where not hit)
+    directions : (H, W, 3) unit ray directions
+
+    Returns
+    -------
+    (H, W, 4) uint8 RGBA, opaque.
+    """
+    h, w = hit.shape
+    ndl = np.einsum("hwk,hwk->hw", np.nan_to_num(normal), directions)
+    cos = np.abs(ndl)
+    base = np.where((ndl > 0)[..., None], np.asarray(FRONT_COLOR), np.asarray(BACK_COLOR))
+    rgb = base * (AMBIENT + DIFFUSE * cos)[..., None] + (SPECULAR * cos**SHININESS)[..., None]
+    rgb = np.where(hit[..., None], rgb, np.asarray(BACKGROUND))
+    out = np.empty((h, w, 4), dtype=np.uint8)
+    out[..., :3] = np.rint(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
+    out[..., 3] = 255
+    return out
+
+
+def first_roots(spline, origin, directions, t0, t1, isovalue, step_t):
+    """First root of ``s(origin + t d) - iso`` in ``[t0, t1]`` for each ray.
+
+    Parameters
+    ----------
+    spline : Spline
+    origin : (3,) float64
+    directions : (N, 3) float64
+    t0, t1 : (N,) float64 intervals (empty where ``t0 > t1``)
+    isovalue : float
+    step_t : (N,) float64 sample spacing in units of t
+
+    Returns
+    -------
+    (N,) float64 ray parameter of the first root, NaN where there is none.
+    """
+    n = len(directions)
+    result = np.full(n, np.nan)
+    alive = np.flatnonzero(t0 <= t1)
+    if alive.size == 0:
+        return result
+    batch = 32
+    # value at the last sample of the previous batch of each live ray
+    t_prev = t0[alive].copy()
+    g_prev = spline.evaluate(origin + t_prev[:, None] * directions[alive]) - isovalue
+    on = g_prev == 0
+    result[alive[on]] = t_prev[on]
+    keep = ~on
+    alive, t_prev, g_prev = alive[keep], t_prev[keep], g_prev[keep]
+    k0 = 1
+    while alive.size:
+        ks = np.arange(k0, k0 + batch, dtype=np.float64)
+        t = np.minimum(t0[alive, None] + ks[None, :] * step_t[alive, None], t1[alive, None])
+        pts = origin + t[..., None] * directions[alive, None, :]
+        g = (spline.evaluate(pts.reshape(-1, 3)) - isovalue).reshape(t.shape)
+        left = np.concatenate([g_prev[:, None], g[:, :-1]], axis=1)
+        change = (g == 0) | ((left < 0) != (g < 0))
+        found = change.any(axis=1)
+        first = np.argmax(change, axis=1)
+        rows = np.flatnonzero(found)
+        if rows.size:
+            fk = first[rows]
+            exact = g[rows, fk] == 0
+            t_hi = t[rows, fk]
+            t_lo = np.where(fk > 0, t[rows, np.maximum(fk - 1, 0)], t_prev[rows])
+            g_lo = left[rows, fk]
+            roots = _bisect(spline, origin, directions[alive[rows]], t_lo, t_hi, g_lo,
+                            isovalue)
+            result[alive[rows]] = np.where(exact, t_hi, roots)
+        done = found | (t[:, -1] >= t1[alive])
+        t_prev, g_prev = t[~done, -1], g[~done, -1]
+        alive = alive[~done]
+        k0 += batch
+    return result
+
+
+def _bisect(spline, origin, d, t_lo, t_hi, g_lo, isovalue):
+    """Bisection on brackets with ``g(t_lo) = g_lo`` and a sign change in ``[t_lo, t_hi]``."""
+    neg_lo = g_lo < 0
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (t_lo + t_hi)
+        gm = spline.evaluate(origin + mid[:, None] * d) - isovalue
+        zero = gm == 0
+        same = ((gm < 0) == neg_lo) & ~zero
+        t_lo = np.where(same, mid, t_lo)
+        t_hi = np.where(same, t_hi, mid)
+        t_lo = np.where(zero, mid, t_lo)
+    return 0.5 * (t_lo + t_hi)
+
+
+def reference_raycast(spline, camera: Camera, size, isovalue: float, clip_planes=(),
+                      step: float = 0.25) -> Frame:
+    """Render the isosurface ``s = isovalue`` of ``spline`` by dense sampling (see module).
+
+    Parameters
+    ----------
+    spline : Spline
+        Any model; only ``evaluate``, ``value_gradient``, ``bounds`` and ``volume.spacing``
+        are used.
+    camera : Camera
+    size : (width, height) or "WxH"
+    isovalue : float
+    clip_planes : sequence of (origin, normal)
+        Each keeps the side its normal points to.
+    step : float
+        Sample spacing along a ray in voxels (of the smallest grid spacing).
+
+    Returns
+    -------
+    Frame
+    """
+    w, h = parse_size(size)
+    if not step > 0:
+        raise ValueError(f"step must be positive, got {step}")
+    planes = normalize_clip_planes(clip_planes)
+    origin, dirs = camera.rays((w, h))
+    d = dirs.reshape(-1, 3)
+    bounds = np.asarray(spline.bounds, dtype=np.float64)
+    t0, t1 = ray_intervals(origin, d, bounds, planes)
+    # step voxels measured in index space, whatever the spacing per axis
+    spacing = np.asarray(spline.volume.spacing, dtype=np.float64)
+    step_t = step / np.linalg.norm(d / spacing, axis=1)
+    t = first_roots(spline, origin, d, t0, t1, float(isovalue), step_t)
+    hit = np.isfinite(t)
+    position = np.full((len(d), 3), np.nan)
+    normal = np.full((len(d), 3), np.nan)
+    position[hit] = origin + t[hit, None] * d[hit]
+    if hit.any():
+        _, grad = spline.value_gradient(position[hit])
+        norm = np.linalg.norm(grad, axis=1, keepdims=True)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            normal[hit] = np.where(norm > 0, grad / norm, 0.0)
+    depth = np.ones(len(d), dtype=np.float32)
+    clip_range = camera.fit_clipping_range(bounds)
+    depth[hit] = np.clip(camera.window_depth(position[hit], clip_range), 0.0, 1.0)
+    hit = hit.reshape(h, w)
+    normal = normal.reshape(h, w, 3)
+    color = phong_shade(hit, normal, dirs)
+    return Frame(hit, position.reshape(h, w, 3), normal, depth.reshape(h, w), color)
