@@ -49,7 +49,7 @@ REFERENCE_TET.flags.writeable = False
 
 
 def _frame(axis_f: int, sign_f: int, axis_t: int, sign_t: int) -> np.ndarray:
-    """Proper rotation with columns (n_F, n_R, n_T): n_F = sign_f e_axis_f, n_T = sign_t e_axis_t."""
+    """Proper rotation, columns (n_F, n_R, n_T): n_F = sign_f e_axis_f, n_T = sign_t e_axis_t."""
     n_f = sign_f * np.eye(3)[axis_f]
     n_t = sign_t * np.eye(3)[axis_t]
     # right-handed reference frame: e_y = e_z x e_x, so n_R = n_T x n_F keeps det = +1
