@@ -10,6 +10,8 @@ from splineviz.core.volume import Volume
 MODELS = {
     "trilinear": "splineviz.core.splines.trilinear:TrilinearSpline",
     "to-quadratic": "splineviz.core.splines.to_quadratic:TOQuadraticSpline",
+    "cubic-c1": "splineviz.core.splines.cubic_c1:CubicC1Spline",
+    "super-quadratic": "splineviz.core.splines.super_quadratic:SuperQuadraticSpline",
 }
 
 
