@@ -1,0 +1,36 @@
+"""Readers, writers and session files (no Qt, no rendering).
+
+Public entry points: :func:`read_volume`, :func:`read_points`, :func:`write_volume`,
+:func:`write_mesh`, :func:`read_mesh`, :func:`write_screenshot`, :func:`describe`, and the
+session API :func:`load_session` / :func:`save_session`. Formats live in a registry
+(:func:`register_format`) that plugins extend.
+"""
+
+from splineviz.io.errors import (  # noqa: F401
+    CorruptFileError,
+    DataFileNotFoundError,
+    DataSizeError,
+    DataTooLargeError,
+    FileFormatError,
+    InvalidDataError,
+    PluginError,
+    SessionError,
+    SessionPathError,
+    SessionVersionError,
+    UnknownFormatError,
+    WriteError,
+)
+from splineviz.io.meshes import (  # noqa: F401
+    read_image,
+    read_mesh,
+    write_mesh,
+    write_screenshot,
+)
+from splineviz.io.points import PointData, load_point_data, read_points  # noqa: F401
+from splineviz.io.registry import FORMATS, Format, find_format, register_format  # noqa: F401
+from splineviz.io.volumes import (  # noqa: F401
+    VolumeData,
+    load_volume_data,
+    read_volume,
+    write_volume,
+)

@@ -1,0 +1,118 @@
+"""VTK plumbing for the readers: error capture and image-to-array conversion.
+
+VTK reports problems through its output window instead of raising. :func:`run_vtk` swaps in
+a string output window for the duration of one pipeline update and turns any error text into
+a :class:`~splineviz.io.errors.CorruptFileError`, so a damaged file never prints noise and
+never passes silently.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import threading
+
+import numpy as np
+
+_LOCK = threading.Lock()  # the output window is process-global
+
+
+def _vtk():
+    from vtkmodules import vtkCommonCore
+
+    return vtkCommonCore
+
+
+@contextlib.contextmanager
+def captured_vtk_output():
+    """Collect everything VTK would print; yields a list that receives the text on exit."""
+    core = _vtk()
+    sink: list[str] = []
+    with _LOCK:
+        old = core.vtkOutputWindow.GetInstance()
+        win = core.vtkStringOutputWindow()
+        core.vtkOutputWindow.SetInstance(win)
+        try:
+            yield sink
+        finally:
+            core.vtkOutputWindow.SetInstance(old)
+            sink.append(win.GetOutput())
+
+
+def first_vtk_error(text: str) -> str | None:
+    """The first error message in VTK output text, stripped of file/line noise."""
+    for block in re.split(r"\n(?=(?:ERROR|Generic Warning|Warning))", text or ""):
+        if not block.startswith("ERROR"):
+            continue
+        lines = [ln.strip() for ln in block.splitlines()[1:] if ln.strip()]
+        msg = " ".join(lines) if lines else block
+        msg = re.sub(r"^\S+ \(0x[0-9a-fA-F]+\):\s*", "", msg)
+        return msg.rstrip(".") or "unspecified VTK error"
+    return None
+
+
+def run_vtk(algorithm, name: str, *, information_only: bool = False):
+    """Update a VTK algorithm; raise CorruptFileError on any error it reports.
+
+    Parameters
+    ----------
+    algorithm : vtkAlgorithm
+    name : str
+        File name for the message.
+    information_only : bool
+        Only run ``UpdateInformation`` (reads the header, allocates nothing).
+    """
+    from splineviz.io.errors import CorruptFileError
+
+    core = _vtk()
+    seen: list[str] = []
+
+    def on_error(obj, event):  # observers stop VTK from printing the message itself
+        seen.append(event)
+
+    tags = [algorithm.AddObserver(core.vtkCommand.ErrorEvent, on_error)]
+    try:
+        with captured_vtk_output() as out:
+            ok = algorithm.UpdateInformation() if information_only else algorithm.Update()
+    finally:
+        for t in tags:
+            algorithm.RemoveObserver(t)
+    msg = first_vtk_error(out[0] if out else "")
+    failed = ok == 0 if isinstance(ok, int) else False
+    if msg or seen or failed:
+        detail = msg or "the reader reported an error"
+        raise CorruptFileError(f"{name} cannot be read: {detail}")
+
+
+def image_to_array(image, name: str):
+    """(nx, ny, nz) NumPy view of the active scalars of a vtkImageData.
+
+    VTK stores samples x-fastest; reshaping to (nz, ny, nx) and transposing gives the
+    ``data[i, j, k]`` convention of :class:`~splineviz.Volume` without a copy.
+    """
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    from splineviz.io.errors import InvalidDataError
+
+    pd = image.GetPointData()
+    arr = pd.GetScalars()
+    if arr is None:
+        for i in range(pd.GetNumberOfArrays()):
+            cand = pd.GetArray(i)
+            if cand is not None and cand.GetNumberOfComponents() == 1:
+                arr = cand
+                break
+    if arr is None:
+        raise InvalidDataError(f"{name} holds no scalar point data")
+    if arr.GetNumberOfComponents() != 1:
+        raise InvalidDataError(
+            f"{name} has {arr.GetNumberOfComponents()} components per sample; only scalar "
+            "volumes can be shown as isosurfaces"
+        )
+    nx, ny, nz = image.GetDimensions()
+    flat = vtk_to_numpy(arr)
+    if flat.size != nx * ny * nz:
+        raise InvalidDataError(
+            f"{name} has {flat.size} samples for dimensions {(nx, ny, nz)}"
+        )
+    return np.asarray(flat).reshape(nz, ny, nx).transpose(2, 1, 0)

@@ -1,0 +1,61 @@
+"""Typed, user-facing errors of the ``io`` layer.
+
+Every problem with a file, a format or a session is raised as one of these
+:class:`~splineviz.core.errors.SplinevizError` subclasses with a one-sentence message, so the
+CLI prints one line and the GUI shows one message box. The classes also derive from the
+matching built-in exception (``ValueError``, ``FileNotFoundError``, ``MemoryError``) so that
+generic handlers keep working.
+"""
+
+from __future__ import annotations
+
+from splineviz.core.errors import SplinevizError
+
+
+class FileFormatError(SplinevizError, ValueError):
+    """A file whose format is unknown, unsupported or malformed."""
+
+
+class UnknownFormatError(FileFormatError):
+    """No registered format matches the file's suffix or content."""
+
+
+class CorruptFileError(FileFormatError):
+    """The file claims a known format but its header or payload is broken or truncated."""
+
+
+class DataSizeError(CorruptFileError):
+    """The header's dimensions and sample type do not match the size of the payload."""
+
+
+class DataTooLargeError(SplinevizError, MemoryError):
+    """The data described by a header would not fit in the memory budget."""
+
+
+class InvalidDataError(SplinevizError, ValueError):
+    """The file reads but its content cannot be used (empty, degenerate, NaN/Inf samples)."""
+
+
+class DataFileNotFoundError(SplinevizError, FileNotFoundError):
+    """A data file (or a file a header refers to) does not exist or is not a regular file."""
+
+
+class WriteError(SplinevizError, OSError):
+    """Output could not be written; no partial file is left behind."""
+
+
+class SessionError(SplinevizError, ValueError):
+    """A session file that is malformed, hostile or of an unknown schema version."""
+
+
+class SessionVersionError(SessionError):
+    """The session's schema version is newer than this program or not a known one."""
+
+
+class SessionPathError(SessionError):
+    """A data path in a session is not allowed (absolute outside the session folder, special
+    file) or cannot be found even after re-pointing."""
+
+
+class PluginError(SplinevizError, RuntimeError):
+    """A plugin could not be loaded or registered something invalid."""

@@ -1,0 +1,166 @@
+"""Mesh and screenshot writers (and a mesh reader for sessions).
+
+Meshes are ``pyvista.PolyData`` at this boundary (DESIGN.md); a ``(vertices (V, 3),
+faces (F, 3) int)`` pair is accepted too. Every write goes to a temporary file beside the
+target and is renamed onto it only when complete.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from splineviz.io import _vtk
+from splineviz.io._util import atomic_output, regular_input
+from splineviz.io.errors import CorruptFileError, InvalidDataError, WriteError
+from splineviz.io.registry import find_format, register_format
+
+
+def as_polydata(mesh):
+    """``pyvista.PolyData`` from a PolyData or a ``(vertices, faces)`` pair of triangles."""
+    import pyvista as pv
+
+    if isinstance(mesh, pv.PolyData):
+        return mesh
+    try:
+        verts, faces = mesh
+        verts = np.asarray(verts, dtype=np.float64)
+        faces = np.asarray(faces)
+    except (TypeError, ValueError):
+        raise InvalidDataError("a mesh must be a pyvista.PolyData or (vertices, faces)") from None
+    if verts.ndim != 2 or verts.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise InvalidDataError(f"mesh arrays must be (V, 3) and (F, 3), got {verts.shape} "
+                               f"and {faces.shape}")
+    if not np.issubdtype(faces.dtype, np.integer):
+        raise InvalidDataError("mesh faces must be integer vertex indices")
+    if faces.size and (faces.min() < 0 or faces.max() >= len(verts)):
+        raise InvalidDataError("mesh faces refer to vertices that do not exist")
+    if not np.all(np.isfinite(verts)):
+        raise InvalidDataError("mesh vertices contain NaN or infinite coordinates")
+    cells = np.hstack([np.full((len(faces), 1), 3), faces]).astype(np.int64).ravel()
+    return pv.PolyData(verts, cells)
+
+
+def _vtk_writer(writer_cls, *, binary=True):
+    def write(path: Path, mesh) -> None:
+        poly = as_polydata(mesh)
+        with atomic_output(path) as tmp:
+            w = writer_cls()
+            w.SetFileName(str(tmp))
+            w.SetInputData(poly)
+            if binary and hasattr(w, "SetFileTypeToBinary"):
+                w.SetFileTypeToBinary()
+            with _vtk.captured_vtk_output() as out:
+                ok = w.Write()
+            err = _vtk.first_vtk_error(out[0])
+            if not ok or err:
+                raise WriteError(f"cannot write {path.name}: {err or 'the writer failed'}")
+
+    return write
+
+
+def _writers():
+    from vtkmodules.vtkIOGeometry import vtkOBJWriter, vtkSTLWriter
+    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+
+    return {"ply": _vtk_writer(vtkPLYWriter), "obj": _vtk_writer(vtkOBJWriter, binary=False),
+            "stl": _vtk_writer(vtkSTLWriter), "vtp": _vtk_writer(vtkXMLPolyDataWriter,
+                                                                  binary=False)}
+
+
+def _lazy(name):
+    def write(path, mesh):
+        return _writers()[name](path, mesh)
+
+    return write
+
+
+def _read_mesh_pv(path: Path):
+    """Any mesh pyvista/VTK reads (PLY, OBJ, STL, VTP, legacy VTK)."""
+    import pyvista as pv
+
+    with _vtk.captured_vtk_output() as out:
+        try:
+            mesh = pv.read(str(path))
+        except (ValueError, OSError, KeyError) as exc:
+            raise CorruptFileError(f"{path.name} is not a readable mesh: {exc}") from None
+    err = _vtk.first_vtk_error(out[0])
+    if err:
+        raise CorruptFileError(f"{path.name} cannot be read: {err}")
+    if not isinstance(mesh, pv.PolyData):
+        mesh = mesh.extract_surface()
+    if mesh.n_points == 0:
+        raise InvalidDataError(f"{path.name} holds no vertices")
+    return mesh
+
+
+for _name, _exts, _desc in (("ply", (".ply",), "Stanford PLY (binary)"),
+                            ("obj", (".obj",), "Wavefront OBJ"),
+                            ("stl", (".stl",), "STL (binary)"),
+                            ("vtp", (".vtp",), "VTK XML PolyData")):
+    register_format(_name, _exts, _read_mesh_pv, _lazy(_name), kind="mesh", description=_desc)
+
+
+def _write_png(path: Path, image) -> None:
+    from PIL import Image
+
+    arr = np.asarray(image)
+    if arr.ndim != 3 or arr.shape[2] not in (3, 4) or arr.dtype != np.uint8 or 0 in arr.shape:
+        raise InvalidDataError(f"a screenshot must be an (H, W, 3|4) uint8 image, got "
+                               f"{arr.shape} {arr.dtype}")
+    with atomic_output(path) as tmp:
+        Image.fromarray(np.ascontiguousarray(arr)).save(str(tmp), format="PNG")
+
+
+def _read_png(path: Path):
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as im:
+            return np.asarray(im.convert("RGBA"))
+    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        raise CorruptFileError(f"{path.name} is not a readable PNG image: {exc}") from None
+
+
+register_format("png", (".png",), _read_png, _write_png, kind="image",
+                sniff=lambda h: h.startswith(b"\x89PNG"), description="PNG image")
+
+
+def write_mesh(path, mesh, *, format=None) -> Path:
+    """Write a triangle mesh as PLY, OBJ, STL or VTP, atomically.
+
+    Parameters
+    ----------
+    path : path-like
+    mesh : pyvista.PolyData or (vertices (V, 3), faces (F, 3))
+    format : str, optional
+
+    Returns
+    -------
+    Path
+    """
+    p = Path(os.fspath(path)).expanduser()
+    find_format(p, "mesh", mode="write", name=format).writer(p, mesh)
+    return p
+
+
+def read_mesh(path, *, format=None):
+    """Read a mesh file -> ``pyvista.PolyData``."""
+    p = regular_input(path)
+    return find_format(p, "mesh", name=format).reader(p)
+
+
+def write_screenshot(path, image) -> Path:
+    """Write an (H, W, 3|4) uint8 image (rows top to bottom) as PNG, atomically."""
+    p = Path(os.fspath(path)).expanduser()
+    find_format(p, "image", mode="write").writer(p, image)
+    return p
+
+
+def read_image(path) -> np.ndarray:
+    """Read a PNG -> (H, W, 4) uint8."""
+    p = regular_input(path)
+    return find_format(p, "image").reader(p)

@@ -1,0 +1,695 @@
+"""Volume readers and writers.
+
+Convention: every reader returns a :class:`VolumeData` whose ``data`` is indexed
+``data[i, j, k]`` at world point ``origin + (i*sx, j*sy, k*sz)`` (x fastest in the file),
+in the file's own sample type; :func:`read_volume` turns it into a float32
+:class:`~splineviz.Volume`. Readers are built on VTK (VTI, legacy VTK, SLC, MetaImage,
+multi-file NRRD), pynrrd (NRRD/NHDR), nibabel (NIfTI), mrcfile (MRC/CCP4) and pydicom (DICOM
+series). Every header is checked against the memory budget *before* the payload is
+allocated, and against the payload size where the payload is uncompressed.
+"""
+
+from __future__ import annotations
+
+import gzip
+import os
+import re
+import warnings
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from splineviz.core.volume import Volume, VolumeError
+from splineviz.io import _vtk
+from splineviz.io._util import (
+    MIN_SAMPLES_PER_AXIS,
+    as_float_triplet,
+    atomic_output,
+    check_volume_size,
+    regular_input,
+)
+from splineviz.io.errors import (
+    CorruptFileError,
+    DataFileNotFoundError,
+    DataSizeError,
+    FileFormatError,
+    InvalidDataError,
+)
+from splineviz.io.registry import find_format, register_format
+
+
+@dataclass
+class VolumeData:
+    """A volume as stored in a file, before conversion to float32.
+
+    Attributes
+    ----------
+    data : (nx, ny, nz) ndarray
+        Samples in the file's dtype (a view may be non-contiguous).
+    spacing, origin : (3,) tuple of float
+    format : str
+        Name of the format that read it.
+    meta : dict
+        Format-specific extras (e.g. ``{"axis_order": "zxy"}`` for MRC).
+    """
+
+    data: np.ndarray
+    spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    format: str = ""
+    meta: dict = field(default_factory=dict)
+
+
+# ---------------------------------------------------------------------------- VTK-based
+def _vtk_itemsize(reader) -> int:
+    """Bytes per sample announced in a VTK reader's pipeline information (8 if unknown)."""
+    from vtkmodules.util.numpy_support import get_vtk_to_numpy_typemap
+    from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkDataSetAttributes
+
+    info = reader.GetOutputInformation(0)
+    field_info = vtkDataObject.GetActiveFieldInformation(
+        info, vtkDataObject.FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes.SCALARS
+    )
+    if field_info is not None and field_info.Has(vtkDataObject.FIELD_ARRAY_TYPE()):
+        typ = field_info.Get(vtkDataObject.FIELD_ARRAY_TYPE())
+        ncomp = 1
+        if field_info.Has(vtkDataObject.FIELD_NUMBER_OF_COMPONENTS()):
+            ncomp = max(1, field_info.Get(vtkDataObject.FIELD_NUMBER_OF_COMPONENTS()))
+        dt = get_vtk_to_numpy_typemap().get(typ)
+        if dt is not None:
+            return np.dtype(dt).itemsize * ncomp
+    return 8
+
+
+def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
+    from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
+
+    reader.SetFileName(str(path))
+    _vtk.run_vtk(reader, path.name, information_only=True)
+    info = reader.GetOutputInformation(0)
+    ext = info.Get(vtkStreamingDemandDrivenPipeline.WHOLE_EXTENT()) if info else None
+    if not ext or len(ext) != 6:
+        raise CorruptFileError(f"{path.name} has no readable image extent in its header")
+    dims = [ext[2 * a + 1] - ext[2 * a] + 1 for a in range(3)]
+    if min(dims) < 1:
+        raise InvalidDataError(f"{path.name} announces an empty grid of {tuple(dims)} samples")
+    check_volume_size(dims, _vtk_itemsize(reader), path.name)
+    _vtk.run_vtk(reader, path.name)
+    image = reader.GetOutput()
+    got = image.GetDimensions()
+    if tuple(got) != tuple(dims) or image.GetNumberOfPoints() == 0:
+        raise CorruptFileError(
+            f"{path.name} announces {tuple(dims)} samples but only {tuple(got)} could be read"
+        )
+    data = _vtk.image_to_array(image, path.name)
+    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt)
+
+
+def _read_vti(path: Path) -> VolumeData:
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
+    return _read_with_vtk(vtkXMLImageDataReader(), path, "vti")
+
+
+def _read_legacy_vtk(path: Path) -> VolumeData:
+    from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader
+
+    head = path.read_bytes()[:1024] if path.stat().st_size < 1024 else _head(path, 1024)
+    if b"STRUCTURED_POINTS" not in head.upper():
+        raise FileFormatError(
+            f"{path.name} is a legacy VTK file but not STRUCTURED_POINTS image data"
+        )
+    reader = vtkStructuredPointsReader()
+    reader.ReadAllScalarsOn()
+    return _read_with_vtk(reader, path, "vtk")
+
+
+def _read_slc(path: Path) -> VolumeData:
+    from vtkmodules.vtkIOImage import vtkSLCReader
+
+    reader = vtkSLCReader()
+    reader.SetFileName(str(path))
+    if not reader.CanReadFile(str(path)):
+        raise CorruptFileError(f"{path.name} does not have a valid SLC header")
+    return _read_with_vtk(reader, path, "slc")
+
+
+_MHD_KEY = re.compile(rb"^\s*(\w+)\s*=\s*(.*?)\s*$", re.M)
+
+
+def _read_metaimage(path: Path) -> VolumeData:
+    """MetaImage (.mhd + .raw/.zraw, or .mha) through VTK's vtkMetaImageReader.
+
+    The header is looked at once before VTK reads it to catch what VTK would silently accept:
+    a missing data file and, for uncompressed payloads, a size that does not match DimSize.
+    """
+    from vtkmodules.vtkIOImage import vtkMetaImageReader
+
+    head = _head(path, 65536)
+    keys = {k.decode("latin-1").lower(): v.decode("latin-1")
+            for k, v in _MHD_KEY.findall(head.split(b"ElementDataFile")[0] + b"\n")}
+    m = re.search(rb"ElementDataFile\s*=\s*(.*?)\s*$", head, re.M)
+    if m is None:
+        raise CorruptFileError(f"{path.name} has no ElementDataFile entry")
+    datafile = m.group(1).decode("latin-1")
+    ndims = keys.get("ndims", "3").strip()
+    if ndims != "3":
+        raise InvalidDataError(f"{path.name} is a {ndims}-D MetaImage, not a volume")
+    if datafile.upper() not in ("LOCAL", "LIST") and "%" not in datafile:
+        payload = path.parent / datafile
+        regular_input(payload)
+        compressed = keys.get("compresseddata", "false").strip().lower() == "true"
+        try:
+            dims = [int(v) for v in keys.get("dimsize", "").split()]
+        except ValueError:
+            raise CorruptFileError(f"{path.name} has a malformed DimSize") from None
+        etype = keys.get("elementtype", "").strip().upper()
+        size = _MET_SIZES.get(etype)
+        if len(dims) == 3 and size and not compressed:
+            check_volume_size(dims, size, path.name)
+            need = dims[0] * dims[1] * dims[2] * size
+            have = payload.stat().st_size
+            if have < need:
+                raise DataSizeError(
+                    f"{payload.name} holds {have} bytes but DimSize {tuple(dims)} of {etype} "
+                    f"needs {need}"
+                )
+    return _read_with_vtk(vtkMetaImageReader(), path, "metaimage")
+
+
+_MET_SIZES = {"MET_UCHAR": 1, "MET_CHAR": 1, "MET_USHORT": 2, "MET_SHORT": 2, "MET_UINT": 4,
+              "MET_INT": 4, "MET_FLOAT": 4, "MET_DOUBLE": 8, "MET_ULONG": 8, "MET_LONG": 8,
+              "MET_ULONG_LONG": 8, "MET_LONG_LONG": 8}
+
+
+# ---------------------------------------------------------------------------- NRRD
+def _read_nrrd(path: Path) -> VolumeData:
+    """NRRD/NHDR with pynrrd; for multi-file data (``data file: name.%d 1 93 1`` or
+    ``LIST``), which ``nrrd.read`` does not handle, each slice file is decoded with pynrrd's
+    ``read_data``."""
+    import nrrd
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            header = nrrd.read_header(str(path))
+    except (nrrd.NRRDError, ValueError, TypeError, KeyError, UnicodeDecodeError) as exc:
+        raise CorruptFileError(f"{path.name} has a malformed NRRD header: {exc}") from None
+    sizes = [int(s) for s in np.atleast_1d(header.get("sizes", []))]
+    if len(sizes) != 3:
+        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume")
+    try:
+        itemsize = np.dtype(nrrd.reader._determine_datatype(header)).itemsize
+    except Exception:  # noqa: BLE001 - an unknown type is reported by the read below
+        itemsize = 8
+    check_volume_size(sizes, itemsize, path.name)
+    datafile = str(header.get("data file", header.get("datafile", "")))
+    if datafile and (datafile.upper().startswith("LIST") or "%" in datafile):
+        data = _read_nrrd_multifile(path, header, datafile, sizes)
+    else:
+        data, header = _read_nrrd_single(path, datafile)
+    spacing = (1.0, 1.0, 1.0)
+    if "spacings" in header:
+        spacing = tuple(float(s) for s in header["spacings"])
+    elif "space directions" in header:
+        dirs = np.asarray(header["space directions"], dtype=float)
+        spacing = tuple(float(v) for v in np.linalg.norm(dirs, axis=1))
+    origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
+    return VolumeData(data, spacing, origin, "nrrd")
+
+
+def _nrrd_file_list(path: Path, datafile: str) -> list[str]:
+    """File names of a multi-file NRRD: ``<printf pattern> <min> <max> <step> [<subdim>]`` or
+    ``LIST [<subdim>]`` followed by one name per line (NRRD0004 "data file")."""
+    parts = datafile.split()
+    if parts[0].upper() == "LIST":
+        text = path.read_bytes().decode("latin-1")
+        after = re.split(r"^data ?file:[^\n]*\n", text, maxsplit=1, flags=re.M)
+        names = [ln.strip() for ln in after[-1].splitlines() if ln.strip()] if len(after) == 2 \
+            else []
+        subdim = parts[1] if len(parts) > 1 else None
+    else:
+        if len(parts) < 4:
+            raise CorruptFileError(f"{path.name} has a malformed multi-file 'data file' entry")
+        try:
+            lo, hi, step = int(parts[1]), int(parts[2]), int(parts[3])
+            if step == 0 or (hi - lo) * step < 0:
+                raise ValueError
+            names = [parts[0] % i for i in range(lo, hi + (1 if step > 0 else -1), step)]
+        except (ValueError, TypeError):
+            raise CorruptFileError(f"{path.name} has a malformed file-name pattern "
+                                   f"{datafile!r}") from None
+        subdim = parts[4] if len(parts) > 4 else None
+    if subdim is not None and subdim != "2":
+        raise FileFormatError(f"{path.name} splits its data into {subdim}-D files; only "
+                              "one slice per file is supported")
+    return names
+
+
+def _read_nrrd_multifile(path: Path, header, datafile: str, sizes) -> np.ndarray:
+    """One 2-D slice per file, each read by pynrrd's own payload decoder (raw, gzip, ...)."""
+    import nrrd
+
+    names = _nrrd_file_list(path, datafile)
+    if len(names) != sizes[2]:
+        raise DataSizeError(f"{path.name} lists {len(names)} slice files for {sizes[2]} slices")
+    out = None
+    for k, name in enumerate(names):
+        slice_path = regular_input(path.parent / name)
+        h = {key: val for key, val in header.items()
+             if key in ("type", "encoding", "endian", "line skip", "byte skip", "lineskip",
+                        "byteskip")}
+        h.update(dimension=2, sizes=np.asarray(sizes[:2]), **{"data file": str(slice_path)})
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                sl = nrrd.read_data(h, None, str(path), index_order="F")
+        except (nrrd.NRRDError, ValueError, EOFError, OSError, zlib.error) as exc:
+            raise CorruptFileError(f"slice file {name} of {path.name} is damaged or "
+                                   f"truncated: {exc}") from None
+        if out is None:
+            out = np.empty((sizes[0], sizes[1], sizes[2]), dtype=sl.dtype)
+        out[:, :, k] = sl.reshape(sizes[0], sizes[1], order="F") if sl.ndim != 2 else sl
+    return out
+
+
+def _read_nrrd_single(path: Path, datafile: str):
+    import nrrd
+
+    if datafile:
+        regular_input(path.parent / datafile)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return nrrd.read(str(path), index_order="F")
+    except FileNotFoundError as exc:
+        raise DataFileNotFoundError(f"{path.name} refers to a missing data file: "
+                                    f"{exc.filename}") from None
+    except (nrrd.NRRDError, ValueError, EOFError, OSError, zlib.error) as exc:
+        raise CorruptFileError(f"{path.name} has a damaged or truncated payload: {exc}") from None
+
+
+def _write_nrrd(path: Path, vol: Volume) -> None:
+    import nrrd
+
+    header = {"space dimension": 3, "space directions": np.diag(vol.spacing),
+              "space origin": np.asarray(vol.origin), "kinds": ["domain"] * 3,
+              "encoding": "gzip"}
+    with atomic_output(path) as tmp:
+        nrrd.write(str(tmp), np.asarray(vol.data), header, index_order="F")
+
+
+def _write_vti(path: Path, vol: Volume) -> None:
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+
+    image = vtkImageData()
+    image.SetDimensions(*vol.shape)
+    image.SetSpacing(*vol.spacing)
+    image.SetOrigin(*vol.origin)
+    flat = np.ascontiguousarray(np.asarray(vol.data).ravel(order="F"))  # x fastest
+    arr = numpy_to_vtk(flat, deep=True)
+    arr.SetName("scalars")
+    image.GetPointData().SetScalars(arr)
+    with atomic_output(path) as tmp:
+        writer = vtkXMLImageDataWriter()
+        writer.SetFileName(str(tmp))
+        writer.SetInputData(image)
+        writer.SetCompressorTypeToZLib()
+        writer.SetDataModeToAppended()
+        with _vtk.captured_vtk_output() as out:
+            ok = writer.Write()
+        if not ok or _vtk.first_vtk_error(out[0]):
+            from splineviz.io.errors import WriteError
+
+            raise WriteError(f"cannot write {path.name}: {_vtk.first_vtk_error(out[0])}")
+
+
+# ---------------------------------------------------------------------------- NIfTI
+def _read_nifti(path: Path) -> VolumeData:
+    """NIfTI-1/2 with nibabel, reoriented to the closest RAS+ axes so that world axes match
+    array axes; spacing = voxel sizes, origin = the affine's translation. A residual
+    rotation (oblique scans) is recorded in ``meta["affine"]`` but not applied."""
+    import nibabel as nib
+    from nibabel.filebasedimages import ImageFileError
+
+    try:
+        img = nib.load(str(path))
+    except (ImageFileError, nib.spatialimages.HeaderDataError, ValueError, OSError,
+            EOFError, zlib.error) as exc:
+        raise CorruptFileError(f"{path.name} is not a readable NIfTI file: {exc}") from None
+    shape = tuple(int(n) for n in img.shape)
+    while len(shape) > 3 and shape[-1] == 1:
+        shape = shape[:-1]
+    if len(shape) != 3:
+        raise InvalidDataError(f"{path.name} has shape {tuple(img.shape)}, not a 3-D volume")
+    check_volume_size(shape, img.get_data_dtype().itemsize, path.name)
+    try:
+        img = nib.as_closest_canonical(img)
+        data = np.asanyarray(img.dataobj).reshape(img.shape[:3])
+    except (ValueError, OSError, EOFError, zlib.error) as exc:
+        raise CorruptFileError(f"{path.name} has a damaged or truncated payload: {exc}") from None
+    zooms = tuple(float(z) for z in img.header.get_zooms()[:3])
+    origin = tuple(float(v) for v in img.affine[:3, 3])
+    return VolumeData(data, zooms, origin, "nifti", {"affine": img.affine.tolist()})
+
+
+# ---------------------------------------------------------------------------- MRC
+def _mrc_axes(header) -> tuple[int, int, int]:
+    """Array axis (of mrcfile's ``data[section, row, column]``) holding world x, y, z.
+
+    MAPC/MAPR/MAPS say which world axis (1=x, 2=y, 3=z) runs along columns, rows and
+    sections (MRC2014 words 17-19)."""
+    crs = (int(header.mapc), int(header.mapr), int(header.maps))
+    if sorted(crs) != [1, 2, 3]:
+        raise CorruptFileError(f"MAPC/MAPR/MAPS {crs} are not a permutation of 1, 2, 3")
+    array_axis_of_crs = (2, 1, 0)  # column -> last array axis, section -> first
+    return tuple(array_axis_of_crs[crs.index(w + 1)] for w in range(3))
+
+
+def _read_mrc(path: Path) -> VolumeData:
+    """MRC/CCP4 maps with mrcfile: axes permuted to x, y, z by MAPC/MAPR/MAPS; voxel size
+    from the cell (CELLA / MX,MY,MZ); origin from the ORIGIN field, or where that is zero from
+    the start indices NCSTART/NRSTART/NSSTART times the voxel size (the CCP4 convention)."""
+    import mrcfile
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with mrcfile.open(str(path), mode="r", permissive=False, header_only=True) as m:
+                h = m.header
+                dims = (int(h.nx), int(h.ny), int(h.nz))
+                mode = int(h.mode)
+    except (ValueError, OSError, EOFError) as exc:
+        raise CorruptFileError(f"{path.name} has an invalid MRC header: {exc}") from None
+    if any(n < 1 for n in dims):
+        raise InvalidDataError(f"{path.name} announces an empty map of {dims} samples")
+    itemsize = {0: 1, 1: 2, 2: 4, 3: 4, 4: 8, 6: 2, 12: 2}.get(mode, 4)
+    check_volume_size(dims, itemsize, path.name)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with mrcfile.open(str(path), mode="r", permissive=False) as m:
+                h = m.header
+                if m.data is None or m.data.ndim != 3:
+                    raise InvalidDataError(f"{path.name} does not hold a 3-D map")
+                axes = _mrc_axes(h)
+                data = np.array(m.data.transpose(axes))
+                vs = m.voxel_size
+                spacing = (float(vs.x), float(vs.y), float(vs.z))
+                org = np.array([float(h.origin.x), float(h.origin.y), float(h.origin.z)])
+                start_crs = (int(h.nxstart), int(h.nystart), int(h.nzstart))
+                crs = (int(h.mapc), int(h.mapr), int(h.maps))
+    except (ValueError, OSError, EOFError) as exc:
+        raise CorruptFileError(f"{path.name} has a damaged or truncated payload: {exc}") from None
+    if not all(np.isfinite(s) and s > 0 for s in spacing):
+        spacing = (1.0, 1.0, 1.0)  # CELLA 0 is common in maps from image processing tools
+    if not np.any(org):
+        start_xyz = [start_crs[crs.index(w + 1)] for w in range(3)]
+        org = np.asarray(start_xyz, float) * np.asarray(spacing)
+    meta = {"axis_order": "".join("xyz"[c - 1] for c in crs)}
+    return VolumeData(data, spacing, tuple(float(o) for o in org), "mrc", meta)
+
+
+# ---------------------------------------------------------------------------- DICOM
+def _read_dicom_folder(path: Path) -> VolumeData:
+    """A DICOM series folder with pydicom: slices sorted by their position along the slice
+    normal (ImageOrientationPatient), RescaleSlope/RescaleIntercept applied, spacing from
+    PixelSpacing and the slice positions, origin = ImagePositionPatient of the first slice.
+    Files that are not DICOM are skipped; with several series the largest is read."""
+    import pydicom
+    from pydicom.errors import InvalidDicomError
+
+    headers = []
+    for f in sorted(p for p in path.iterdir() if p.is_file()):
+        try:
+            ds = pydicom.dcmread(str(f), stop_before_pixels=True)
+        except (InvalidDicomError, EOFError, OSError, ValueError, TypeError, KeyError):
+            continue
+        if "Rows" in ds and "Columns" in ds:
+            headers.append((f, ds))
+    if not headers:
+        raise InvalidDataError(f"folder {path.name} holds no DICOM images")
+    series: dict[str, list] = {}
+    for f, ds in headers:
+        series.setdefault(str(ds.get("SeriesInstanceUID", "")), []).append((f, ds))
+    slices = max(series.values(), key=len)
+    if len(slices) < MIN_SAMPLES_PER_AXIS:
+        raise InvalidDataError(
+            f"folder {path.name} holds {len(slices)} DICOM slice; a volume needs at least "
+            f"{MIN_SAMPLES_PER_AXIS}"
+        )
+    rows, cols = int(slices[0][1].Rows), int(slices[0][1].Columns)
+    if any((int(ds.Rows), int(ds.Columns)) != (rows, cols) for _, ds in slices):
+        raise InvalidDataError(f"the DICOM slices in {path.name} differ in size")
+    try:
+        iop = np.asarray(slices[0][1].get("ImageOrientationPatient", [1, 0, 0, 0, 1, 0]), float)
+        normal = np.cross(iop[:3], iop[3:])
+        pos = np.array([np.asarray(ds.get("ImagePositionPatient", [0, 0, i]), float)
+                        for i, (_, ds) in enumerate(slices)])
+    except (ValueError, TypeError) as exc:
+        raise CorruptFileError(f"DICOM geometry in {path.name} is malformed: {exc}") from None
+    depth = pos @ normal
+    order = np.argsort(depth, kind="stable")
+    if np.allclose(depth, depth[0]):  # no usable positions: fall back to InstanceNumber
+        order = np.argsort([int(ds.get("InstanceNumber", i)) for i, (_, ds) in
+                            enumerate(slices)], kind="stable")
+        dz = float(slices[0][1].get("SliceThickness", 1.0) or 1.0)
+    else:
+        steps = np.diff(depth[order])
+        if np.any(steps <= 0):
+            raise InvalidDataError(f"{path.name} holds two DICOM slices at the same position")
+        dz = float(np.median(steps))
+        if np.max(np.abs(steps - dz)) > 1e-3 * max(dz, 1e-12) + 1e-4:
+            raise InvalidDataError(f"the DICOM slices in {path.name} are not evenly spaced")
+    check_volume_size((cols, rows, len(slices)), 4, path.name)
+    out = np.empty((cols, rows, len(slices)), dtype=np.float32)
+    for k, idx in enumerate(order):
+        f = slices[idx][0]
+        try:
+            ds = pydicom.dcmread(str(f))
+            px = ds.pixel_array.astype(np.float32)
+        except Exception as exc:  # noqa: BLE001 - pixel handlers raise many types
+            raise CorruptFileError(f"cannot decode the pixels of {f.name}: {exc}") from None
+        if px.shape != (rows, cols):
+            raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, "
+                                   f"expected {(rows, cols)}")
+        slope = float(ds.get("RescaleSlope", 1.0) or 1.0)
+        inter = float(ds.get("RescaleIntercept", 0.0) or 0.0)
+        out[:, :, k] = (px * slope + inter).T  # pixel_array is [row, column]; x runs along
+    ps = slices[0][1].get("PixelSpacing", [1.0, 1.0])
+    spacing = (float(ps[1]), float(ps[0]), dz)  # PixelSpacing is (row step, column step)
+    origin = tuple(float(v) for v in pos[order[0]])
+    return VolumeData(out, spacing, origin, "dicom",
+                      {"series": str(slices[0][1].get("SeriesInstanceUID", ""))})
+
+
+# ---------------------------------------------------------------------------- NumPy, raw
+def _read_npy(path: Path) -> VolumeData:
+    try:
+        arr = np.load(str(path), mmap_mode="r", allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise CorruptFileError(f"{path.name} is not a valid .npy array: {exc}") from None
+    if arr.ndim != 3:
+        raise InvalidDataError(f"{path.name} holds a {arr.ndim}-D array, not a volume")
+    check_volume_size(arr.shape, arr.dtype.itemsize, path.name)
+    return VolumeData(np.array(arr), format="npy")
+
+
+def _write_npy(path: Path, vol: Volume) -> None:
+    with atomic_output(path) as tmp:
+        np.save(str(tmp), np.asarray(vol.data), allow_pickle=False)
+
+
+def _read_raw(path: Path, *, dims=None, dtype=None, byteorder="little", offset=0) -> VolumeData:
+    """Headerless samples: ``dims`` (nx, ny, nz), x fastest, of ``dtype`` with
+    ``byteorder`` ("little"/"big"), after ``offset`` header bytes."""
+    if dims is None or dtype is None:
+        raise FileFormatError(f"{path.name} is raw data: give its dims and dtype")
+    try:
+        dims = tuple(int(n) for n in dims)
+        dt = np.dtype(dtype)
+    except (TypeError, ValueError):
+        raise FileFormatError(f"invalid raw dims {dims!r} or dtype {dtype!r}") from None
+    if len(dims) != 3:
+        raise FileFormatError(f"raw dims must be three numbers, got {dims}")
+    if byteorder not in ("little", "big"):
+        raise FileFormatError(f"byteorder must be 'little' or 'big', got {byteorder!r}")
+    if dt.kind not in "biuf" or dt.itemsize == 0:
+        raise FileFormatError(f"raw dtype must be numeric, got {dt}")
+    dt = dt.newbyteorder("<" if byteorder == "little" else ">")
+    check_volume_size(dims, dt.itemsize, path.name)
+    need = int(np.prod(dims, dtype=object)) * dt.itemsize
+    have = path.stat().st_size - int(offset)
+    if have != need:
+        raise DataSizeError(
+            f"{path.name} holds {have} bytes after the header but dims {dims} of {dt.name} "
+            f"need {need}"
+        )
+    flat = np.fromfile(str(path), dtype=dt, count=need // dt.itemsize, offset=int(offset))
+    return VolumeData(flat.reshape(dims[::-1]).transpose(2, 1, 0), format="raw")
+
+
+# ---------------------------------------------------------------------------- sniffing
+def _head(path: Path, n: int) -> bytes:
+    with open(path, "rb") as fh:
+        return fh.read(n)
+
+
+def _sniff_nifti(head: bytes) -> bool:
+    if head[:2] == b"\x1f\x8b":
+        try:
+            head = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(head, 352)
+        except zlib.error:
+            return False
+    return len(head) >= 348 and head[344:347] in (b"n+1", b"ni1", b"n+2", b"ni2") or (
+        len(head) >= 4 and int.from_bytes(head[:4], "little") in (348, 540)
+        and head[344:347] in (b"n+1", b"n+2")
+    )
+
+
+register_format("vti", (".vti",), _read_vti, _write_vti, kind="volume",
+                sniff=lambda h: b"<VTKFile" in h and b"ImageData" in h,
+                description="VTK XML ImageData")
+register_format("vtk", (".vtk",), _read_legacy_vtk, None, kind="volume",
+                sniff=lambda h: h.startswith(b"# vtk DataFile"),
+                description="legacy VTK structured points")
+register_format("slc", (".slc",), _read_slc, None, kind="volume",
+                sniff=lambda h: h.lstrip().startswith(b"11111"), description="SLC volume")
+register_format("metaimage", (".mhd", ".mha"), _read_metaimage, None, kind="volume",
+                sniff=lambda h: re.search(rb"^\s*(ObjectType|NDims)\s*=", h, re.M) is not None,
+                description="MetaImage")
+register_format("nrrd", (".nrrd", ".nhdr"), _read_nrrd, _write_nrrd, kind="volume",
+                sniff=lambda h: h.startswith(b"NRRD000"), description="NRRD")
+register_format("nifti", (".nii", ".nii.gz"), _read_nifti, None, kind="volume",
+                sniff=_sniff_nifti, description="NIfTI-1/2")
+register_format("mrc", (".mrc", ".map", ".ccp4", ".mrcs"), _read_mrc, None, kind="volume",
+                sniff=lambda h: len(h) >= 212 and h[208:211] == b"MAP",
+                description="MRC/CCP4 map")
+register_format("dicom", (), _read_dicom_folder, None, kind="volume", folder=True,
+                description="DICOM series folder")
+register_format("npy", (".npy",), _read_npy, _write_npy, kind="volume",
+                sniff=lambda h: h.startswith(b"\x93NUMPY"), description="NumPy array")
+register_format("raw", (".raw", ".bin", ".dat"), _read_raw, None, kind="volume",
+                description="raw binary (needs dims and dtype)")
+
+_RAW_OPTIONS = ("dims", "dtype", "byteorder", "offset")
+
+
+def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="little",
+                     offset=0) -> VolumeData:
+    """Read a volume file in its own sample type (see :func:`read_volume`)."""
+    from splineviz.plugins import ensure_loaded
+
+    ensure_loaded()
+    p = regular_input(path, allow_dir=True)
+    if dims is not None or dtype is not None:
+        format = format or "raw"
+    fmt = find_format(p, "volume", name=format)
+    if fmt.name == "raw":
+        vd = fmt.reader(p, dims=dims, dtype=dtype, byteorder=byteorder, offset=offset)
+    else:
+        try:
+            vd = fmt.reader(p)
+        except gzip.BadGzipFile as exc:
+            raise CorruptFileError(f"{p.name} has a damaged compressed payload: {exc}") from None
+    if not isinstance(vd, VolumeData):
+        raise FileFormatError(f"the {fmt.name} reader returned {type(vd).__name__}, "
+                              "not VolumeData")
+    return vd
+
+
+def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little", offset=0,
+                spacing=None, origin=None, nonfinite="error") -> Volume:
+    """Read a volume file (or DICOM folder) into a :class:`~splineviz.Volume`.
+
+    Parameters
+    ----------
+    path : path-like
+        VTI, NRRD/NHDR, MHD/MHA, legacy .vtk, SLC, NIfTI, MRC/MAP, DICOM folder, .npy, or raw.
+    format : str, optional
+        Force a registered format by name instead of guessing from suffix and content.
+    dims, dtype, byteorder, offset
+        Raw binaries: (nx, ny, nz) samples x fastest, NumPy dtype, "little"/"big", bytes of
+        header to skip. Giving ``dims`` or ``dtype`` selects the raw reader.
+    spacing, origin : (3,) float, optional
+        Override the file's geometry (raw files have none: default 1 and 0).
+    nonfinite : {"error", "fill"}
+        What to do with NaN/Inf samples: refuse the file, or replace them by the smallest
+        finite sample (outside every isosurface above it).
+
+    Returns
+    -------
+    Volume
+        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, float32.
+
+    Raises
+    ------
+    SplinevizError
+        A subclass from :mod:`splineviz.io.errors` with a one-sentence message.
+
+    Examples
+    --------
+    >>> vol = read_volume("../shared/data/volumes/HeadMRVolume.mhd")  # doctest: +SKIP
+    >>> vol.shape, vol.spacing  # doctest: +SKIP
+    ((48, 62, 42), (4.0, 4.0, 4.0))
+    """
+    if nonfinite not in ("error", "fill"):
+        raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
+    vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
+                          offset=offset)
+    name = Path(os.fspath(path)).name
+    validate_volume_data(vd, name)
+    data = np.asarray(vd.data, dtype=np.float32)
+    bad = ~np.isfinite(data)
+    if bad.any():
+        if bad.all():
+            raise InvalidDataError(f"{name} has no finite samples")
+        if nonfinite == "error":
+            raise InvalidDataError(
+                f"{name} has {int(bad.sum())} NaN or infinite samples "
+                "(read with nonfinite='fill' to replace them)"
+            )
+        data = np.where(bad, data[~bad].min(), data)
+    try:
+        sp = as_float_triplet(vd.spacing if spacing is None else spacing, "spacing")
+        og = as_float_triplet(vd.origin if origin is None else origin, "origin")
+        return Volume(data, spacing=sp, origin=og)
+    except (VolumeError, ValueError) as exc:
+        raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+
+
+def validate_volume_data(vd: VolumeData, name: str) -> None:
+    """Shape and type checks common to all formats (thesis splines need cells on each axis)."""
+    shape = tuple(vd.data.shape)
+    if len(shape) != 3:
+        raise InvalidDataError(f"{name} holds a {len(shape)}-D array, not a volume")
+    if min(shape) < MIN_SAMPLES_PER_AXIS:
+        raise InvalidDataError(
+            f"{name} has {shape} samples; a spline volume needs at least "
+            f"{MIN_SAMPLES_PER_AXIS} along each axis"
+        )
+    if not (np.issubdtype(vd.data.dtype, np.number) or vd.data.dtype == bool) or \
+            np.issubdtype(vd.data.dtype, np.complexfloating):
+        raise InvalidDataError(f"{name} holds {vd.data.dtype} samples, not real numbers")
+
+
+def write_volume(path, volume, *, format=None) -> Path:
+    """Write a :class:`~splineviz.Volume` (or 3-D array) as VTI, NRRD or NPY, atomically.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    from splineviz.plugins import ensure_loaded
+
+    ensure_loaded()
+    vol = volume if isinstance(volume, Volume) else Volume(volume)
+    p = Path(os.fspath(path)).expanduser()
+    fmt = find_format(p, "volume", mode="write", name=format)
+    fmt.writer(p, vol)
+    return p
