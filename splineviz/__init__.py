@@ -17,6 +17,9 @@ _LAZY = {
     "PointCloudError": "splineviz.core.points:PointCloudError",
     "build_spline": "splineviz.core.splines:build_spline",
     "testfunctions": "splineviz.core.testfunctions:",
+    "Camera": "splineviz.core.camera:Camera",
+    "RayCaster": "splineviz.compute.raycast:RayCaster",
+    "Frame": "splineviz.core.raycast_reference:Frame",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

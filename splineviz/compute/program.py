@@ -65,6 +65,21 @@ def get_program(context, name: str, defines: dict | None = None):
     return prog
 
 
+_kernels: dict = {}
+
+
+def get_kernel(context, name: str, kernel: str, defines: dict | None = None):
+    """Kernel object ``kernel`` of :func:`get_program`; cached, since every attribute access
+    on a program creates a new kernel object."""
+    import pyopencl as cl
+
+    key = (context.int_ptr, name, build_options(defines), kernel)
+    k = _kernels.get(key)
+    if k is None:
+        k = _kernels[key] = cl.Kernel(get_program(context, name, defines), kernel)
+    return k
+
+
 def cache_size() -> int:
     """Number of programs built in this process (for tests of the cache)."""
     return len(_cache)

@@ -1,8 +1,8 @@
 """NumPy reference ray caster for spline isosurfaces (thesis §6.2, done the slow, exact way).
 
 Used to test the OpenCL kernels and as the fallback when no OpenCL device works. It only uses
-the public :class:`~splineviz.core.splines.base.Spline` interface (``evaluate`` and
-``value_gradient``), so it works for every model, including future ones.
+the public :class:`~splineviz.core.splines.base.Spline` interface (``evaluate``,
+``gradient`` and ``value_gradient``), so it works for every model, including future ones.
 
 Method: each ray is cut to the data box and to the kept side of every clip plane (a convex
 set, so one interval ``[t0, t1]``); ``s(x) - iso`` is sampled densely along it (``step``
@@ -157,7 +157,15 @@ def phong_shade(hit, normal, directions) -> np.ndarray:
 
 
 def first_roots(spline, origin, directions, t0, t1, isovalue, step_t):
-    """First root of ``s(origin + t d) - iso`` in ``[t0, t1]`` for each ray.
+    """First root of ``g(t) = s(origin + t d) - iso`` in ``[t0, t1]`` for each ray.
+
+    Samples carry the value and the directional derivative ``g'``. A sample interval brackets
+    a root when ``g`` changes sign, or when ``g`` keeps its sign but ``g'`` says the curve
+    turns back towards zero inside (``g > 0`` with ``g'`` going from - to +, or the mirror
+    case): then the turning point is located by bisection on the sign of ``g'`` and, if ``g``
+    there has crossed zero, ``[left sample, turning point]`` is the bracket. This catches the
+    pair of close roots of a grazing ray that plain sign tests at ``step`` would miss, as
+    long as ``g'`` changes sign at most once per step.
 
     Parameters
     ----------
@@ -178,38 +186,78 @@ def first_roots(spline, origin, directions, t0, t1, isovalue, step_t):
     if alive.size == 0:
         return result
     batch = 32
-    # value at the last sample of the previous batch of each live ray
+
+    def sample(pts, dirs):
+        v, grad = spline.value_gradient(pts)
+        return v - isovalue, np.einsum("nk,nk->n", grad, dirs)
+
+    # value and slope at the last sample of the previous batch of each live ray
     t_prev = t0[alive].copy()
-    g_prev = spline.evaluate(origin + t_prev[:, None] * directions[alive]) - isovalue
+    g_prev, s_prev = sample(origin + t_prev[:, None] * directions[alive], directions[alive])
     on = g_prev == 0
     result[alive[on]] = t_prev[on]
     keep = ~on
-    alive, t_prev, g_prev = alive[keep], t_prev[keep], g_prev[keep]
+    alive, t_prev, g_prev, s_prev = alive[keep], t_prev[keep], g_prev[keep], s_prev[keep]
     k0 = 1
     while alive.size:
+        m = alive.size
         ks = np.arange(k0, k0 + batch, dtype=np.float64)
         t = np.minimum(t0[alive, None] + ks[None, :] * step_t[alive, None], t1[alive, None])
-        pts = origin + t[..., None] * directions[alive, None, :]
-        g = (spline.evaluate(pts.reshape(-1, 3)) - isovalue).reshape(t.shape)
-        left = np.concatenate([g_prev[:, None], g[:, :-1]], axis=1)
-        change = (g == 0) | ((left < 0) != (g < 0))
+        dirs = np.broadcast_to(directions[alive, None, :], (m, batch, 3))
+        pts = origin + t[..., None] * dirs
+        g, sl = sample(pts.reshape(-1, 3), dirs.reshape(-1, 3))
+        g, sl = g.reshape(t.shape), sl.reshape(t.shape)
+        t_left = np.concatenate([t_prev[:, None], t[:, :-1]], axis=1)
+        g_left = np.concatenate([g_prev[:, None], g[:, :-1]], axis=1)
+        s_left = np.concatenate([s_prev[:, None], sl[:, :-1]], axis=1)
+        change = (g == 0) | ((g_left < 0) != (g < 0))
+        t_right = t.copy()
+        # same sign at both ends, but the slope turns towards zero inside the interval
+        turn = ~change & (t > t_left) & (
+            ((g_left > 0) & (s_left < 0) & (sl > 0)) | ((g_left < 0) & (s_left > 0) & (sl < 0))
+        )
+        if turn.any():
+            r, k = np.nonzero(turn)
+            te, ge = _turning_points(spline, origin, directions[alive[r]], t_left[r, k],
+                                     t[r, k], s_left[r, k], isovalue)
+            crossed = (ge == 0) | ((ge < 0) != (g_left[r, k] < 0))
+            change[r[crossed], k[crossed]] = True
+            t_right[r[crossed], k[crossed]] = te[crossed]
+            g[r[crossed], k[crossed]] = np.where(ge[crossed] == 0, 0.0, 1.0)
         found = change.any(axis=1)
         first = np.argmax(change, axis=1)
         rows = np.flatnonzero(found)
         if rows.size:
             fk = first[rows]
             exact = g[rows, fk] == 0
-            t_hi = t[rows, fk]
-            t_lo = np.where(fk > 0, t[rows, np.maximum(fk - 1, 0)], t_prev[rows])
-            g_lo = left[rows, fk]
-            roots = _bisect(spline, origin, directions[alive[rows]], t_lo, t_hi, g_lo,
-                            isovalue)
+            t_hi = t_right[rows, fk]
+            roots = _bisect(spline, origin, directions[alive[rows]], t_left[rows, fk], t_hi,
+                            g_left[rows, fk], isovalue)
             result[alive[rows]] = np.where(exact, t_hi, roots)
         done = found | (t[:, -1] >= t1[alive])
-        t_prev, g_prev = t[~done, -1], g[~done, -1]
+        t_prev, g_prev, s_prev = t[~done, -1], g[~done, -1], sl[~done, -1]
         alive = alive[~done]
         k0 += batch
     return result
+
+
+def _turning_points(spline, origin, d, t_lo, t_hi, s_lo, isovalue):
+    """Bisection on the sign of the directional derivative; returns (t, g(t)) at the end."""
+    neg_lo = s_lo < 0
+    for _ in range(BISECTION_STEPS // 2):
+        mid = 0.5 * (t_lo + t_hi)
+        grad = spline.gradient(origin + mid[:, None] * d)
+        sm = np.einsum("nk,nk->n", grad, d)
+        same = (sm < 0) == neg_lo
+        t_lo = np.where(same, mid, t_lo)
+        t_hi = np.where(same, t_hi, mid)
+    # the extremum of g lies in [t_lo, t_hi]; test the end with the smaller |g| side
+    cand = np.stack([t_lo, t_hi], axis=1)
+    vals = spline.evaluate((origin + cand[..., None] * d[:, None, :]).reshape(-1, 3))
+    vals = vals.reshape(-1, 2) - isovalue
+    pick = np.argmin(np.abs(vals), axis=1)
+    idx = np.arange(len(t_lo))
+    return cand[idx, pick], vals[idx, pick]
 
 
 def _bisect(spline, origin, d, t_lo, t_hi, g_lo, isovalue):

@@ -1,0 +1,279 @@
+// Image-based ray casting of spline isosurfaces (thesis §6.2, Listing 6.2), one work-item per
+// pixel. Specialised by -D options:
+//   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
+//   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
+//   SKIP_ACTIVE          skip code of an active cell (see classify.cl)
+//
+// Rays live in index space (sample data[i,j,k] at (i,j,k)); the ray parameter t is in world
+// units: u(t) = eye_u + t * d_u with d_u = d_world / spacing. For precision, traversal uses
+// s = t - t0 measured from the entry point into the (box ∩ clip planes) interval.
+
+#define BISECT_STEPS 40
+
+typedef struct {
+    float c[8];  // corners c[4 di + 2 dj + dk]
+} Cell;
+
+// Monomial coefficients of the trilinear interpolant on [0,1]^3:
+// f = a + bx x + by y + bz z + bxy xy + bxz xz + byz yz + bxyz xyz
+typedef struct {
+    float a, bx, by, bz, bxy, bxz, byz, bxyz;
+} Trilinear;
+
+inline Trilinear trilinear_coeffs(__global const float *data, int3 cell, int NY, int NZ)
+{
+    const int base = (cell.x * NY + cell.y) * NZ + cell.z;
+    const int sx = NY * NZ, sy = NZ;
+    const float c000 = data[base], c001 = data[base + 1];
+    const float c010 = data[base + sy], c011 = data[base + sy + 1];
+    const float c100 = data[base + sx], c101 = data[base + sx + 1];
+    const float c110 = data[base + sx + sy], c111 = data[base + sx + sy + 1];
+    Trilinear t;
+    t.a = c000;
+    t.bx = c100 - c000;
+    t.by = c010 - c000;
+    t.bz = c001 - c000;
+    t.bxy = c110 - c100 - c010 + c000;
+    t.bxz = c101 - c100 - c001 + c000;
+    t.byz = c011 - c010 - c001 + c000;
+    t.bxyz = c111 - c110 - c101 - c011 + c100 + c010 + c001 - c000;
+    return t;
+}
+
+inline float tri_value(const Trilinear *f, float3 p)
+{
+    return f->a + f->bx * p.x + f->by * p.y + f->bz * p.z + f->bxy * p.x * p.y
+           + f->bxz * p.x * p.z + f->byz * p.y * p.z + f->bxyz * p.x * p.y * p.z;
+}
+
+inline float3 tri_gradient(const Trilinear *f, float3 p)
+{
+    return (float3)(f->bx + f->bxy * p.y + f->bxz * p.z + f->bxyz * p.y * p.z,
+                    f->by + f->bxy * p.x + f->byz * p.z + f->bxyz * p.x * p.z,
+                    f->bz + f->bxz * p.x + f->byz * p.y + f->bxyz * p.x * p.y);
+}
+
+inline float cubic(float4 k, float s) { return k.x + s * (k.y + s * (k.z + s * k.w)); }
+
+// Restriction of f - iso to the ray p + s d: k.x + k.y s + k.z s^2 + k.w s^3 (exact).
+inline float4 tri_ray_cubic(const Trilinear *f, float3 p, float3 d, float iso)
+{
+    const float3 g = tri_gradient(f, p);
+    float4 k;
+    k.x = tri_value(f, p) - iso;
+    k.y = dot(g, d);
+    k.z = f->bxy * d.x * d.y + f->bxz * d.x * d.z + f->byz * d.y * d.z
+          + f->bxyz * (d.x * d.y * p.z + d.x * p.y * d.z + p.x * d.y * d.z);
+    k.w = f->bxyz * d.x * d.y * d.z;
+    return k;
+}
+
+// Roots of a + b s + c s^2 = 0 (numerically stable form); returns the number found.
+inline int quadratic_roots(float a, float b, float c, float *r0, float *r1)
+{
+    if (c == 0.0f) {
+        if (b == 0.0f) return 0;
+        *r0 = -a / b;
+        return 1;
+    }
+    const float disc = b * b - 4.0f * a * c;
+    if (disc < 0.0f) return 0;
+    const float q = -0.5f * (b + copysign(sqrt(disc), b));
+    if (q == 0.0f) {  // b == 0 and a == 0: double root at 0
+        *r0 = 0.0f;
+        return 1;
+    }
+    float x0 = q / c, x1 = a / q;
+    *r0 = fmin(x0, x1);
+    *r1 = fmax(x0, x1);
+    return 2;
+}
+
+// First root of the cubic k in [0, len]; -1 if none. The cubic is split at its critical
+// points into monotone pieces, so a sign test on each piece cannot miss a root.
+inline float first_cubic_root(float4 k, float len)
+{
+    float br[4];
+    int n = 0;
+    br[n++] = 0.0f;
+    float r0, r1;
+    const int nr = quadratic_roots(k.y, 2.0f * k.z, 3.0f * k.w, &r0, &r1);
+    if (nr >= 1 && r0 > 0.0f && r0 < len) br[n++] = r0;
+    if (nr == 2 && r1 > 0.0f && r1 < len && r1 != r0) br[n++] = r1;
+    br[n++] = len;
+    float a = br[0];
+    float ga = cubic(k, a);
+    for (int p = 1; p < n; ++p) {
+        if (ga == 0.0f) return a;
+        const float b = br[p];
+        const float gb = cubic(k, b);
+        if ((ga < 0.0f) != (gb < 0.0f)) {
+            // bisection to float resolution, then one Newton step kept inside the bracket
+            float lo = a, hi = b;
+            const bool neg = ga < 0.0f;
+            for (int it = 0; it < BISECT_STEPS && hi - lo > 0.0f; ++it) {
+                const float m = 0.5f * (lo + hi);
+                if (m <= lo || m >= hi) break;
+                const float gm = cubic(k, m);
+                if (gm == 0.0f) return m;
+                if ((gm < 0.0f) == neg) lo = m; else hi = m;
+            }
+            float s = 0.5f * (lo + hi);
+            const float dg = k.y + s * (2.0f * k.z + 3.0f * k.w * s);
+            if (dg != 0.0f) {
+                const float sn = s - cubic(k, s) / dg;
+                if (sn >= lo && sn <= hi) s = sn;
+            }
+            return s;
+        }
+        a = b;
+        ga = gb;
+    }
+    if (ga == 0.0f) return a;
+    return -1.0f;
+}
+
+inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
+{
+    // parameters where the ray leaves the box [lo, hi] through the plane chosen by the
+    // Heaviside of each direction component (thesis §6.2.1)
+    const float3 bound = (float3)(d.x >= 0.0f ? (float)hi.x : (float)lo.x,
+                                  d.y >= 0.0f ? (float)hi.y : (float)lo.y,
+                                  d.z >= 0.0f ? (float)hi.z : (float)lo.z);
+    float3 t = (bound - ue) * inv_d;
+    // axis-parallel rays never leave through that axis
+    t.x = d.x == 0.0f ? INFINITY : t.x;
+    t.y = d.y == 0.0f ? INFINITY : t.y;
+    t.z = d.z == 0.0f ? INFINITY : t.z;
+    return t;
+}
+
+inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t.z ? 1 : 2); }
+
+__kernel void raycast(__global const float *data, int NX, int NY, int NZ,
+                      __global const uchar *skip,
+                      float iso,
+                      float3 eye_w,        // eye, world
+                      float3 eye_u,        // eye, index space
+                      float3 dop, float3 right_s, float3 up_s,  // right/up scaled by tan
+                      float3 inv_spacing,
+                      __global const float4 *planes, int n_planes,  // index space: n.u + w >= 0
+                      float depth_a, float depth_b,  // window depth = a - b / z_eye
+                      __global uchar *hit_out, __global float4 *pos_out,
+                      __global float4 *normal_out, __global float *depth_out,
+                      __global uchar4 *color_out)
+{
+    const int col = get_global_id(0), row = get_global_id(1);
+    const int W = get_global_size(0), H = get_global_size(1);
+    const int pix = row * W + col;
+
+    const float x = 2.0f * (col + 0.5f) / W - 1.0f;
+    const float y = 1.0f - 2.0f * (row + 0.5f) / H;
+    const float3 dw = normalize(dop + x * right_s + y * up_s);
+    const float3 d = dw * inv_spacing;  // index-space direction per world unit
+    const float3 inv_d = 1.0f / d;
+
+    // interval of the ray inside the box [0, n-1] ...
+    const float3 hiB = (float3)(NX - 1, NY - 1, NZ - 1);
+    float3 ta = (0.0f - eye_u) * inv_d, tb = (hiB - eye_u) * inv_d;
+    float3 tn = fmin(ta, tb), tf = fmax(ta, tb);
+    // axis-parallel rays: inside the slab or never
+    if (d.x == 0.0f) { tn.x = (eye_u.x >= 0.0f && eye_u.x <= hiB.x) ? -INFINITY : INFINITY; tf.x = -tn.x; }
+    if (d.y == 0.0f) { tn.y = (eye_u.y >= 0.0f && eye_u.y <= hiB.y) ? -INFINITY : INFINITY; tf.y = -tn.y; }
+    if (d.z == 0.0f) { tn.z = (eye_u.z >= 0.0f && eye_u.z <= hiB.z) ? -INFINITY : INFINITY; tf.z = -tn.z; }
+    float t0 = fmax(0.0f, fmax(tn.x, fmax(tn.y, tn.z)));
+    float t1 = fmin(tf.x, fmin(tf.y, tf.z));
+    // ... and on the kept side of every clip plane (an intersection of half-spaces)
+    for (int p = 0; p < n_planes; ++p) {
+        const float4 pl = planes[p];
+        const float a0 = dot(pl.xyz, eye_u) + pl.w;
+        const float b = dot(pl.xyz, d);
+        if (b > 0.0f) t0 = fmax(t0, -a0 / b);
+        else if (b < 0.0f) t1 = fmin(t1, -a0 / b);
+        else if (a0 < 0.0f) t1 = -INFINITY;
+    }
+
+    bool found = false;
+    float3 upos = (float3)(0.0f);
+    float3 grad_u = (float3)(0.0f);
+    float t_hit = 0.0f;
+
+    if (t0 <= t1) {
+        const float3 ue = eye_u + t0 * d;  // entry point
+        const float send = t1 - t0;
+        const int3 ncell = (int3)(NX - 1, NY - 1, NZ - 1);
+        int3 cell = clamp(convert_int3_rtn(ue), (int3)(0), ncell - 1);
+        float s = 0.0f;
+        const int max_steps = 4 * (NX + NY + NZ) + 16;
+        for (int step = 0; step < max_steps; ++step) {
+            const int c = (cell.x * ncell.y + cell.y) * ncell.z + cell.z;
+            const uchar code = skip[c];
+            if (code == SKIP_ACTIVE) {
+                const float3 te = exit_params(ue, d, inv_d, cell, cell + 1);
+                const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
+                const float s_end = fmin(s_exit, send);
+                const Trilinear f = trilinear_coeffs(data, cell, NY, NZ);
+                const float3 p = ue + s * d - convert_float3(cell);
+                const float4 k = tri_ray_cubic(&f, p, d, iso);
+                const float r = first_cubic_root(k, s_end - s);
+                if (r >= 0.0f) {
+                    const float3 q = p + r * d;
+                    upos = convert_float3(cell) + q;
+                    grad_u = tri_gradient(&f, q);
+                    t_hit = t0 + s + r;
+                    found = true;
+                    break;
+                }
+                if (s_exit >= send) break;
+                s = s_exit;
+                const int a = argmin3(te);
+                if (a == 0) cell.x += d.x > 0.0f ? 1 : -1;
+                else if (a == 1) cell.y += d.y > 0.0f ? 1 : -1;
+                else cell.z += d.z > 0.0f ? 1 : -1;
+            } else {
+                // empty-space leaping over the macro cube of 2^code cells (thesis §6.2.1);
+                // the next cell comes from integer bounds, not from an epsilon step
+                const int L = code;
+                const int3 lo = (cell >> L) << L;
+                const int3 hi = min(lo + (1 << L), ncell);
+                const float3 te = exit_params(ue, d, inv_d, lo, hi);
+                const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
+                if (s_exit >= send) break;
+                const int a = argmin3(te);
+                const float3 q = ue + s_exit * d;
+                int3 nc = clamp(convert_int3_rtn(q), lo, hi - 1);
+                if (a == 0) nc.x = d.x > 0.0f ? hi.x : lo.x - 1;
+                else if (a == 1) nc.y = d.y > 0.0f ? hi.y : lo.y - 1;
+                else nc.z = d.z > 0.0f ? hi.z : lo.z - 1;
+                cell = nc;
+                s = s_exit;
+            }
+            if (any(cell < (int3)(0)) || any(cell >= ncell)) break;
+        }
+    }
+
+    hit_out[pix] = found ? 1 : 0;
+    if (!found) {
+        pos_out[pix] = (float4)(NAN);
+        normal_out[pix] = (float4)(NAN);
+        depth_out[pix] = 1.0f;
+        color_out[pix] = (uchar4)(BG_R, BG_G, BG_B, 255);
+        return;
+    }
+    const float3 gw = grad_u * inv_spacing;  // chain rule: index-space gradient to world
+    const float gl = length(gw);
+    const float3 n = gl > 0.0f ? gw / gl : (float3)(0.0f);
+    pos_out[pix] = (float4)(upos, t_hit);
+    normal_out[pix] = (float4)(n, 0.0f);
+    const float ze = t_hit * dot(dw, dop);
+    depth_out[pix] = clamp(depth_a - depth_b / ze, 0.0f, 1.0f);
+    // headlight Phong, two sided; the same formula as core.raycast_reference.phong_shade
+    const float ndl = dot(n, dw);
+    const float cs = fabs(ndl);
+    const float3 base = ndl > 0.0f ? (float3)(FRONT_R, FRONT_G, FRONT_B)
+                                   : (float3)(BACK_R, BACK_G, BACK_B);
+    const float3 rgb = clamp(base * (AMBIENT + DIFFUSE * cs) + SPECULAR * pow(cs, SHININESS),
+                             0.0f, 1.0f);
+    const float3 c255 = rint(rgb * 255.0f);
+    color_out[pix] = (uchar4)((uchar)c255.x, (uchar)c255.y, (uchar)c255.z, 255);
+}

@@ -1,0 +1,345 @@
+"""OpenCL ray casting of spline isosurfaces (thesis §6.1.1, §6.2; DESIGN.md ``RayCaster``).
+
+Pipeline on the device, without a CPU round trip of the volume:
+
+* on a data change: per-cell value bounds (the convex-hull/min-max test of §6.1.1) and the
+  levels of a min-max octree (§6.2.1), reduced level by level;
+* on an isovalue change: classification (active flag per cell), prefix-scan compaction of the
+  active cells with pyopencl's scan (Q_class -> Q_scan -> Q_active, Fig. 6.3), and the skip
+  volume (skip index of the largest empty macro cube per cell);
+* per frame: one work-item per pixel; macro-cell leaping with the Heaviside plane choice,
+  cell traversal, the exact restriction of the model to the ray in each active cell, first
+  root, gradient, Phong headlight shading and OpenGL window depth.
+
+Models with an OpenCL kernel: ``"trilinear"``. The tetrahedral models render through the NumPy
+reference ray caster (:mod:`splineviz.core.raycast_reference`) until their kernels exist;
+``stats["path"]`` says which path made the frame.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from splineviz.compute.device import get_device, try_get_device
+from splineviz.compute.program import get_kernel
+from splineviz.core import raycast_reference as ref
+from splineviz.core.camera import Camera, parse_size
+from splineviz.core.errors import SplinevizError
+from splineviz.core.volume import Volume
+
+#: models with an OpenCL kernel, and their -D define
+KERNEL_MODELS = {"trilinear": "MODEL_TRILINEAR"}
+#: skip code of an active cell (classify.cl)
+SKIP_ACTIVE = 255
+
+
+class RayCastError(SplinevizError, ValueError):
+    """Bad ray-casting input (unknown model, volume too small, no isovalue set)."""
+
+
+def _shading_defines() -> dict:
+    """Phong constants from :mod:`splineviz.core.raycast_reference` (one source of truth)."""
+    d = {
+        "AMBIENT": float(ref.AMBIENT),
+        "DIFFUSE": float(ref.DIFFUSE),
+        "SPECULAR": float(ref.SPECULAR),
+        "SHININESS": float(ref.SHININESS),
+        "SKIP_ACTIVE": SKIP_ACTIVE,
+    }
+    for prefix, rgb in (("FRONT", ref.FRONT_COLOR), ("BACK", ref.BACK_COLOR)):
+        for ch, v in zip("RGB", rgb, strict=True):
+            d[f"{prefix}_{ch}"] = float(v)
+    for ch, v in zip("RGB", ref.BACKGROUND, strict=True):
+        d[f"BG_{ch}"] = int(round(v * 255))
+    return d
+
+
+def _octree_levels(cells: tuple[int, int, int]) -> list[tuple[int, int, int, int]]:
+    """(offset, nx, ny, nz) of each min-max octree level, level 0 = the cells."""
+    levels = []
+    off = 0
+    dims = tuple(cells)
+    while True:
+        levels.append((off, *dims))
+        off += int(np.prod(dims))
+        if max(dims) == 1:
+            return levels
+        dims = tuple((n + 1) // 2 for n in dims)
+
+
+def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-cell (min, max) of the 8 corner samples: the trilinear model's value bounds.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) float
+
+    Returns
+    -------
+    vmin, vmax : (nx-1, ny-1, nz-1) float32
+    """
+    d = np.asarray(data, dtype=np.float32)
+    corners = [d[i:d.shape[0] - 1 + i, j:d.shape[1] - 1 + j, k:d.shape[2] - 1 + k]
+               for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    return np.minimum.reduce(corners), np.maximum.reduce(corners)
+
+
+class RayCaster:
+    """Geometry-free ray caster of the isosurface of a spline model (DESIGN.md).
+
+    Parameters
+    ----------
+    volume : Volume or (nx, ny, nz) array
+    model : str
+        Spline model name (see :data:`splineviz.core.splines.MODELS`).
+    device : str or None
+        ``"gpu"``, ``"cpu"``, ``"numpy"`` or a device-name substring; ``None`` reads
+        ``$SPLINEVIZ_DEVICE`` and otherwise prefers a GPU.
+    **model_kwargs
+        Passed to :func:`splineviz.build_spline` (e.g. ``k`` of ``"to-quadratic"``).
+
+    Examples
+    --------
+    >>> import numpy as np, splineviz as sv
+    >>> x = np.linspace(-1, 1, 9)
+    >>> vol = sv.Volume(np.add.outer(np.add.outer(x**2, x**2), x**2))
+    >>> rc = sv.RayCaster(vol, model="trilinear", device="cpu")
+    >>> rc.set_isovalue(0.5)
+    >>> frame = rc.render(sv.Camera((4, -20, 6), (4, 4, 4)), size=(32, 24))
+    >>> frame.hit.shape, bool(frame.hit[12, 16])
+    ((24, 32), True)
+    """
+
+    def __init__(self, volume, model: str = "cubic-c1", device: str | None = None,
+                 **model_kwargs):
+        from splineviz.core.splines import MODELS
+
+        if model not in MODELS and model not in KERNEL_MODELS:
+            raise RayCastError(f"unknown spline model {model!r}; choose one of {sorted(MODELS)}")
+        self.model = model
+        self._model_kwargs = model_kwargs
+        self._device = None
+        if model in KERNEL_MODELS:
+            self._device = try_get_device(device)
+        self._isovalue = None
+        self._spline = None
+        self.stats = {"active_cells": None, "active_tets": None, "classify_s": None,
+                      "render_s": None, "device": "numpy", "path": "numpy"}
+        if self._device is not None:
+            self.stats["device"] = self._device.name
+            self.stats["path"] = "opencl"
+        self.set_volume(volume)
+
+    # -- data ----------------------------------------------------------------------------
+
+    @property
+    def volume(self) -> Volume:
+        return self._volume
+
+    @property
+    def isovalue(self):
+        return self._isovalue
+
+    @property
+    def spline(self):
+        """The core spline model (built lazily; used by the NumPy path and for checks)."""
+        if self._spline is None:
+            from splineviz.core.splines import build_spline
+
+            self._spline = build_spline(self._volume, self.model, **self._model_kwargs)
+        return self._spline
+
+    def set_volume(self, volume) -> None:
+        """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt."""
+        if not isinstance(volume, Volume):
+            volume = Volume(volume)
+        if min(volume.shape) < 2:
+            raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
+        self._volume = volume
+        self._spline = None
+        self._cells = tuple(n - 1 for n in volume.shape)
+        if self._device is not None:
+            self._upload()
+        if self._isovalue is not None:
+            self.set_isovalue(self._isovalue)
+
+    def _upload(self):
+        import pyopencl.array as cla
+
+        dev = self._device
+        q = dev.queue
+        k_minmax = get_kernel(dev.context, "classify", "cell_minmax")
+        k_reduce = get_kernel(dev.context, "classify", "reduce_level")
+        self._k_skip = get_kernel(dev.context, "classify", "skip_codes")
+        self._data = cla.to_device(q, self._volume.data)
+        levels = _octree_levels(self._cells)
+        total = levels[-1][0] + int(np.prod(levels[-1][1:]))
+        self._levels = levels
+        self._levels_buf = cla.to_device(q, np.array(levels, dtype=np.int32).reshape(-1, 4))
+        self._vmin = cla.empty(q, total, np.float32)
+        self._vmax = cla.empty(q, total, np.float32)
+        nx, ny, nz = self._volume.shape
+        cx, cy, cz = self._cells
+        k_minmax(q, (cz, cy, cx), None, self._data.data, self._vmin.data,
+                                   self._vmax.data, np.int32(nx), np.int32(ny), np.int32(nz))
+        for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
+            k_reduce(q, (dz, dy, dx), None, self._vmin.data, self._vmax.data,
+                                        *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
+        ncell = cx * cy * cz
+        self._skip = cla.empty(q, ncell, np.uint8)
+        self._active_flags = cla.empty(q, ncell, np.int32)
+        self._active_list = cla.empty(q, ncell, np.int32)
+        self._count = cla.empty(q, 1, np.int32)
+        self._scan = _compaction_kernel(dev.context)
+        q.finish()
+
+    # -- classification ------------------------------------------------------------------
+
+    def set_isovalue(self, value) -> None:
+        """Set the isovalue; classifies cells (active flags, compaction, skip volume)."""
+        value = float(value)
+        if not np.isfinite(value):
+            raise RayCastError(f"the isovalue must be finite, got {value}")
+        self._isovalue = value
+        t = time.perf_counter()
+        if self._device is not None:
+            q = self._device.queue
+            cx, cy, cz = self._cells
+            self._k_skip(q, (cz, cy, cx), None, self._vmin.data, self._vmax.data,
+                                      self._levels_buf.data, np.int32(len(self._levels)),
+                                      np.float32(value), self._skip.data,
+                                      self._active_flags.data)
+            self._scan(self._active_flags, self._active_list, self._count, queue=q)
+            count = int(self._count.get(queue=q)[0])
+        elif self.model == "trilinear":
+            vmin, vmax = numpy_cell_bounds(self._volume.data)
+            count = int(np.count_nonzero((vmin <= np.float32(value)) & (np.float32(value) <= vmax)))
+        else:
+            count = None  # the NumPy path of the tetrahedral models does no classification
+        self.stats["classify_s"] = time.perf_counter() - t
+        self.stats["active_cells"] = count
+        self.stats["active_tets"] = None
+
+    def active_cells(self) -> np.ndarray:
+        """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the active cells."""
+        if self._isovalue is None:
+            raise RayCastError("set an isovalue before asking for active cells")
+        if self._device is None:
+            vmin, vmax = numpy_cell_bounds(self._volume.data)
+            iso = np.float32(self._isovalue)
+            return np.flatnonzero(((vmin <= iso) & (iso <= vmax)).ravel()).astype(np.int32)
+        n = self.stats["active_cells"]
+        return self._active_list[:n].get(queue=self._device.queue)
+
+    def skip_volume(self) -> np.ndarray:
+        """(nx-1, ny-1, nz-1) uint8 skip codes (255 = active, else macro level); OpenCL path."""
+        if self._device is None or self._isovalue is None:
+            raise RayCastError("the skip volume exists on the OpenCL path after set_isovalue")
+        return self._skip.get(queue=self._device.queue).reshape(self._cells)
+
+    # -- rendering -----------------------------------------------------------------------
+
+    def render(self, camera: Camera, size=(640, 480), clip_planes=()) -> ref.Frame:
+        """Ray cast one frame.
+
+        Parameters
+        ----------
+        camera : Camera
+        size : (width, height) or "WxH"
+        clip_planes : sequence of (origin, normal); each keeps the side its normal points to
+
+        Returns
+        -------
+        Frame
+        """
+        if self._isovalue is None:
+            raise RayCastError("set an isovalue before rendering")
+        if not isinstance(camera, Camera):
+            raise RayCastError("render needs a splineviz Camera")
+        w, h = parse_size(size)
+        planes = ref.normalize_clip_planes(clip_planes)
+        t = time.perf_counter()
+        if self._device is None:
+            frame = ref.reference_raycast(self.spline, camera, (w, h), self._isovalue, planes)
+        else:
+            frame = self._render_cl(camera, w, h, planes)
+        self.stats["render_s"] = time.perf_counter() - t
+        return frame
+
+    def _render_cl(self, camera, w, h, planes) -> ref.Frame:
+        import pyopencl.array as cla
+        from pyopencl import cltypes
+
+        dev = self._device
+        q = dev.queue
+        k_ray = get_kernel(dev.context, "raycast", "raycast",
+                           {KERNEL_MODELS[self.model]: 1, **_shading_defines()})
+        vol = self._volume
+        spacing = np.asarray(vol.spacing, dtype=np.float64)
+        origin = np.asarray(vol.origin, dtype=np.float64)
+        right, up, dop = camera.basis()
+        tan_half = np.tan(np.radians(camera.view_angle) / 2.0)
+        eye = np.asarray(camera.position, dtype=np.float64)
+        eye_u = (eye - origin) / spacing
+        clip = camera.fit_clipping_range(vol.bounds)
+        depth_a, depth_b = camera.projection_constants(clip)
+        # planes to index space: dot(x - o, n) = dot(u, spacing n) + dot(origin - o, n)
+        pl = np.zeros((max(len(planes), 1), 4), dtype=np.float32)
+        for i, (po, pn) in enumerate(planes):
+            pl[i, :3] = spacing * pn
+            pl[i, 3] = np.dot(origin - po, pn)
+        planes_buf = cla.to_device(q, pl)
+
+        def f3(v):
+            return cltypes.make_float3(*(float(x) for x in v))
+
+        n = w * h
+        hit = cla.empty(q, n, np.uint8)
+        pos = cla.empty(q, (n, 4), np.float32)
+        nor = cla.empty(q, (n, 4), np.float32)
+        depth = cla.empty(q, n, np.float32)
+        color = cla.empty(q, (n, 4), np.uint8)
+        nx, ny, nz = vol.shape
+        k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
+                     self._skip.data, np.float32(self._isovalue), f3(eye), f3(eye_u), f3(dop),
+                     f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
+                     planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
+                     np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
+        hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
+        pos_h = pos.get(queue=q).reshape(h, w, 4)
+        position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
+                            np.nan)
+        normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
+        return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
+                         color.get(queue=q).reshape(h, w, 4))
+
+
+_scan_cache: dict = {}
+
+
+def _compaction_kernel(context):
+    """Stream compaction by a prefix scan (thesis Fig. 6.3): flags -> indices of ones."""
+    key = context.int_ptr
+    knl = _scan_cache.get(key)
+    if knl is None:
+        from pyopencl.scan import GenericScanKernel
+
+        knl = GenericScanKernel(
+            context, np.int32,
+            arguments="__global const int *flags, __global int *out, __global int *count",
+            input_expr="flags[i]",
+            scan_expr="a+b", neutral="0",
+            output_statement="""
+                if (prev_item != item) out[item - 1] = i;
+                if (i + 1 == N) count[0] = item;
+            """,
+        )
+        _scan_cache[key] = knl
+    return knl
+
+
+def get_raycast_device(preference=None):
+    """The device the ray caster would use (raises NoDeviceError when there is none)."""
+    return get_device(preference)

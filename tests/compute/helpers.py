@@ -1,0 +1,118 @@
+"""Shared helpers of the ray-casting tests: data loading, cameras and the acceptance metrics
+of issue 4 (kernel frame vs. NumPy reference frame)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from splineviz.core.camera import Camera
+from splineviz.core.splines.base import Spline
+from splineviz.core.volume import Volume
+
+DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "volumes"
+
+
+def load_volume(name: str) -> Volume:
+    """bonsai.vti / engine.vti (pyvista) or tooth.nrrd (pynrrd) as a Volume."""
+    path = DATA / name
+    if path.suffix == ".nrrd":
+        import nrrd
+
+        data, header = nrrd.read(str(path))
+        spacing = np.linalg.norm(header.get("space directions", np.eye(3)), axis=1)
+        origin = header.get("space origin", np.zeros(3))
+        return Volume(data, spacing=spacing, origin=origin)
+    import pyvista as pv
+
+    img = pv.read(str(path))
+    arr = np.asarray(img.point_data[img.array_names[0]])
+    nx, ny, nz = img.dimensions
+    data = arr.reshape(nz, ny, nx).transpose(2, 1, 0)  # VTK: x varies fastest
+    return Volume(data, spacing=img.spacing, origin=img.origin)
+
+
+def marschner_lobb(n: int = 41) -> tuple[Volume, float]:
+    """Marschner-Lobb sampled on n^3 points over its thesis domain, and its isovalue."""
+    from splineviz.core.testfunctions import TEST_FUNCTIONS
+
+    f = TEST_FUNCTIONS["ml"]
+    return Volume.from_function(f, (n, n, n), f.domain), float(f.isovalue)
+
+
+def cameras(volume: Volume) -> list[Camera]:
+    """Three off-axis cameras looking at the data box from different sides."""
+    b = np.asarray(volume.bounds)
+    c = b.mean(axis=1)
+    r = np.linalg.norm(b[:, 1] - b[:, 0])
+    dirs = [(1.0, -1.3, 0.8), (-1.2, -0.4, -0.9), (0.3, 1.1, 1.4)]
+    ups = [(0, 0, 1), (0, 0, 1), (1, 0, 0)]
+    out = []
+    for d, up in zip(dirs, ups, strict=True):
+        d = np.asarray(d) / np.linalg.norm(d)
+        out.append(Camera(c + 1.6 * r * d, c, view_up=up, view_angle=35.0))
+    return out
+
+
+class LocalTrilinear(Spline):
+    """Trilinear interpolation written independently of the kernel (test oracle)."""
+
+    model = "trilinear"
+
+    def index_derivatives(self, u, order):
+        d = self.volume.data.astype(np.float64)
+        hi = np.asarray(d.shape) - 2
+        c = np.clip(np.floor(u).astype(np.int64), 0, hi)
+        p = u - c
+        val = np.zeros(len(u))
+        grad = np.zeros((len(u), 3))
+        for di in (0, 1):
+            for dj in (0, 1):
+                for dk in (0, 1):
+                    v = d[c[:, 0] + di, c[:, 1] + dj, c[:, 2] + dk]
+                    wx = p[:, 0] if di else 1 - p[:, 0]
+                    wy = p[:, 1] if dj else 1 - p[:, 1]
+                    wz = p[:, 2] if dk else 1 - p[:, 2]
+                    sx, sy, sz = (1 if di else -1), (1 if dj else -1), (1 if dk else -1)
+                    val += v * wx * wy * wz
+                    grad[:, 0] += v * sx * wy * wz
+                    grad[:, 1] += v * wx * sy * wz
+                    grad[:, 2] += v * wx * wy * sz
+        if order == 0:
+            return val[:, None]
+        return np.concatenate([val[:, None], grad], axis=1)
+
+
+def compare_frames(test, ref, spline, isovalue, clip_planes=()) -> dict:
+    """Acceptance metrics of issue 4 for a kernel frame ``test`` against ``ref``.
+
+    Returns
+    -------
+    dict with hit_agreement (fraction of pixels), both (number of pixels hit by both),
+    pos_ok (fraction of both-hit pixels whose positions agree within 1e-3 voxel), pos_max
+    (voxels), value_max (max |s(x) - iso| / data range over the kernel's hits), normal_ok
+    (fraction within 0.5 degree), normal_max (degrees), clip_violations (hits on a cut side).
+    """
+    vol = spline.volume
+    lo, hi = vol.finite_range
+    both = test.hit & ref.hit
+    spacing = np.asarray(vol.spacing)
+    dpos = np.linalg.norm((test.position[both] - ref.position[both]) / spacing, axis=1)
+    cosang = np.clip(np.sum(test.normal[both] * ref.normal[both], axis=1), -1, 1)
+    ang = np.degrees(np.arccos(cosang))
+    vals = spline.evaluate(test.position[test.hit]) if test.hit.any() else np.zeros(0)
+    viol = 0
+    for o, n in clip_planes:
+        n = np.asarray(n, float) / np.linalg.norm(n)
+        viol += int(np.sum((test.position[test.hit] - np.asarray(o)) @ n < -1e-4))
+    return {
+        "hit_agreement": float(np.mean(test.hit == ref.hit)),
+        "both": int(both.sum()),
+        "pos_ok": float(np.mean(dpos <= 1e-3)) if both.any() else 1.0,
+        "pos_max": float(dpos.max()) if both.any() else 0.0,
+        "value_max": float(np.max(np.abs(vals - isovalue)) / (hi - lo)) if vals.size else 0.0,
+        "normal_ok": float(np.mean(ang <= 0.5)) if both.any() else 1.0,
+        "normal_max": float(ang.max()) if both.any() else 0.0,
+        "clip_violations": viol,
+    }

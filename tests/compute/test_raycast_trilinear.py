@@ -1,0 +1,160 @@
+"""The trilinear OpenCL ray caster against the NumPy reference (issue 4 acceptance criteria).
+
+Default run: Marschner-Lobb 41^3 from three cameras, tooth.nrrd from one camera and a clipped
+view; bonsai.vti and the other tooth cameras are ``slow``.
+"""
+
+import numpy as np
+import pytest
+
+from splineviz.compute import device as devmod
+from splineviz.compute.raycast import RayCaster, RayCastError, numpy_cell_bounds
+from splineviz.core.camera import Camera
+from splineviz.core.raycast_reference import reference_raycast
+from splineviz.core.volume import Volume
+
+from .helpers import LocalTrilinear, cameras, compare_frames, load_volume, marschner_lobb
+
+try:
+    devmod.get_device("auto")
+    HAVE_CL = True
+except devmod.NoDeviceError:
+    HAVE_CL = False
+
+needs_cl = pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device at all")
+SIZE = (160, 120)
+
+
+def _check(metrics):
+    assert metrics["hit_agreement"] >= 0.995, metrics
+    assert metrics["pos_ok"] >= 0.995 and metrics["normal_ok"] >= 0.995, metrics
+    assert metrics["value_max"] <= 1e-5, metrics
+    assert metrics["clip_violations"] == 0, metrics
+    assert metrics["both"] > 500, metrics  # the view must actually show the surface
+
+
+def _run(vol, iso, cam, planes=(), step=0.25):
+    rc = RayCaster(vol, model="trilinear")
+    rc.set_isovalue(iso)
+    frame = rc.render(cam, SIZE, clip_planes=planes)
+    spline = LocalTrilinear(vol)
+    ref = reference_raycast(spline, cam, SIZE, iso, clip_planes=planes, step=step)
+    return frame, ref, compare_frames(frame, ref, spline, iso, planes)
+
+
+@needs_cl
+@pytest.mark.parametrize("cam_index", [0, 1, 2])
+def test_marschner_lobb_matches_reference(cam_index):
+    vol, iso = marschner_lobb(41)
+    frame, ref, m = _run(vol, iso, cameras(vol)[cam_index])
+    _check(m)
+    hit = frame.hit & ref.hit
+    np.testing.assert_allclose(frame.depth[hit], ref.depth[hit], atol=1e-5)
+    assert np.all(frame.depth[~frame.hit] == 1)
+    # Phong in the kernel and in NumPy: the same formula, up to float32 rounding
+    diff = np.abs(frame.color[hit].astype(int) - ref.color[hit].astype(int))
+    assert diff.max() <= 1
+    np.testing.assert_array_equal(frame.color[~frame.hit & ~ref.hit],
+                                  ref.color[~frame.hit & ~ref.hit])
+
+
+@needs_cl
+def test_tooth_matches_reference():
+    vol = load_volume("tooth.nrrd")
+    _, _, m = _run(vol, 100.0, cameras(vol)[0], step=0.5)
+    _check(m)
+
+
+@needs_cl
+def test_tooth_clipped_is_exact_cut():
+    vol = load_volume("tooth.nrrd")
+    c = np.asarray(vol.bounds).mean(axis=1)
+    planes = [(c, (0.3, -1.0, 0.2)), (c + (0, 0, 30), (0, 0, -1.0))]
+    frame, ref, m = _run(vol, 100.0, cameras(vol)[0], planes, step=0.5)
+    _check(m)
+    # the cut shows the inside: some hits lie on the back side of the surface
+    unclipped = RayCaster(vol, model="trilinear")
+    unclipped.set_isovalue(100.0)
+    full = unclipped.render(cameras(vol)[0], SIZE)
+    assert np.sum(frame.hit & full.hit & (frame.depth > full.depth + 1e-4)) > 100
+
+
+@needs_cl
+@pytest.mark.slow
+@pytest.mark.parametrize("name,iso,cam_index", [("tooth.nrrd", 100.0, 1), ("tooth.nrrd", 100.0, 2),
+                                                ("bonsai.vti", 40.0, 0), ("bonsai.vti", 40.0, 1),
+                                                ("bonsai.vti", 40.0, 2)])
+def test_real_data_matches_reference_slow(name, iso, cam_index):
+    vol = load_volume(name)
+    _, _, m = _run(vol, iso, cameras(vol)[cam_index], step=0.5)
+    _check(m)
+
+
+def _random_volume(shape=(13, 9, 11), seed=3):
+    rng = np.random.default_rng(seed)
+    # smooth-ish field so that some macro cubes are empty and some are not
+    x, y, z = np.meshgrid(*(np.linspace(-1, 1, n) for n in shape), indexing="ij")
+    return Volume(x**2 + 0.5 * y**2 + z**2 + 0.05 * rng.standard_normal(shape))
+
+
+@needs_cl
+def test_classification_compaction_and_skip_volume():
+    vol = _random_volume()
+    rc = RayCaster(vol, model="trilinear")
+    rc.set_isovalue(0.6)
+    vmin, vmax = numpy_cell_bounds(vol.data)
+    active = (vmin <= np.float32(0.6)) & (np.float32(0.6) <= vmax)
+    assert rc.stats["active_cells"] == active.sum() > 0
+    np.testing.assert_array_equal(np.sort(rc.active_cells()), np.flatnonzero(active.ravel()))
+    skip = rc.skip_volume()
+    np.testing.assert_array_equal(skip == 255, active)
+    top = int(np.ceil(np.log2(max(active.shape))))
+    for (i, j, k), code in np.ndenumerate(skip):
+        if code == 255:
+            continue
+        L = int(code)
+        lo = np.array([i, j, k]) >> L << L
+        block = active[lo[0]:lo[0] + 2**L, lo[1]:lo[1] + 2**L, lo[2]:lo[2] + 2**L]
+        assert not block.any()  # the macro cube is empty ...
+        if L < top:  # ... and maximal: the next larger one is not
+            lo2 = np.array([i, j, k]) >> (L + 1) << (L + 1)
+            big = active[lo2[0]:lo2[0] + 2**(L + 1), lo2[1]:lo2[1] + 2**(L + 1),
+                         lo2[2]:lo2[2] + 2**(L + 1)]
+            assert big.any()
+    # a new isovalue reclassifies; a new volume rebuilds the octree
+    rc.set_isovalue(10.0)
+    assert rc.stats["active_cells"] == 0
+    rc.set_volume(Volume(vol.data * 10))
+    assert rc.stats["active_cells"] == np.sum((vmin * 10 <= 10) & (10 <= vmax * 10))
+
+
+@needs_cl
+def test_empty_space_leaping_changes_nothing():
+    # the same frame with every cell forced active (no leaping) and with the skip volume
+    vol, iso = marschner_lobb(25)
+    rc = RayCaster(vol, model="trilinear")
+    rc.set_isovalue(iso)
+    cam = cameras(vol)[1]
+    leaped = rc.render(cam, (80, 60))
+    assert (rc.skip_volume() != 255).any()
+    rc._skip.fill(np.uint8(255), queue=rc._device.queue)
+    dense = rc.render(cam, (80, 60))
+    np.testing.assert_array_equal(leaped.hit, dense.hit)
+    np.testing.assert_allclose(leaped.position[leaped.hit], dense.position[dense.hit], atol=1e-4)
+
+
+def test_numpy_path_and_errors(monkeypatch):
+    vol = _random_volume((6, 6, 6))
+    rc = RayCaster(vol, model="trilinear", device="numpy")
+    assert rc.stats["path"] == "numpy" and rc.stats["device"] == "numpy"
+    with pytest.raises(RayCastError, match="isovalue"):
+        rc.render(Camera((3, -10, 3), (2.5, 2.5, 2.5)), (8, 6))
+    rc.set_isovalue(0.6)
+    vmin, vmax = numpy_cell_bounds(vol.data)
+    assert rc.stats["active_cells"] == np.sum((vmin <= 0.6) & (0.6 <= vmax))
+    with pytest.raises(RayCastError, match="unknown spline model"):
+        RayCaster(vol, model="quartic")
+    with pytest.raises(RayCastError, match="at least 2 samples"):
+        RayCaster(np.zeros((1, 4, 4)), model="trilinear", device="numpy")
+    with pytest.raises(RayCastError, match="finite"):
+        rc.set_isovalue(np.nan)
