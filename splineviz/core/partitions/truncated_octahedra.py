@@ -115,14 +115,35 @@ def barycentric_matrices() -> np.ndarray:
 
 
 @cache
-def _face_candidates() -> np.ndarray:
-    """(14, 12) tetrahedra over each face, padded by repetition (squares have 8)."""
-    _, _, face_of = generic_tetrahedra()
-    cand = np.empty((14, 12), dtype=np.int64)
-    for f in range(14):
-        ids = np.flatnonzero(face_of == f)
-        cand[f] = np.resize(ids, 12)
-    return cand
+def _face_sectors():
+    """Per face: an in-plane frame and the generic tetrahedron of each angular sector.
+
+    The faces are regular polygons and their tetrahedra are the fan triangles (centre, edge
+    midpoint, vertex), each spanning pi/n_edges of angle measured from the first loop vertex;
+    so a point's tetrahedron follows from the angle of its projection on the face plane.
+
+    Returns
+    -------
+    frames : (14, 2, 3) unit vectors u, w spanning each face plane
+    sectors : (14, 12) generic tetrahedron per sector (squares use the first 8)
+    n_sectors : (14,) 8 or 12
+    """
+    verts, _, face_of = generic_tetrahedra()
+    frames = np.empty((14, 2, 3))
+    sectors = np.zeros((14, 12), dtype=np.int64)
+    n_sectors = np.empty(14, dtype=np.int64)
+    for f, face in enumerate(faces()):
+        u = face["loop"][0] - face["centre"]
+        u /= np.linalg.norm(u)
+        w = np.cross(face["normal"] / np.linalg.norm(face["normal"]), u)
+        frames[f] = u, w
+        n = 2 * len(face["loop"])
+        n_sectors[f] = n
+        for t in np.flatnonzero(face_of == f):
+            mid = verts[t, 1:].mean(axis=0) - face["centre"]  # centroid of [v1, v2, v3]
+            ang = np.arctan2(mid @ w, mid @ u) % (2 * np.pi)
+            sectors[f, int(ang // (2 * np.pi / n))] = t
+    return frames, sectors, n_sectors
 
 
 def nearest_centre(points: np.ndarray) -> np.ndarray:
@@ -162,12 +183,17 @@ def locate(points: np.ndarray):
     d = p - centre
     ratio = np.concatenate([d @ (SQUARE_NEIGHBOURS.T / 2.0), d @ HEX_NEIGHBOURS.T / 1.5], axis=1)
     face = np.argmax(ratio, axis=1)
-    cand = _face_candidates()[face]  # (N, 12)
-    mats = barycentric_matrices()[cand]  # (N, 12, 4, 4)
-    lam = np.einsum("nkij,nj->nki", mats[..., :3], d) + mats[..., 3]
-    best = np.argmax(lam.min(axis=2), axis=1)
-    rows = np.arange(len(p))
-    return centre, cand[rows, best], lam[rows, best]
+    frames, sectors, n_sectors = _face_sectors()
+    centre_f = np.array([f["centre"] for f in faces()])[face]
+    q = d - centre_f
+    ang = np.arctan2(np.einsum("nc,nc->n", q, frames[face, 1]),
+                     np.einsum("nc,nc->n", q, frames[face, 0])) % (2 * np.pi)
+    n = n_sectors[face]
+    sector = np.minimum((ang * n / (2 * np.pi)).astype(np.int64), n - 1)
+    tet = sectors[face, sector]
+    mats = barycentric_matrices()[tet]
+    lam = np.einsum("nij,nj->ni", mats[:, :, :3], d) + mats[:, :, 3]
+    return centre, tet, lam
 
 
 def _key(points: np.ndarray) -> tuple:

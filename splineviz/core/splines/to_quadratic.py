@@ -184,6 +184,9 @@ def coefficients(padded: np.ndarray, base: np.ndarray, tet: np.ndarray, k: float
     """
     out = np.empty((len(tet), 10))
     table = stencils(k)
+    strides = np.array(padded.strides) // padded.itemsize
+    flat = np.ravel(padded)
+    base_flat = base @ strides
     order = np.argsort(tet, kind="stable")
     bounds = np.searchsorted(tet[order], np.arange(145))
     for t in range(144):
@@ -191,9 +194,7 @@ def coefficients(padded: np.ndarray, base: np.ndarray, tet: np.ndarray, k: float
         if len(rows) == 0:
             continue
         offsets, w = table[t]
-        idx = base[rows, None, :] + offsets[None]  # (n, K, 3)
-        values = padded[idx[..., 0], idx[..., 1], idx[..., 2]]
-        out[rows] = values @ w.T
+        out[rows] = flat[base_flat[rows, None] + offsets @ strides] @ w.T
     return out
 
 
