@@ -20,6 +20,16 @@ _LAZY = {
     "Camera": "splineviz.core.camera:Camera",
     "RayCaster": "splineviz.compute.raycast:RayCaster",
     "Frame": "splineviz.core.raycast_reference:Frame",
+    "read_volume": "splineviz.io.volumes:read_volume",
+    "write_volume": "splineviz.io.volumes:write_volume",
+    "read_points": "splineviz.io.points:read_points",
+    "read_mesh": "splineviz.io.meshes:read_mesh",
+    "write_mesh": "splineviz.io.meshes:write_mesh",
+    "write_screenshot": "splineviz.io.meshes:write_screenshot",
+    "load_session": "splineviz.io.session:load_session",
+    "save_session": "splineviz.io.session:save_session",
+    "Session": "splineviz.io.session:Session",
+    "register_format": "splineviz.io.registry:register_format",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

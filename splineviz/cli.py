@@ -17,7 +17,9 @@ from splineviz import __version__
 from splineviz.core.errors import SplinevizError
 
 # sub-command name -> "module:register_function"
-SUBCOMMANDS: dict[str, str] = {}
+SUBCOMMANDS: dict[str, str] = {
+    "info": "splineviz.io.info:register",
+}
 
 
 def _build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,92 @@
+"""``splineviz info FILE``: what a volume, point, mesh or session file holds."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from splineviz.io.errors import UnknownFormatError
+
+
+def describe(path) -> dict:
+    """Summary of a file: kind, format and geometry.
+
+    Returns
+    -------
+    dict
+        For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds``; for points:
+        ``kind, format, points, normals, colors, bounds``; for sessions: ``kind,
+        schema_version, objects, views``.
+    """
+    from splineviz.io._util import regular_input
+    from splineviz.io.points import load_point_data, validate_point_data
+    from splineviz.io.session import load_session
+    from splineviz.io.volumes import load_volume_data, validate_volume_data
+
+    p = regular_input(path, allow_dir=True)
+    if p.suffix.lower() == ".svs":
+        s = load_session(p, check_data=False)
+        return {"kind": "session", "file": str(p), "schema_version": s.schema_version,
+                "objects": [f"{o.id} ({o.type})" for o in s.objects],
+                "views": [v.id for v in s.views]}
+    try:
+        vd = load_volume_data(p)
+    except UnknownFormatError:
+        try:
+            raw = load_point_data(p)
+        except UnknownFormatError:
+            from splineviz.io.registry import formats
+
+            names = ", ".join(f.name for k in ("volume", "points") for f in formats(k))
+            raise UnknownFormatError(f"cannot tell the format of {p.name}; readable formats: "
+                                     f"{names}") from None
+        pd = validate_point_data(raw, p.name, dedupe=False)
+        lo, hi = pd.points.min(axis=0), pd.points.max(axis=0)
+        return {"kind": "points", "file": str(p), "format": pd.format,
+                "points": int(len(pd.points)), "normals": pd.normals is not None,
+                "colors": pd.colors is not None,
+                "bounds": [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]}
+    validate_volume_data(vd, p.name)
+    data = np.asarray(vd.data)
+    finite = np.isfinite(data) if data.dtype.kind == "f" else None
+    vals = data[finite] if finite is not None else data
+    rng = [float(vals.min()), float(vals.max())] if vals.size else None
+    shape = tuple(int(n) for n in data.shape)
+    return {"kind": "volume", "file": str(p), "format": vd.format, "dims": list(shape),
+            "dtype": str(data.dtype), "range": rng,
+            "nonfinite": int(data.size - finite.sum()) if finite is not None else 0,
+            "spacing": [float(s) for s in vd.spacing], "origin": [float(o) for o in vd.origin],
+            "bounds": [[o, o + (n - 1) * s] for o, n, s in zip(vd.origin, shape, vd.spacing,
+                                                              strict=True)]}
+
+
+def format_info(info: dict) -> str:
+    """Human-readable lines for :func:`describe`'s dict."""
+    lines = []
+    for key, val in info.items():
+        if isinstance(val, list) and val and isinstance(val[0], list):
+            val = "  ".join(f"[{a:g}, {b:g}]" for a, b in val)
+        elif isinstance(val, list) and val and isinstance(val[0], float):
+            val = " ".join(f"{v:g}" for v in val)
+        elif isinstance(val, list):
+            val = " ".join(str(v) for v in val)
+        lines.append(f"{key:>15}: {val}")
+    return "\n".join(lines)
+
+
+def register(subparsers) -> None:
+    """Add the ``info`` sub-command (cli.SUBCOMMANDS)."""
+    p = subparsers.add_parser("info", help="what a file holds (dims, dtype, range, spacing)")
+    p.add_argument("file", help="volume, point cloud, mesh or session file (or DICOM folder)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.set_defaults(func=_run)
+
+
+def _run(args) -> int:
+    import json
+
+    info = describe(Path(os.fspath(args.file)))
+    print(json.dumps(info, indent=2) if args.json else format_info(info))
+    return 0

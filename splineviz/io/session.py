@@ -1,0 +1,615 @@
+"""Session files (``*.svs``): a ParaView-like, versioned JSON description of a scene.
+
+Document layout (schema :data:`SCHEMA_VERSION`)::
+
+    {
+      "format": "splineviz-session",
+      "schema_version": 2,
+      "app_version": "0.1.0",
+      "objects": [                          # pipeline, inputs before outputs
+        {"id": "vol1", "type": "VolumeFile", "name": "bonsai",
+         "properties": {"path": "data/bonsai.vti"}},
+        {"id": "iso1", "type": "Isosurface", "inputs": ["vol1"],
+         "properties": {"isovalue": 40.0, "model": "cubic-c1", "color": [0.8, 0.6, 0.3]}},
+        {"id": "clip1", "type": "ClipPlane", "inputs": ["iso1"],
+         "properties": {"origin": [128, 128, 128], "normal": [1, 0, 0]}}
+      ],
+      "views": [{"id": "view1", "camera": {...}, "background": [...], "lights": [...],
+                 "layout": {...}}]
+    }
+
+Only properties that differ from their defaults are written (the napari ``_get_state`` habit).
+Data paths are stored relative to the session file and resolved against its folder on load;
+an absolute path is accepted only inside that folder, and a missing file can be re-pointed
+with the ``repoint`` callback of :func:`load_session`.
+
+Safety: a session is data only. It is parsed with :func:`json.loads` (NaN/Infinity and
+duplicate keys refused), validated by pydantic models that forbid unknown keys, bounded in
+size, depth and number magnitude, and never names code to import or run. A malformed session
+raises a :class:`~splineviz.io.errors.SessionError` and changes nothing.
+
+Migrations: :data:`MIGRATIONS` maps a schema version to the function that lifts a document
+to the next version; :func:`migrate` applies them in order.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import stat
+from collections.abc import Callable
+from pathlib import Path, PurePosixPath
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from splineviz.io._util import atomic_output
+from splineviz.io.errors import SessionError, SessionPathError, SessionVersionError
+
+FORMAT = "splineviz-session"
+SCHEMA_VERSION = 2
+#: largest session file read, in bytes (a scene description, not data)
+MAX_SESSION_BYTES = 16 * 2**20
+#: largest coordinate or value magnitude accepted (beyond it float32 rendering breaks down)
+MAX_MAGNITUDE = 1e15
+#: most pipeline objects / views / lights in one session
+MAX_OBJECTS = 10_000
+MAX_VIEWS = 64
+MAX_LIGHTS = 16
+#: longest stored path or name
+MAX_TEXT = 4096
+
+_ID = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
+
+Finite = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
+Unit = Annotated[float, Field(allow_inf_nan=False, ge=0.0, le=1.0)]
+Vec3 = tuple[Finite, Finite, Finite]
+RGB = tuple[Unit, Unit, Unit]
+Text = Annotated[str, Field(max_length=MAX_TEXT)]
+Size = Annotated[int, Field(ge=2, le=4096)]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True)
+
+
+def _check_path_text(v: str) -> str:
+    if not v or "\x00" in v:
+        raise ValueError("a data path must be a non-empty string without NUL characters")
+    return v
+
+
+# ---------------------------------------------------------------------------- properties
+class VolumeFileProps(_Model):
+    """A volume read with :func:`~splineviz.io.read_volume`; raw files need dims/dtype."""
+
+    path: Text
+    format: str | None = None
+    dims: tuple[Size, Size, Size] | None = None
+    dtype: Literal["uint8", "int8", "uint16", "int16", "uint32", "int32", "float32",
+                   "float64"] | None = None
+    byteorder: Literal["little", "big"] = "little"
+    offset: Annotated[int, Field(ge=0, le=2**40)] = 0
+    spacing: tuple[Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)],
+                   ...] | None = None
+    origin: Vec3 | None = None
+
+    _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
+
+
+class SourceProps(_Model):
+    """A synthetic source offered by a plugin (see :mod:`splineviz.plugins`)."""
+
+    source: Annotated[str, Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$")]
+    shape: tuple[Size, Size, Size] = (64, 64, 64)
+
+
+class PointsFileProps(_Model):
+    path: Text
+    format: str | None = None
+    color: RGB = (0.8, 0.8, 0.8)
+    point_size: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 3.0
+    opacity: Unit = 1.0
+    visible: bool = True
+
+    _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
+
+
+class MeshFileProps(_Model):
+    path: Text
+    color: RGB = (0.8, 0.8, 0.8)
+    opacity: Unit = 1.0
+    show_edges: bool = False
+    visible: bool = True
+
+    _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
+
+
+class IsosurfaceProps(_Model):
+    """An isosurface of the spline ``model`` over its input volume (thesis ch. 6)."""
+
+    isovalue: Finite
+    model: Annotated[str, Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$")] = "to-quadratic"
+    k: Annotated[int, Field(ge=1, le=16)] = 2
+    color: RGB = (0.9, 0.9, 0.9)
+    opacity: Unit = 1.0
+    visible: bool = True
+
+
+class RemeshProps(_Model):
+    """A mesh from a point cloud by projection and advancing front (thesis ch. 7)."""
+
+    edge_length: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None = None
+    rho: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False)] | None = None
+    color: RGB = (0.8, 0.8, 0.8)
+    opacity: Unit = 1.0
+    show_edges: bool = True
+    visible: bool = True
+
+
+class ClipPlaneProps(_Model):
+    """A clip plane keeping the side its normal points to (DESIGN.md ``clip_planes``)."""
+
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    normal: Vec3 = (1.0, 0.0, 0.0)
+    enabled: bool = True
+
+    @field_validator("normal")
+    @classmethod
+    def _nonzero(cls, v):
+        if sum(c * c for c in v) == 0.0:
+            raise ValueError("a clip plane normal must not be zero")
+        return v
+
+
+# ---------------------------------------------------------------------------- objects
+class _Object(_Model):
+    id: Annotated[str, Field(pattern=_ID)]
+    name: Annotated[str, Field(max_length=200)] = ""
+    inputs: Annotated[list[Annotated[str, Field(pattern=_ID)]], Field(max_length=64)] = []
+
+
+class VolumeFile(_Object):
+    type: Literal["VolumeFile"] = "VolumeFile"
+    properties: VolumeFileProps
+
+
+class Source(_Object):
+    type: Literal["Source"] = "Source"
+    properties: SourceProps
+
+
+class PointsFile(_Object):
+    type: Literal["PointsFile"] = "PointsFile"
+    properties: PointsFileProps
+
+
+class MeshFile(_Object):
+    type: Literal["MeshFile"] = "MeshFile"
+    properties: MeshFileProps
+
+
+class Isosurface(_Object):
+    type: Literal["Isosurface"] = "Isosurface"
+    properties: IsosurfaceProps
+
+
+class Remesh(_Object):
+    type: Literal["Remesh"] = "Remesh"
+    properties: RemeshProps = Field(default_factory=RemeshProps)
+
+
+class ClipPlane(_Object):
+    type: Literal["ClipPlane"] = "ClipPlane"
+    properties: ClipPlaneProps = Field(default_factory=ClipPlaneProps)
+
+
+PipelineObject = Annotated[
+    VolumeFile | Source | PointsFile | MeshFile | Isosurface | Remesh | ClipPlane,
+    Field(discriminator="type"),
+]
+
+#: object type -> (number of inputs allowed (min, max), input types allowed)
+INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
+    "VolumeFile": ((0, 0), ()),
+    "Source": ((0, 0), ()),
+    "PointsFile": ((0, 0), ()),
+    "MeshFile": ((0, 0), ()),
+    "Isosurface": ((1, 1), ("VolumeFile", "Source")),
+    "Remesh": ((1, 1), ("PointsFile",)),
+    "ClipPlane": ((1, 64), ("Isosurface", "PointsFile", "MeshFile", "Remesh")),
+}
+
+#: object types whose ``properties.path`` names a data file
+FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
+
+
+# ---------------------------------------------------------------------------- views
+class CameraState(_Model):
+    """VTK camera conventions, as :class:`splineviz.core.camera.Camera`."""
+
+    position: Vec3 = (0.0, 0.0, 1.0)
+    focal_point: Vec3 = (0.0, 0.0, 0.0)
+    view_up: Vec3 = (0.0, 1.0, 0.0)
+    view_angle: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 30.0
+    parallel_projection: bool = False
+    parallel_scale: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] = 1.0
+
+
+class Light(_Model):
+    type: Literal["headlight", "camera", "scene"] = "headlight"
+    position: Vec3 = (0.0, 0.0, 1.0)
+    focal_point: Vec3 = (0.0, 0.0, 0.0)
+    color: RGB = (1.0, 1.0, 1.0)
+    intensity: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)] = 1.0
+
+
+class Layout(_Model):
+    """Cell of the view in the window's grid of views."""
+
+    row: Annotated[int, Field(ge=0, le=15)] = 0
+    col: Annotated[int, Field(ge=0, le=15)] = 0
+    row_span: Annotated[int, Field(ge=1, le=16)] = 1
+    col_span: Annotated[int, Field(ge=1, le=16)] = 1
+
+
+class View(_Model):
+    id: Annotated[str, Field(pattern=_ID)] = "view1"
+    type: Literal["RenderView"] = "RenderView"
+    camera: CameraState = Field(default_factory=CameraState)
+    background: RGB = (0.1, 0.1, 0.15)
+    background2: RGB | None = None  # gradient top colour
+    lights: Annotated[list[Light], Field(max_length=MAX_LIGHTS)] = [Light()]
+    layout: Layout = Field(default_factory=Layout)
+    size: tuple[Annotated[int, Field(ge=1, le=16384)],
+                Annotated[int, Field(ge=1, le=16384)]] | None = None
+    hidden: Annotated[list[Annotated[str, Field(pattern=_ID)]], Field(max_length=MAX_OBJECTS)] = []
+
+
+class Session(_Model):
+    """A scene: pipeline objects (inputs first) and views.
+
+    Data paths in a loaded session are absolute (resolved against the session's folder);
+    :func:`save_session` writes them relative to the new file's folder.
+    """
+
+    format: Literal["splineviz-session"] = FORMAT
+    schema_version: Literal[2] = SCHEMA_VERSION
+    app_version: Annotated[str, Field(max_length=64)] = ""
+    objects: Annotated[list[PipelineObject], Field(max_length=MAX_OBJECTS)] = []
+    views: Annotated[list[View], Field(max_length=MAX_VIEWS)] = Field(
+        default_factory=lambda: [View()])
+
+    def object(self, obj_id: str):
+        """The pipeline object with id ``obj_id``."""
+        for o in self.objects:
+            if o.id == obj_id:
+                return o
+        raise KeyError(obj_id)
+
+    def data_files(self) -> list[tuple[str, Path]]:
+        """(object id, path) for every object that reads a data file."""
+        return [(o.id, Path(o.properties.path)) for o in self.objects if o.type in FILE_TYPES]
+
+    def missing_files(self) -> list[tuple[str, Path]]:
+        """Data files that do not exist (to re-point)."""
+        return [(i, p) for i, p in self.data_files() if not p.exists()]
+
+    def repoint(self, obj_id: str, new_path) -> None:
+        """Point object ``obj_id`` at another data file."""
+        obj = self.object(obj_id)
+        if obj.type not in FILE_TYPES:
+            raise SessionError(f"object {obj_id!r} ({obj.type}) has no data file")
+        obj.properties.path = str(Path(os.fspath(new_path)).expanduser().absolute())
+
+    def to_document(self, base_dir=None) -> dict:
+        """The JSON document (non-default properties only), paths relative to ``base_dir``."""
+        objects = []
+        for o in self.objects:
+            d = o.model_dump(mode="json", exclude_defaults=True)
+            entry = {"id": o.id, "type": o.type}  # the discriminator is always written
+            for key in ("name", "inputs"):
+                if key in d:
+                    entry[key] = d[key]
+            entry["properties"] = d.get("properties", {})
+            if "path" in entry["properties"] and base_dir is not None:
+                entry["properties"]["path"] = _relative(entry["properties"]["path"],
+                                                        Path(base_dir))
+            objects.append(entry)
+        views = [{"id": v.id, "type": v.type, **{k: val for k, val in v.model_dump(
+            mode="json", exclude_defaults=True).items() if k not in ("id", "type")}}
+            for v in self.views]
+        doc = {"format": FORMAT, "schema_version": SCHEMA_VERSION,
+               "app_version": self.app_version or _app_version(),
+               "objects": objects, "views": views}
+        return doc
+
+
+def _app_version() -> str:
+    from splineviz import __version__
+
+    return __version__
+
+
+def _relative(path: str, base: Path) -> str:
+    p = Path(path)
+    if not p.is_absolute():
+        return PurePosixPath(*Path(os.path.normpath(path)).parts).as_posix()
+    try:
+        rel = os.path.relpath(p, base.absolute())
+    except ValueError:  # another drive on Windows: no relative path exists
+        raise SessionPathError(f"{p} cannot be written relative to {base}") from None
+    return PurePosixPath(*Path(rel).parts).as_posix()
+
+
+# ---------------------------------------------------------------------------- migrations
+def _hex_to_rgb(value):
+    if isinstance(value, str) and re.fullmatch(r"#[0-9a-fA-F]{6}", value):
+        return [round(int(value[i:i + 2], 16) / 255, 6) for i in (1, 3, 5)]
+    return value
+
+
+def _v1_to_v2(doc: dict) -> dict:
+    """Schema 1 (pre-release builds): one ``view`` instead of ``views``, a single ``input``
+    string instead of an ``inputs`` list, ``iso`` for ``isovalue`` and ``#rrggbb`` colours
+    under the key ``colour``."""
+    out = {k: v for k, v in doc.items() if k not in ("view", "objects")}
+    objects = []
+    for o in doc.get("objects", []):
+        if not isinstance(o, dict):
+            objects.append(o)
+            continue
+        o = dict(o)
+        if "input" in o:
+            inp = o.pop("input")
+            o["inputs"] = [inp] if inp is not None else []
+        props = dict(o.get("properties", {})) if isinstance(o.get("properties"), dict) \
+            else o.get("properties")
+        if isinstance(props, dict):
+            if "iso" in props:
+                props["isovalue"] = props.pop("iso")
+            if "colour" in props:
+                props["color"] = _hex_to_rgb(props.pop("colour"))
+            o["properties"] = props
+        objects.append(o)
+    out["objects"] = objects
+    if "view" in doc:
+        view = dict(doc["view"]) if isinstance(doc["view"], dict) else doc["view"]
+        if isinstance(view, dict):
+            view.setdefault("id", "view1")
+            if "background" in view:
+                view["background"] = _hex_to_rgb(view["background"])
+        out["views"] = [view]
+    out["schema_version"] = 2
+    return out
+
+
+#: schema version -> function lifting a document of that version to the next one
+MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2}
+
+
+def migrate(doc: dict) -> dict:
+    """Lift a parsed session document to :data:`SCHEMA_VERSION` (a new dict; input unchanged).
+
+    Raises
+    ------
+    SessionVersionError
+        The version is missing, not an integer, newer than this program, or has no migration.
+    """
+    version = doc.get("schema_version")
+    if isinstance(version, bool) or not isinstance(version, int):
+        raise SessionVersionError(f"schema_version must be an integer, got {version!r}")
+    if version > SCHEMA_VERSION:
+        raise SessionVersionError(
+            f"the session has schema version {version}, newer than the {SCHEMA_VERSION} this "
+            "program understands; please update splineviz"
+        )
+    while version < SCHEMA_VERSION:
+        step = MIGRATIONS.get(version)
+        if step is None:
+            raise SessionVersionError(f"schema version {version} is unknown and cannot be "
+                                      "migrated")
+        doc = step(doc)
+        version = doc["schema_version"]
+    return doc
+
+
+# ---------------------------------------------------------------------------- load / save
+def _reject_constant(name):
+    raise SessionError(f"the session contains {name}, which is not a valid number")
+
+
+def _no_duplicates(pairs):
+    keys = [k for k, _ in pairs]
+    if len(keys) != len(set(keys)):
+        dup = next(k for k in keys if keys.count(k) > 1)
+        raise SessionError(f"the session repeats the key {dup!r} in one object")
+    return dict(pairs)
+
+
+def parse_document(text: str) -> dict:
+    """Strict JSON parse of a session document (no NaN/Infinity, no duplicate keys)."""
+    try:
+        doc = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_no_duplicates)
+    except json.JSONDecodeError as exc:
+        raise SessionError(f"the session is not valid JSON: {exc.msg} at line {exc.lineno}, "
+                           f"column {exc.colno}") from None
+    except RecursionError:
+        raise SessionError("the session is nested too deeply to be a session file") from None
+    except ValueError as exc:  # e.g. an integer with more digits than Python converts
+        raise SessionError(f"the session holds an unreadable value: {exc}") from None
+    if not isinstance(doc, dict):
+        raise SessionError("a session file must hold a JSON object at the top level")
+    if doc.get("format") != FORMAT:
+        raise SessionError(f"this is not a splineviz session (format is {doc.get('format')!r})")
+    return doc
+
+
+def _describe(err: ValidationError) -> str:
+    e = err.errors()[0]
+    loc = ".".join(str(p) for p in e.get("loc", ()) if not (isinstance(p, str) and p in (
+        "VolumeFile", "Source", "PointsFile", "MeshFile", "Isosurface", "Remesh",
+        "ClipPlane")))
+    msg = e.get("msg", "invalid value").rstrip(".")
+    return f"{loc or 'document'}: {msg}"
+
+
+def validate_document(doc: dict) -> Session:
+    """Migrate and validate a parsed document -> :class:`Session` (paths as stored)."""
+    doc = migrate(doc)
+    try:
+        session = Session.model_validate(doc)
+    except ValidationError as exc:
+        raise SessionError(f"invalid session entry {_describe(exc)}") from None
+    seen: dict[str, str] = {}
+    for o in session.objects:
+        if o.id in seen:
+            raise SessionError(f"two pipeline objects share the id {o.id!r}")
+        (lo, hi), allowed = INPUT_RULES[o.type]
+        if not lo <= len(o.inputs) <= hi:
+            raise SessionError(f"{o.type} {o.id!r} needs {lo if lo == hi else f'{lo} to {hi}'} "
+                               f"input(s), got {len(o.inputs)}")
+        for i in o.inputs:
+            if i not in seen:
+                raise SessionError(f"object {o.id!r} uses input {i!r}, which is not defined "
+                                   "before it")
+            if seen[i] not in allowed:
+                raise SessionError(f"{o.type} {o.id!r} cannot take the {seen[i]} {i!r} as input")
+        seen[o.id] = o.type
+    view_ids = [v.id for v in session.views]
+    if len(view_ids) != len(set(view_ids)):
+        raise SessionError("two views share the same id")
+    for v in session.views:
+        for h in v.hidden:
+            if h not in seen:
+                raise SessionError(f"view {v.id!r} hides {h!r}, which is not an object")
+    return session
+
+
+def _resolve(session: Session, folder: Path) -> None:
+    root = folder.resolve()
+    for o in session.objects:
+        if o.type not in FILE_TYPES:
+            continue
+        raw = o.properties.path
+        p = Path(raw).expanduser() if raw.startswith("~") else Path(raw)
+        if p.is_absolute() or PurePosixPath(raw).is_absolute() or re.match(r"^[A-Za-z]:[\\/]",
+                                                                           raw):
+            resolved = Path(os.path.normpath(p))
+            try:
+                resolved.resolve().relative_to(root)
+            except ValueError:
+                raise SessionPathError(
+                    f"object {o.id!r} names the absolute path {raw}, outside the session's "
+                    "folder; sessions store data paths relative to themselves"
+                ) from None
+        else:
+            resolved = Path(os.path.normpath(folder / Path(*PurePosixPath(raw.replace(
+                "\\", "/")).parts)))
+        o.properties.path = str(resolved)
+
+
+def _check_data(session: Session, repoint) -> None:
+    from splineviz.plugins import sources
+
+    for obj_id, p in session.data_files():
+        while True:
+            ok = _usable(p)
+            if ok is True:
+                break
+            if repoint is None:
+                raise SessionPathError(f"data file {p} of object {obj_id!r} {ok}")
+            new = repoint(obj_id, p)
+            if new is None:
+                raise SessionPathError(f"data file {p} of object {obj_id!r} {ok} and was not "
+                                       "re-pointed")
+            session.repoint(obj_id, new)
+            p = Path(session.object(obj_id).properties.path)
+            if _usable(p) is not True:
+                raise SessionPathError(f"the re-pointed data file {p} {_usable(p)}")
+            break
+    names = None
+    for o in session.objects:
+        if o.type == "Source":
+            names = sources() if names is None else names
+            if o.properties.source not in names:
+                raise SessionError(
+                    f"source {o.properties.source!r} of object {o.id!r} is not provided by "
+                    f"any installed plugin (available: {', '.join(sorted(names)) or 'none'})"
+                )
+
+
+def _usable(p: Path):
+    """True, or the reason why ``p`` cannot be a data file or DICOM folder."""
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        return "does not exist"
+    except OSError as exc:
+        return f"cannot be accessed ({exc.strerror})"
+    if stat.S_ISREG(st.st_mode) or stat.S_ISDIR(st.st_mode):
+        return True
+    return "is not a regular file"
+
+
+def load_session(path, *, repoint: Callable[[str, Path], Any] | None = None,
+                 check_data: bool = True) -> Session:
+    """Read, migrate and validate a session file.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.svs`` file.
+    repoint : callable, optional
+        ``repoint(object_id, missing_path) -> new path or None`` is asked for every data
+        file that is missing (the GUI shows a file dialog). ``None`` gives up.
+    check_data : bool
+        Check that data files exist and sources are provided by a plugin.
+
+    Returns
+    -------
+    Session
+        With absolute data paths.
+
+    Raises
+    ------
+    SessionError
+        Malformed, hostile or unknown-version documents; missing data that was not re-pointed
+        (:class:`SessionPathError`).
+    """
+    p = Path(os.fspath(path)).expanduser()
+    try:
+        st = p.stat()
+    except FileNotFoundError:
+        raise SessionPathError(f"session file not found: {p}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise SessionPathError(f"{p} is not a regular file")
+    if st.st_size > MAX_SESSION_BYTES:
+        raise SessionError(f"{p.name} is {st.st_size:,} bytes, too large for a session file")
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise SessionError(f"{p.name} is not UTF-8 text, so not a session file") from None
+    session = validate_document(parse_document(text))
+    _resolve(session, p.parent)
+    if check_data:
+        _check_data(session, repoint)
+    return session
+
+
+def save_session(session: Session, path) -> Path:
+    """Write ``session`` as JSON (paths relative to ``path``'s folder), atomically.
+
+    Saving a loaded session again gives the same document.
+    """
+    if not isinstance(session, Session):
+        raise SessionError(f"save_session needs a Session, got {type(session).__name__}")
+    p = Path(os.fspath(path)).expanduser()
+    # re-validate: a session edited in memory must still be a valid document
+    doc = session.to_document(base_dir=p.parent)
+    validate_document(json.loads(json.dumps(doc)))
+    text = json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    with atomic_output(p) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return p
