@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from splineviz.core import bform
 from splineviz.core.partitions import type6
 from splineviz.core.splines import type6_rules
 from splineviz.core.splines.base import TetSpline
@@ -25,6 +26,24 @@ from splineviz.core.splines.boundary import pad_linear
 
 #: ghost layers needed by the 3x3x3 stencil around each cube centre
 GHOST_LAYERS = 1
+
+
+def _compact_masks(masks: np.ndarray):
+    """Drop the data offsets a tetrahedron never uses.
+
+    Parameters
+    ----------
+    masks : (24, n_d, 27)
+
+    Returns
+    -------
+    used : (24, k) int64 stencil rows used by each tetrahedron (k equal for all by symmetry)
+    compact : (24, n_d, k) the masks restricted to them
+    """
+    nonzero = (masks != 0).any(axis=1)  # (24, 27)
+    used = np.array([np.flatnonzero(row) for row in nonzero])
+    compact = np.take_along_axis(masks, used[:, None, :], axis=2)
+    return used, np.ascontiguousarray(compact)
 
 
 class Type6Spline(TetSpline):
@@ -47,6 +66,7 @@ class Type6Spline(TetSpline):
         strides = np.array([shape[1] * shape[2], shape[2], 1], dtype=np.int64)
         self._pad_strides = strides
         self._stencil = type6_rules.OFFSETS @ strides  # (27,) flat offsets of the stencil
+        self._compact = _compact_masks(self.scheme.tet_masks)
 
     @property
     def padded(self) -> np.ndarray:
@@ -87,16 +107,27 @@ class Type6Spline(TetSpline):
         (N, n_d) float64 in the multi-index order of :func:`bform.multi_indices`
         """
         tet = np.asarray(tet, dtype=np.int64)
-        f27 = self.neighbourhoods(cube)
-        masks = self.scheme.tet_masks
-        out = np.empty((len(tet), masks.shape[1]))
-        # group by generic tetrahedron so each group is one small matrix product
         order = np.argsort(tet, kind="stable")
-        edges = np.searchsorted(tet[order], np.arange(type6.N_TETS + 1))
+        out = np.empty((len(tet), self.scheme.tet_masks.shape[1]))
+        out[order] = self._sorted_coefficients(np.asarray(cube)[order], tet[order])
+        return out
+
+    def _sorted_coefficients(self, cube: np.ndarray, tet: np.ndarray) -> np.ndarray:
+        """Like :meth:`tet_coefficients` for ``tet`` sorted ascending (contiguous groups)."""
+        base = (np.asarray(cube, dtype=np.int64) + GHOST_LAYERS) @ self._pad_strides
+        flat = self.padded.ravel()
+        used, compact = self._compact
+        out = np.empty((len(tet), compact.shape[1]))
+        # per generic tetrahedron: gather only the data its masks use (23 of 27 values for
+        # cubics, 15 for quadratics) and do one small matrix product on a contiguous slice
+        edges = np.searchsorted(tet, np.arange(type6.N_TETS + 1))
         for t in range(type6.N_TETS):
-            rows = order[edges[t]:edges[t + 1]]
-            if len(rows):
-                out[rows] = f27[rows] @ masks[t].T
+            lo, hi = edges[t], edges[t + 1]
+            if hi > lo:
+                vals = flat[base[lo:hi, None] + self._stencil[used[t]]]
+                # einsum, not matmul: BLAS threading costs more than it gains on these
+                # thin (n, 23) x (23, 20) products, erratically so on a loaded machine
+                np.einsum("nk,ck->nc", vals, compact[t], out=out[lo:hi])
         return out
 
     def determining_values(self, cube: np.ndarray) -> np.ndarray:
@@ -128,3 +159,24 @@ class Type6Spline(TetSpline):
         matrix = type6.barycentric_matrices()[tet]
         lam = np.einsum("nij,nj->ni", matrix[:, :, :3], local) + matrix[:, :, 3]
         return coeffs, lam, matrix
+
+    def index_derivatives(self, upoints, order):
+        # evaluate in the order of the generic tetrahedra (contiguous groups, no scatter of
+        # the coefficient arrays), then put the few output columns back in input order
+        cube, tet, local = type6.locate(upoints)
+        perm = np.argsort(tet, kind="stable")
+        tet_s = tet[perm]
+        coeffs = self._sorted_coefficients(cube[perm], tet_s)
+        matrix = type6.barycentric_matrices()[tet_s]
+        lam = np.einsum("nij,nj->ni", matrix[:, :, :3], local[perm]) + matrix[:, :, 3]
+        if order == 0:
+            res = bform.evaluate(coeffs, lam)[:, None]
+        else:
+            value, grad = bform.value_gradient(coeffs, lam, matrix)
+            parts = [value[:, None], grad]
+            if order >= 2:
+                parts.append(bform.hessian(coeffs, lam, matrix).reshape(-1, 9))
+            res = np.concatenate(parts, axis=1)
+        out = np.empty_like(res)
+        out[perm] = res
+        return out
