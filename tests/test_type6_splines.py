@@ -424,3 +424,16 @@ def test_large_volume_memory_and_speed_against_map_coordinates(model):
           f"ratio {r['ratio']:.2f}, peak RSS {r['peak_rss_mib']:.0f} MiB")
     assert r["ratio"] < 5.0
     assert r["peak_rss_mib"] < 2048
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("shape", [(1, 4, 5), (2, 2, 2), (1, 1, 1)])
+def test_thin_volumes_are_covered_and_linear_data_reproduced(model, shape):
+    i, j, k = np.indices(shape).astype(float)
+    data = 1.0 + 0.5 * i - 0.25 * j + 2.0 * k
+    s = sv.build_spline(data, model=model)
+    (x0, x1), (y0, y1), (z0, z1) = s.bounds
+    p = np.random.default_rng(1).uniform([x0, y0, z0], [x1, y1, z1], (200, 3))
+    p = np.concatenate([p, [[x0, y0, z0], [x1, y1, z1]]])
+    expected = 1.0 + 0.5 * p[:, 0] - 0.25 * p[:, 1] + 2.0 * p[:, 2]
+    assert np.abs(s.evaluate(p) - expected).max() < 1e-12
