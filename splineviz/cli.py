@@ -40,6 +40,8 @@ def _viewer_parser() -> argparse.ArgumentParser:
     parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
     parser.add_argument("--iso", type=float, default=None, help="isovalue")
     parser.add_argument("--model", default="to-quadratic", help="spline model")
+    parser.add_argument("--screenshot", metavar="PNG", help="save the view to PNG and quit")
+    parser.add_argument("--size", metavar="WxH", help="window / screenshot size, e.g. 1024x768")
     return parser
 
 

@@ -1,0 +1,38 @@
+"""The plain viewer behind ``splineviz`` with no argument: default data, spline isosurface."""
+
+import numpy as np
+
+import splineviz as sv
+from splineviz.cli import main
+from splineviz.viewer import default_volume, spline_isosurface
+
+
+def test_default_isosurface_lies_on_the_spline_surface():
+    vol, iso = default_volume()
+    s = sv.build_spline(vol, model="to-quadratic")
+    mesh = spline_isosurface(s, iso)
+    assert mesh.n_points > 10000
+    pts = np.asarray(mesh.points)
+    assert np.abs(s.evaluate(pts) - iso).max() < 1e-6
+    # normals are unit and point to lower values (VTK's contour convention)
+    n = mesh.point_data.active_normals
+    assert np.allclose(np.linalg.norm(n, axis=1), 1)
+    g = s.gradient(pts[:100])
+    assert np.all(np.einsum("nc,nc->n", g, n[:100]) < 0)
+
+
+def test_screenshot_of_default_data(tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "default.png"
+    assert main(["--screenshot", str(out), "--size", "320x240"]) == 0
+    img = np.asarray(Image.open(out).convert("RGB"))
+    assert img.shape == (240, 320, 3)
+    surface = np.any(np.abs(img.astype(int) - 255) > 40, axis=2)
+    assert 0.1 < surface.mean() < 0.8  # the surface fills a good part of the view
+
+
+def test_missing_file_is_one_line_error(capsys):
+    assert main(["/nonexistent/volume.vti"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("splineviz: error:")
