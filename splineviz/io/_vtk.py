@@ -9,7 +9,9 @@ never passes silently.
 from __future__ import annotations
 
 import contextlib
+import os
 import re
+import tempfile
 import threading
 
 import numpy as np
@@ -25,23 +27,46 @@ def _vtk():
 
 @contextlib.contextmanager
 def captured_vtk_output():
-    """Collect everything VTK would print; yields a list that receives the text on exit."""
+    """Collect everything VTK would print; yields a list that receives the text on exit.
+
+    Two channels are captured: the output window (``vtkErrorMacro``) and the vtkLogger, through
+    which some readers report failures only as warnings (the legacy reader's "Error reading
+    binary data!" on a truncated payload). Logger errors and warnings that mention an error
+    are turned into ``ERROR`` blocks so :func:`first_vtk_error` finds them.
+    """
     core = _vtk()
+    logger = core.vtkLogger
     sink: list[str] = []
-    with _LOCK:
+    with _LOCK, tempfile.TemporaryDirectory(prefix="splineviz-vtklog-") as tmp:
+        log_path = os.path.join(tmp, "vtk.log")
         old = core.vtkOutputWindow.GetInstance()
         win = core.vtkStringOutputWindow()
         core.vtkOutputWindow.SetInstance(win)
+        cutoff = logger.GetCurrentVerbosityCutoff()
+        logger.SetStderrVerbosity(logger.VERBOSITY_OFF)
+        logger.LogToFile(log_path, logger.TRUNCATE, logger.VERBOSITY_WARNING)
         try:
             yield sink
         finally:
+            logger.EndLogToFile(log_path)
+            logger.SetStderrVerbosity(logger.ConvertToVerbosity(cutoff))
             core.vtkOutputWindow.SetInstance(old)
-            sink.append(win.GetOutput())
+            text = win.GetOutput()
+            try:
+                with open(log_path, encoding="utf-8", errors="replace") as fh:
+                    for line in fh:
+                        level, _, msg = line.partition("| ")
+                        if level.endswith("ERR") or (level.endswith("WARN") and
+                                                     "rror" in msg):
+                            text += f"\nERROR: vtkLogger\n{msg.strip()}\n"
+            except OSError:
+                pass
+            sink.append(text)
 
 
 def first_vtk_error(text: str) -> str | None:
     """The first error message in VTK output text, stripped of file/line noise."""
-    for block in re.split(r"\n(?=(?:ERROR|Generic Warning|Warning))", text or ""):
+    for block in re.split(r"\n(?=(?:ERROR|Generic Warning|Warning))", (text or "").lstrip()):
         if not block.startswith("ERROR"):
             continue
         lines = [ln.strip() for ln in block.splitlines()[1:] if ln.strip()]

@@ -11,8 +11,21 @@ from __future__ import annotations
 
 from splineviz.core.errors import SplinevizError
 
+#: longest message kept; library messages can quote whole headers
+MAX_MESSAGE = 300
 
-class FileFormatError(SplinevizError, ValueError):
+
+class _OneSentence:
+    """Mixin: the message is collapsed to one line (libraries add newlines and hints)."""
+
+    def __init__(self, message="", *args):
+        text = " ".join(str(message).split())
+        if len(text) > MAX_MESSAGE:
+            text = text[: MAX_MESSAGE - 3] + "..."
+        super().__init__(text, *args)
+
+
+class FileFormatError(_OneSentence, SplinevizError, ValueError):
     """A file whose format is unknown, unsupported or malformed."""
 
 
@@ -28,23 +41,23 @@ class DataSizeError(CorruptFileError):
     """The header's dimensions and sample type do not match the size of the payload."""
 
 
-class DataTooLargeError(SplinevizError, MemoryError):
+class DataTooLargeError(_OneSentence, SplinevizError, MemoryError):
     """The data described by a header would not fit in the memory budget."""
 
 
-class InvalidDataError(SplinevizError, ValueError):
+class InvalidDataError(_OneSentence, SplinevizError, ValueError):
     """The file reads but its content cannot be used (empty, degenerate, NaN/Inf samples)."""
 
 
-class DataFileNotFoundError(SplinevizError, FileNotFoundError):
+class DataFileNotFoundError(_OneSentence, SplinevizError, FileNotFoundError):
     """A data file (or a file a header refers to) does not exist or is not a regular file."""
 
 
-class WriteError(SplinevizError, OSError):
+class WriteError(_OneSentence, SplinevizError, OSError):
     """Output could not be written; no partial file is left behind."""
 
 
-class SessionError(SplinevizError, ValueError):
+class SessionError(_OneSentence, SplinevizError, ValueError):
     """A session file that is malformed, hostile or of an unknown schema version."""
 
 
@@ -57,5 +70,5 @@ class SessionPathError(SessionError):
     file) or cannot be found even after re-pointing."""
 
 
-class PluginError(SplinevizError, RuntimeError):
+class PluginError(_OneSentence, SplinevizError, RuntimeError):
     """A plugin could not be loaded or registered something invalid."""

@@ -102,6 +102,8 @@ def _read_ply(path: Path) -> PointData:
                         colors = np.clip(colors * 255 + 0.5, 0, 255)
                     colors = colors.astype(np.uint8)
                     break
+    except InvalidDataError:
+        raise
     except (PlyParseError, PlyHeaderParseError) as exc:
         raise CorruptFileError(f"{path.name} is not a valid PLY file: {exc}") from None
     except (ValueError, EOFError, UnicodeDecodeError, MemoryError, TypeError) as exc:
@@ -164,6 +166,11 @@ def _read_pcd(path: Path) -> PointData:
     if mode == "binary_compressed":
         per_point = 0  # compressed size says nothing; the byte budget still applies
     _check_count(count, path, per_point)
+    if mode == "ascii":  # Open3D pads missing ascii rows with zeros: count them first
+        body = path.read_bytes().split(b"\nDATA", 1)[-1].split(b"\n", 1)[-1]
+        rows = sum(1 for ln in body.splitlines() if ln.strip())
+        if rows != count:
+            raise DataSizeError(f"{path.name} announces {count} points but holds {rows} rows")
     import open3d as o3d
 
     o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)

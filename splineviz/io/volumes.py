@@ -167,6 +167,9 @@ def _read_metaimage(path: Path) -> VolumeData:
             raise CorruptFileError(f"{path.name} has a malformed DimSize") from None
         etype = keys.get("elementtype", "").strip().upper()
         size = _MET_SIZES.get(etype)
+        if len(dims) == 3 and size and compressed:
+            check_volume_size(dims, size, path.name)
+            _check_zlib_stream(payload, dims[0] * dims[1] * dims[2] * size)
         if len(dims) == 3 and size and not compressed:
             check_volume_size(dims, size, path.name)
             need = dims[0] * dims[1] * dims[2] * size
@@ -177,6 +180,24 @@ def _read_metaimage(path: Path) -> VolumeData:
                     f"needs {need}"
                 )
     return _read_with_vtk(vtkMetaImageReader(), path, "metaimage")
+
+
+def _check_zlib_stream(payload: Path, need: int) -> None:
+    """Inflate a MetaImage .zraw stream chunk by chunk (nothing kept) and compare its length
+    with DimSize: VTK's MetaIO accepts a damaged stream silently."""
+    inflater = zlib.decompressobj()
+    got = 0
+    try:
+        with open(payload, "rb") as fh:
+            while chunk := fh.read(1 << 20):
+                got += len(inflater.decompress(chunk, 0))
+                if got > need:
+                    break
+        got += len(inflater.flush())
+    except zlib.error as exc:
+        raise CorruptFileError(f"{payload.name} is a damaged compressed stream: {exc}") from None
+    if got != need:
+        raise DataSizeError(f"{payload.name} inflates to {got} bytes but DimSize needs {need}")
 
 
 _MET_SIZES = {"MET_UCHAR": 1, "MET_CHAR": 1, "MET_USHORT": 2, "MET_SHORT": 2, "MET_UINT": 4,
@@ -266,7 +287,8 @@ def _read_nrrd_multifile(path: Path, header, datafile: str, sizes) -> np.ndarray
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 sl = nrrd.read_data(h, None, str(path), index_order="F")
-        except (nrrd.NRRDError, ValueError, EOFError, OSError, zlib.error) as exc:
+        except (nrrd.NRRDError, ValueError, EOFError, OSError, zlib.error, KeyError,
+            TypeError, IndexError) as exc:
             raise CorruptFileError(f"slice file {name} of {path.name} is damaged or "
                                    f"truncated: {exc}") from None
         if out is None:
@@ -287,7 +309,8 @@ def _read_nrrd_single(path: Path, datafile: str):
     except FileNotFoundError as exc:
         raise DataFileNotFoundError(f"{path.name} refers to a missing data file: "
                                     f"{exc.filename}") from None
-    except (nrrd.NRRDError, ValueError, EOFError, OSError, zlib.error) as exc:
+    except (nrrd.NRRDError, ValueError, EOFError, OSError, zlib.error, KeyError,
+            TypeError, IndexError) as exc:
         raise CorruptFileError(f"{path.name} has a damaged or truncated payload: {exc}") from None
 
 
