@@ -1,0 +1,504 @@
+"""Advancing-front triangulation of a point-set surface (thesis §7.1, Fig. 7.3 left; §7.3).
+
+Conventions: the mesh is ``vertices (V, 3)`` float64 and ``faces (F, 3)`` int, triangles
+counter-clockwise seen from the side the normals point to.  The *front* is a set of directed
+boundary edges ``(a, b)``: the unmeshed region lies to the left of ``a -> b`` (seen from the
+normal side), so the next triangle built on it is ``(a, b, v)``.
+
+One step takes a front edge, predicts a new point at the height of an equilateral triangle of
+the guidance length, projects it onto the surface (:class:`~.projection.Projector`) and either
+adds it or, when a front vertex is close, connects to that vertex instead.  Connecting to the
+front neighbour closes an *ear*; connecting to another vertex of the same front loop *splits*
+it, to a vertex of another loop *merges* the two (Hartmann's operations [Har98]).  Every
+candidate triangle must keep the mesh an oriented manifold: it must face along the surface
+normal, stay inside the unmeshed wedges at its corners, cross no front edge, contain no front
+vertex, and use no edge that already has two triangles.  Where the predicted point leaves the
+point cloud, the edge becomes part of a border and stays open.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from splineviz.core.errors import SplinevizError
+
+#: a front angle below this (radians) is an ear: close it before growing
+EAR_ANGLE = np.deg2rad(75.0)
+#: front vertices within this many target lengths of the predicted point are tried first
+CONNECT_RADIUS = 0.6
+#: a new vertex closer than this many target lengths to a front vertex is rejected
+MIN_VERTEX_DISTANCE = 0.45
+#: smallest accepted triangle angle when a new vertex is created / an existing one is used
+MIN_ANGLE_NEW = np.deg2rad(30.0)
+MIN_ANGLE_CONNECT = np.deg2rad(12.0)
+#: a candidate triangle's normal must be within this angle of the surface normal
+MAX_NORMAL_DEVIATION = np.deg2rad(60.0)
+#: the predicted point is past a border of the cloud when its distance to the nearest input
+#: point exceeds max(BORDER_SPACINGS * spacing, BORDER_LENGTHS * target length)
+BORDER_SPACINGS = 1.5
+BORDER_LENGTHS = 0.35
+#: number of times an edge is postponed before the relaxed rules apply, and before giving up
+RETRIES = 2
+GIVE_UP = 4
+#: relaxed connection radius (target lengths) after RETRIES failures
+RELAXED_RADIUS = 1.3
+#: ear angle limit after RETRIES failures
+RELAXED_EAR_ANGLE = np.deg2rad(110.0)
+#: new seeds are placed at input points farther than this many target lengths from the mesh
+SEED_DISTANCE = 3.0
+#: at most this many seeds (connected components)
+MAX_SEEDS = 64
+
+
+class FrontError(SplinevizError, RuntimeError):
+    """The advancing front cannot start (no seed triangle can be placed)."""
+
+
+class Cancelled(SplinevizError):
+    """The triangulation was cancelled through the progress callback."""
+
+
+@dataclass
+class FrontStats:
+    """Counts of the front events of one run."""
+
+    new_vertices: int = 0
+    ears: int = 0
+    connections: int = 0
+    borders: int = 0
+    given_up: int = 0
+    seeds: int = 0
+    steps: int = 0
+    events: dict = field(default_factory=dict)
+
+
+def _sub(u, v):
+    return (u[0] - v[0], u[1] - v[1], u[2] - v[2])
+
+
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def _cross(u, v):
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+def _norm(u):
+    return math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+
+
+def _unit(u):
+    length = _norm(u)
+    return (u[0] / length, u[1] / length, u[2] / length)
+
+
+def _angle_ccw(d1, d2, n):
+    """Counter-clockwise angle from ``d1`` to ``d2`` around normal ``n``, in ``[0, 2 pi)``.
+
+    Small 3-vectors are plain tuples: NumPy's per-call overhead dominates at this size.
+    """
+    ang = math.atan2(_dot(_cross(d1, d2), n), _dot(d1, d2))
+    return ang if ang >= 0 else ang + 2 * math.pi
+
+
+def _segments_cross(p, q, r, s):
+    """Whether 2-D segments pq and rs cross properly (shared endpoints excluded by caller).
+
+    ``p, q`` : (2,) one segment; ``r, s`` : (E, 2) many segments.  Returns (E,) bool.
+    """
+    def orient(a, b, c):
+        return (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (
+            c[..., 0] - a[..., 0])
+
+    d1 = orient(r, s, p)
+    d2 = orient(r, s, q)
+    d3 = orient(p, q, r)
+    d4 = orient(p, q, s)
+    return (d1 * d2 < 0) & (d3 * d4 < 0)
+
+
+class AdvancingFront:
+    """Advancing-front mesher driven by a projector and a guidance field.
+
+    Parameters
+    ----------
+    projector : Projector
+        Projection onto the surface (``project_with_normals``), the input points and spacing.
+    guidance : GuidanceField
+        Target edge length at any position.
+    progress : callable, optional
+        Called as ``progress(fraction, message)``; if it returns ``False`` the run stops with
+        :class:`Cancelled`.
+    """
+
+    def __init__(self, projector, guidance, progress=None):
+        self.proj = projector
+        self.guide = guidance
+        self.progress = progress
+        self.stats = FrontStats()
+        cap = 1024
+        self.V = np.empty((cap, 3))
+        self.N = np.empty((cap, 3))
+        self.L = np.empty(cap)
+        self.nv = 0
+        self.P: list[tuple[float, float, float]] = []  # positions as tuples for scalar math
+        self.faces: list[tuple[int, int, int]] = []
+        self.front: dict[tuple[int, int], int] = {}  # edge -> number of failed attempts
+        self.out_nb: list[set] = []
+        self.in_nb: list[set] = []
+        self.edge_faces: dict[tuple[int, int], int] = {}
+        self.border: set[tuple[int, int]] = set()
+        self.heap: list = []
+        self.counter = 0
+        self.cell = float(np.max(guidance.lengths))
+        self.grid: dict[tuple[int, int, int], set] = {}
+        self.area_done = 0.0
+        self.spacing = projector.scale
+        # the total area estimate drives the progress fraction
+        self.area_total = float(np.sum(np.pi * (0.5 * projector.scale) ** 2)) * 1.1
+
+    # -- bookkeeping -----------------------------------------------------------------------
+    def _cell(self, x):
+        return (int(np.floor(x[0] / self.cell)), int(np.floor(x[1] / self.cell)),
+                int(np.floor(x[2] / self.cell)))
+
+    def _add_vertex(self, x, n):
+        if self.nv == len(self.V):
+            self.V = np.concatenate([self.V, np.empty_like(self.V)])
+            self.N = np.concatenate([self.N, np.empty_like(self.N)])
+            self.L = np.concatenate([self.L, np.empty_like(self.L)])
+        i = self.nv
+        self.V[i], self.N[i] = x, n
+        self.P.append(tuple(float(c) for c in x))
+        self.L[i] = float(self.guide(x[None])[0])
+        self.nv += 1
+        self.out_nb.append(set())
+        self.in_nb.append(set())
+        return i
+
+    def _front_add(self, a, b):
+        if not self.out_nb[a] and not self.in_nb[a]:
+            self.grid.setdefault(self._cell(self.V[a]), set()).add(a)
+        if not self.out_nb[b] and not self.in_nb[b]:
+            self.grid.setdefault(self._cell(self.V[b]), set()).add(b)
+        self.front[(a, b)] = 0
+        self.out_nb[a].add(b)
+        self.in_nb[b].add(a)
+        self._push(a, b)
+
+    def _front_remove(self, a, b):
+        del self.front[(a, b)]
+        self.border.discard((a, b))
+        self.out_nb[a].discard(b)
+        self.in_nb[b].discard(a)
+        for v in (a, b):
+            if not self.out_nb[v] and not self.in_nb[v]:
+                cell = self.grid.get(self._cell(self.V[v]))
+                if cell is not None:
+                    cell.discard(v)
+
+    def _push(self, a, b, delay=0):
+        self.counter += 1
+        heapq.heappush(self.heap, (delay, self.counter, a, b))
+
+    def _add_triangle(self, a, b, c):
+        self.faces.append((a, b, c))
+        for u, w in ((a, b), (b, c), (c, a)):
+            key = (u, w) if u < w else (w, u)
+            self.edge_faces[key] = self.edge_faces.get(key, 0) + 1
+            if (u, w) in self.front:
+                self._front_remove(u, w)
+            else:
+                self._front_add(w, u)
+        pa = self.P[a]
+        self.area_done += 0.5 * _norm(_cross(_sub(self.P[b], pa), _sub(self.P[c], pa)))
+
+    def _front_vertices_near(self, x, radius):
+        r = int(np.ceil(radius / self.cell))
+        cx, cy, cz = self._cell(x)
+        found = []
+        for i in range(cx - r, cx + r + 1):
+            for j in range(cy - r, cy + r + 1):
+                for k in range(cz - r, cz + r + 1):
+                    s = self.grid.get((i, j, k))
+                    if s:
+                        found.extend(s)
+        if not found:
+            return np.empty(0, dtype=int)
+        found = np.fromiter(found, dtype=int, count=len(found))
+        d = np.linalg.norm(self.V[found] - x, axis=1)
+        keep = d <= radius
+        return found[keep][np.argsort(d[keep])]
+
+    # -- geometry tests --------------------------------------------------------------------
+    def _wedges(self, o, n):
+        """Unmeshed wedges at front vertex ``o``: list of ``(next, total angle)``.
+
+        For each outgoing front edge ``o -> nxt`` the wedge turns counter-clockwise from
+        ``nxt - o`` to ``prv - o`` where ``prv -> o`` is the incoming front edge that closes the
+        smallest such angle (a vertex on several front loops has several wedges).
+        """
+        P, po = self.P, self.P[o]
+        wedges = []
+        for nxt in self.out_nb[o]:
+            d1 = _sub(P[nxt], po)
+            best = None
+            for prv in self.in_nb[o]:
+                ang = 2 * math.pi if prv == nxt else _angle_ccw(d1, _sub(P[prv], po), n)
+                if best is None or ang < best:
+                    best = ang
+            if best is not None:
+                wedges.append((nxt, best))
+        return wedges
+
+    def _inside_wedge(self, o, d, n):
+        """Whether direction ``d`` leaves front vertex ``o`` into unmeshed space."""
+        po = self.P[o]
+        for nxt, total in self._wedges(o, n):
+            ang = _angle_ccw(_sub(self.P[nxt], po), d, n)
+            if 1e-9 < ang < total - 1e-9:
+                return True
+        return False
+
+    def _triangle_ok(self, a, b, v, xv, n, min_angle, existing):
+        """Validity of triangle ``(a, b, v)`` with apex at ``xv`` (a tuple; ``v = -1`` for a
+        new vertex): orientation, shape, manifold edges, unmeshed wedges, no front vertex
+        inside, no front edge crossed, and not spanning a hole of the cloud."""
+        xa, xb = self.P[a], self.P[b]
+        e0, e1, e2 = _sub(xb, xa), _sub(xv, xb), _sub(xa, xv)
+        tn = _cross(e0, _sub(xv, xa))
+        tl = _norm(tn)
+        if tl <= 0 or _dot(tn, n) < math.cos(MAX_NORMAL_DEVIATION) * tl:
+            return False
+        la, lb, lc = _norm(e0), _norm(e1), _norm(e2)
+        # the smallest angle is opposite the shortest side: sin = 2 area / (other two sides)
+        sides = sorted((la, lb, lc))
+        if tl / (sides[1] * sides[2]) < math.sin(min_angle):
+            return False
+        front = self.front
+        if existing:
+            for u, w in ((b, v), (v, a)):
+                key = (u, w) if u < w else (w, u)
+                if (u, w) not in front and key in self.edge_faces:
+                    return False
+        # every new edge must leave both its ends into their unmeshed wedges
+        if (b, v) not in front:
+            if not self._inside_wedge(b, _sub(xv, xb), n):
+                return False
+            if existing and not self._inside_wedge(v, _sub(xb, xv), n):
+                return False
+        if (v, a) not in front:
+            if not self._inside_wedge(a, _sub(xv, xa), n):
+                return False
+            if existing and not self._inside_wedge(v, _sub(xa, xv), n):
+                return False
+        centre = np.array([(xa[i] + xb[i] + xv[i]) / 3.0 for i in range(3)])
+        # a triangle whose centre is far from every input point spans a hole of the scan
+        dist, near_pt = self.proj.conn.tree.query(centre)
+        if dist > self._border_tolerance(near_pt, max(la, lb, lc)):
+            return False
+        radius = max(la, lb, lc) * 1.5
+        near = self._front_vertices_near(centre, radius)
+        if len(near) == 0:
+            return True
+        nv = np.asarray(n)
+        t1 = np.asarray(e0) / la
+        t2 = np.cross(nv, t1)
+        t2 /= np.linalg.norm(t2)
+        basis = np.stack([t1, t2])
+        pa = basis @ (np.asarray(xa) - centre)
+        pb = basis @ (np.asarray(xb) - centre)
+        pv = basis @ (np.asarray(xv) - centre)
+        # no other front vertex inside the triangle (in the tangent plane)
+        others = near[(near != a) & (near != b) & (near != v)]
+        if len(others):
+            rel = self.V[others] - centre
+            q = rel @ basis.T
+            height = np.abs(rel @ nv)
+            c1 = (pb[0] - pa[0]) * (q[:, 1] - pa[1]) - (pb[1] - pa[1]) * (q[:, 0] - pa[0])
+            c2 = (pv[0] - pb[0]) * (q[:, 1] - pb[1]) - (pv[1] - pb[1]) * (q[:, 0] - pb[0])
+            c3 = (pa[0] - pv[0]) * (q[:, 1] - pv[1]) - (pa[1] - pv[1]) * (q[:, 0] - pv[0])
+            if ((c1 > 0) & (c2 > 0) & (c3 > 0) & (height < radius)).any():
+                return False
+        # no front edge crosses the new edges
+        edges = [(u, w) for u in near for w in self.out_nb[u]]
+        edges += [(w, u) for u in near for w in self.in_nb[u]]
+        if not edges:
+            return True
+        ed = np.array(edges)
+        r = (self.V[ed[:, 0]] - centre) @ basis.T
+        s = (self.V[ed[:, 1]] - centre) @ basis.T
+        for u, pu in ((a, pa), (b, pb)):
+            shared = (ed[:, 0] == u) | (ed[:, 1] == u)
+            if existing:
+                shared |= (ed[:, 0] == v) | (ed[:, 1] == v)
+            if (_segments_cross(pu, pv, r, s) & ~shared).any():
+                return False
+        return True
+
+    def _border_tolerance(self, nearest_point, length):
+        """Largest distance from the cloud that still counts as on the surface."""
+        return max(BORDER_SPACINGS * self.spacing[nearest_point], BORDER_LENGTHS * length)
+
+    # -- the front step --------------------------------------------------------------------
+    def _neighbour(self, vertex, other, incoming, n):
+        """The front neighbour across ``vertex`` of the edge towards ``other``."""
+        cands = self.in_nb[vertex] if incoming else self.out_nb[vertex]
+        if len(cands) == 1:
+            return next(iter(cands))
+        if not cands:
+            return None
+        pv = self.P[vertex]
+        d0 = _sub(self.P[other], pv)
+        best, best_ang = None, None
+        for c in cands:
+            ang = _angle_ccw(d0, _sub(self.P[c], pv), n)
+            if not incoming:
+                ang = 2 * math.pi - ang
+            if best_ang is None or ang < best_ang:
+                best, best_ang = c, ang
+        return best
+
+    def _step(self, a, b):
+        st = self.stats
+        st.steps += 1
+        attempts = self.front[(a, b)]
+        P = self.P
+        xa, xb = P[a], P[b]
+        n = _unit(tuple(float(c) for c in self.N[a] + self.N[b]))
+        ab = _sub(xb, xa)
+        lab = _norm(ab)
+        target = 0.5 * (self.L[a] + self.L[b])
+        relaxed = attempts >= RETRIES
+        min_connect = MIN_ANGLE_CONNECT * (0.5 if relaxed else 1.0)
+        # 1. ears: a sharp front angle at a or b is closed with the front neighbour
+        x = self._neighbour(a, b, True, n)
+        y = self._neighbour(b, a, False, n)
+        ears = []
+        if x is not None and x != b:
+            ears.append((_angle_ccw(ab, _sub(P[x], xa), n), x))
+        if y is not None and y != a:
+            ears.append((_angle_ccw(_sub(P[y], xb), (-ab[0], -ab[1], -ab[2]), n), y))
+        ears.sort()
+        limit = EAR_ANGLE if not relaxed else RELAXED_EAR_ANGLE
+        for ang, v in ears:
+            if ang < limit and self._triangle_ok(a, b, v, P[v], n, min_connect, True):
+                self._add_triangle(a, b, v)
+                st.ears += 1
+                return
+        # 2. predict the apex of an equilateral-ish triangle and project it
+        d = _unit(_cross(n, ab))
+        length = min(max(target, 0.55 * lab), 1.8 * lab)
+        height = math.sqrt(max(length**2 - 0.25 * lab**2, 0.1 * lab**2))
+        guess = np.array([0.5 * (xa[i] + xb[i]) + height * d[i] for i in range(3)])
+        pts, nrm = self.proj.project_with_normals(guess[None])
+        xp, npn = pts[0], nrm[0]
+        dist, near_pt = self.proj.conn.tree.query(xp)
+        if dist > self._border_tolerance(near_pt, target):
+            # 3. the point left the cloud: this edge is a border of an open scan
+            self.border.add((a, b))
+            st.borders += 1
+            return
+        # 4. connect to a nearby front vertex (ear, split or merge)
+        radius = (RELAXED_RADIUS if relaxed else CONNECT_RADIUS) * target
+        near = self._front_vertices_near(xp, radius)
+        for v in near:
+            if v == a or v == b:
+                continue
+            if self._triangle_ok(a, b, v, P[v], n, min_connect, True):
+                self._add_triangle(a, b, v)
+                st.connections += 1
+                return
+        # 5. a new vertex, if nothing is too close to it
+        close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target)
+        close = close[(close != a) & (close != b)]
+        xpt = (float(xp[0]), float(xp[1]), float(xp[2]))
+        mid = (0.5 * (xa[0] + xb[0]), 0.5 * (xa[1] + xb[1]), 0.5 * (xa[2] + xb[2]))
+        if len(close) == 0 and _dot(_sub(xpt, mid), d) > 0.2 * lab and \
+                self._triangle_ok(a, b, -1, xpt, n, MIN_ANGLE_NEW, False):
+            v = self._add_vertex(xp, npn)
+            self._add_triangle(a, b, v)
+            st.new_vertices += 1
+            return
+        # 6. postpone; after GIVE_UP attempts leave the edge as an unresolved border
+        if attempts + 1 >= GIVE_UP:
+            self.border.add((a, b))
+            st.given_up += 1
+            return
+        self.front[(a, b)] = attempts + 1
+        self._push(a, b, delay=attempts + 1)
+
+    # -- seeding and the main loop ---------------------------------------------------------
+    def _seed(self, i):
+        """Place an equilateral triangle at input point ``i``; False if it does not fit."""
+        proj = self.proj
+        p, nrm = proj.project_with_normals(proj.points[i][None])
+        p, nrm = p[0], nrm[0]
+        length = float(self.guide(p[None])[0])
+        frame = np.cross(nrm, [1.0, 0.0, 0.0])
+        if np.linalg.norm(frame) < 0.5:
+            frame = np.cross(nrm, [0.0, 1.0, 0.0])
+        t1 = frame / np.linalg.norm(frame)
+        t2 = np.cross(nrm, t1)
+        guess = np.stack([p + length * t1, p + length * (0.5 * t1 + np.sqrt(0.75) * t2)])
+        q, qn = proj.project_with_normals(guess)
+        tri = np.stack([p, q[0], q[1]])
+        tn = np.cross(tri[1] - tri[0], tri[2] - tri[0])
+        if np.dot(tn, nrm) <= 0.5 * np.linalg.norm(tn):
+            return False
+        ids = [self._add_vertex(p, nrm), self._add_vertex(q[0], qn[0]),
+               self._add_vertex(q[1], qn[1])]
+        self._add_triangle(*ids)
+        self.stats.seeds += 1
+        return True
+
+    def _report(self, message):
+        if self.progress is None:
+            return
+        frac = min(0.999, self.area_done / max(self.area_total, 1e-300))
+        if self.progress(frac, message) is False:
+            raise Cancelled("the triangulation was cancelled")
+
+    def run(self):
+        """Triangulate; returns ``(vertices (V, 3), faces (F, 3))``."""
+        proj = self.proj
+        kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
+        tried = 0
+        for _ in range(MAX_SEEDS):
+            if self.nv:
+                from scipy.spatial import cKDTree
+
+                tree = cKDTree(self.V[: self.nv])
+                dist, _ = tree.query(proj.points[kappa_order])
+                far = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
+                if len(far) < max(10, 0.002 * len(proj.points)):
+                    break
+                start = far[0]
+            else:
+                start = kappa_order[0]
+            tried += 1
+            if not self._seed(start):
+                if self.nv == 0 and tried > 10:
+                    raise FrontError("no seed triangle could be placed on the point cloud")
+                kappa_order = kappa_order[kappa_order != start]
+                continue
+            self._advance()
+        if self.nv == 0:
+            raise FrontError("no seed triangle could be placed on the point cloud")
+        return self.V[: self.nv].copy(), np.array(self.faces, dtype=np.int64).reshape(-1, 3)
+
+    def _advance(self):
+        steps = 0
+        while self.heap:
+            _delay, _c, a, b = heapq.heappop(self.heap)
+            if (a, b) not in self.front or (a, b) in self.border:
+                continue
+            self._step(a, b)
+            steps += 1
+            if steps % 500 == 0:
+                self._report(f"{len(self.faces)} triangles")

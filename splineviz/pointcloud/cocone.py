@@ -1,0 +1,337 @@
+"""Inter-point connectivity and normals by the Cocone algorithm (thesis §7.2, Fig. 7.4).
+
+Conventions: points are ``(N, 3)`` float64; the neighbour graph is a symmetric
+``scipy.sparse.csr_matrix`` of shape ``(N, N)`` whose stored values are Euclidean edge lengths;
+normals are ``(N, 3)`` unit vectors.
+
+The algorithm [ACDL00]: build the 3-D Delaunay tetrahedralisation (Qhull); the Voronoi vertices
+are the tetrahedra's circumcentres; the *pole* of a point is the farthest Voronoi vertex of its
+cell (for cells on the convex hull, which are unbounded, the average outward hull normal); the
+*co-cone* of a point is the set of directions within ``COCONE_ANGLE`` of the plane orthogonal to
+the pole vector; a Delaunay triangle is kept when its dual Voronoi edge meets the co-cones of all
+three of its vertices.  The edges of the kept triangles form the neighbour graph.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
+
+from splineviz.core.errors import SplinevizError
+from splineviz.core.points import PointCloud
+
+#: half opening angle of the co-cone around the plane orthogonal to the pole (Cocone: pi/8)
+COCONE_ANGLE = np.pi / 8
+#: points closer than this fraction of the bounding-box diagonal are merged as duplicates
+DUPLICATE_TOLERANCE = 1e-9
+#: points left with fewer Cocone neighbours than this get their nearest neighbours added
+MIN_NEIGHBOURS = 3
+#: number of nearest neighbours whose mean distance defines the local sample spacing
+SPACING_NEIGHBOURS = 6
+
+
+class ConnectivityError(SplinevizError, ValueError):
+    """A point set from which no connectivity can be built (too few or degenerate points)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Connectivity:
+    """Result of :func:`cocone_connectivity` on the de-duplicated points.
+
+    Attributes
+    ----------
+    points : (N, 3) float64
+        The distinct input points.
+    inverse : (N0,) int
+        For each original input point, its index in ``points``.
+    graph : (N, N) scipy.sparse.csr_matrix
+        Symmetric neighbour graph; values are edge lengths.
+    normals : (N, 3) float64
+        Unit normals from the pole vectors, oriented consistently along the graph (outward on
+        closed surfaces: the point of largest x has a normal with positive x).
+    spacing : (N,) float64
+        Local sample spacing: mean distance to the ``SPACING_NEIGHBOURS`` nearest points.
+    tree : scipy.spatial.cKDTree
+        k-d tree over ``points``.
+    """
+
+    points: np.ndarray
+    inverse: np.ndarray
+    graph: sparse.csr_matrix
+    normals: np.ndarray
+    spacing: np.ndarray
+    tree: cKDTree
+
+    def neighbours(self, i: int) -> np.ndarray:
+        """Indices of the graph neighbours of point ``i``."""
+        return self.graph.indices[self.graph.indptr[i] : self.graph.indptr[i + 1]]
+
+
+def deduplicate(points: np.ndarray, tolerance: float = DUPLICATE_TOLERANCE):
+    """Merge points closer than ``tolerance`` times the bounding-box diagonal.
+
+    Parameters
+    ----------
+    points : (N0, 3) float64
+
+    Returns
+    -------
+    unique : (N, 3) float64
+    inverse : (N0,) int
+        ``unique[inverse]`` reproduces the input up to the tolerance.
+    """
+    diag = float(np.linalg.norm(np.ptp(points, axis=0))) if len(points) else 0.0
+    step = max(diag * tolerance, np.finfo(float).tiny)
+    keys = np.round((points - points.min(axis=0)) / step).astype(np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    return points[first], inverse.ravel()
+
+
+def circumcenters(vertices: np.ndarray) -> np.ndarray:
+    """Circumcentres of tetrahedra.
+
+    Parameters
+    ----------
+    vertices : (T, 4, 3) float64
+
+    Returns
+    -------
+    (T, 3) float64; rows of flat tetrahedra are very large or non-finite.
+    """
+    a = vertices[:, 0]
+    e = vertices[:, 1:] - a[:, None, :]  # (T, 3, 3) edge vectors
+    rhs = 0.5 * np.einsum("tij,tij->ti", e, e)
+    det = np.linalg.det(e)
+    ok = np.abs(det) > 1e-300
+    out = np.full(a.shape, np.inf)
+    out[ok] = a[ok] + np.linalg.solve(e[ok], rhs[ok][..., None])[..., 0]
+    return out
+
+
+def local_spacing(tree: cKDTree, points: np.ndarray, k: int = SPACING_NEIGHBOURS) -> np.ndarray:
+    """Mean distance of each point to its ``k`` nearest other points, shape ``(N,)``."""
+    k = min(k, len(points) - 1)
+    dist, _ = tree.query(points, k=k + 1)
+    return dist[:, 1:].mean(axis=1)
+
+
+def _hull_pole_directions(dt: Delaunay, points: np.ndarray) -> np.ndarray:
+    """Average outward normal of the convex-hull facets at each hull vertex; zero elsewhere."""
+    hull = dt.convex_hull
+    p = points[hull]
+    nrm = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    # orient outward: away from the centroid of the whole set
+    out = np.sign(np.einsum("ij,ij->i", nrm, p.mean(axis=1) - points.mean(axis=0)))
+    nrm *= np.where(out == 0, 1.0, out)[:, None]
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True) + 1e-300
+    acc = np.zeros_like(points)
+    for c in range(3):
+        np.add.at(acc, hull[:, c], nrm)
+    return acc
+
+
+def poles(dt: Delaunay, points: np.ndarray, centers: np.ndarray) -> np.ndarray:
+    """Unit pole vectors (thesis Fig. 7.4: the farthest Voronoi vertex), shape ``(N, 3)``.
+
+    Unbounded Voronoi cells (points on the convex hull) use the average outward normal of their
+    hull facets, as the Cocone algorithm does.
+    """
+    n = len(points)
+    simp = dt.simplices
+    pid = simp.ravel()
+    tid = np.repeat(np.arange(len(simp)), 4)
+    vec = centers[tid] - points[pid]
+    dist = np.einsum("ij,ij->i", vec, vec)
+    dist[~np.isfinite(dist)] = -1.0  # flat tetrahedra carry no pole
+    order = np.lexsort((dist, pid))  # per point, farthest last
+    last = np.r_[pid[order][1:] != pid[order][:-1], True]
+    pole = np.zeros((n, 3))
+    pole[pid[order][last]] = vec[order][last]
+    hull_dir = _hull_pole_directions(dt, points)
+    on_hull = np.linalg.norm(hull_dir, axis=1) > 0
+    pole[on_hull] = hull_dir[on_hull]
+    pole[~np.isfinite(pole).all(axis=1)] = 0.0
+    length = np.linalg.norm(pole, axis=1, keepdims=True)
+    return np.divide(pole, length, out=np.zeros_like(pole), where=length > 0)
+
+
+def _in_cocone(points, pole, ids, x, sin_theta):
+    """cos of the angle between x - p and the pole of p, and whether x is in the co-cone."""
+    v = x - points[ids]
+    cos = np.einsum("ij,ij->i", v, pole[ids]) / (np.linalg.norm(v, axis=1) + 1e-300)
+    return cos
+
+
+def cocone_triangles(dt: Delaunay, points: np.ndarray, pole: np.ndarray, centers: np.ndarray,
+                     angle: float = COCONE_ANGLE) -> np.ndarray:
+    """Delaunay triangles whose dual Voronoi edge meets the co-cones of all three vertices.
+
+    Parameters
+    ----------
+    dt : scipy.spatial.Delaunay of ``points``
+    points : (N, 3) float64
+    pole : (N, 3) unit pole vectors
+    centers : (T, 3) circumcentres of ``dt.simplices``
+
+    Returns
+    -------
+    (F, 3) int triangles (vertex indices, unoriented).
+    """
+    simp, nb = dt.simplices, dt.neighbors
+    t = np.repeat(np.arange(len(simp)), 4)
+    k = np.tile(np.arange(4), len(simp))
+    other = nb.ravel()
+    keep = (other == -1) | (t < other)  # each interior face once
+    t, k, other = t[keep], k[keep], other[keep]
+    faces = np.stack([simp[t, (k + j) % 4] for j in (1, 2, 3)], axis=1)
+    start = centers[t]
+    end = np.empty_like(start)
+    inner = other >= 0
+    end[inner] = centers[other[inner]]
+    # a hull face's dual Voronoi edge is a ray leaving the hull: end it far away
+    p = points[faces[~inner]]
+    nrm = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    away = np.einsum("ij,ij->i", nrm, p[:, 0] - points[simp[t[~inner], k[~inner]]])
+    nrm *= np.sign(away + (away == 0))[:, None]
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True) + 1e-300
+    far = 10.0 * float(np.linalg.norm(np.ptp(points, axis=0)))
+    base = np.where(np.isfinite(start[~inner]), start[~inner], p.mean(axis=1))
+    end[~inner] = base + far * nrm
+    start = np.where(np.isfinite(start), start, end)
+    end = np.where(np.isfinite(end), end, start)
+    s = np.sin(angle)
+    ok = np.ones(len(faces), dtype=bool)
+    for j in range(3):
+        c0 = _in_cocone(points, pole, faces[:, j], start, s)
+        c1 = _in_cocone(points, pole, faces[:, j], end, s)
+        # the angle is continuous along the edge: it meets the co-cone if an end lies inside
+        # or the ends lie in opposite halves of the double cone around the pole
+        ok &= (np.abs(c0) <= s) | (np.abs(c1) <= s) | (c0 * c1 < 0)
+    return faces[ok]
+
+
+def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.ndarray) -> np.ndarray:
+    """Orient normals consistently by propagation along a minimum spanning tree [HDD*92].
+
+    Edge weights ``1 - |n_i . n_j|`` make the propagation cross nearly parallel normals first.
+    Per connected component, the sign is fixed so that the point of largest x has a normal with
+    positive x (outward on a closed surface).
+
+    Parameters
+    ----------
+    normals : (N, 3) unit vectors
+    graph : (N, N) symmetric sparse neighbour graph
+    points : (N, 3)
+
+    Returns
+    -------
+    (N, 3) re-oriented copy.
+    """
+    g = sparse.triu(graph, k=1).tocoo()
+    w = 1.0 - np.abs(np.einsum("ij,ij->i", normals[g.row], normals[g.col])) + 1e-6
+    mst = csgraph.minimum_spanning_tree(sparse.csr_matrix((w, (g.row, g.col)), shape=graph.shape))
+    mst = (mst + mst.T).tocsr()
+    out = normals.copy()
+    ncomp, labels = csgraph.connected_components(mst, directed=False)
+    for c in range(ncomp):
+        members = np.flatnonzero(labels == c)
+        root = members[np.argmax(points[members, 0])]
+        if out[root, 0] < 0:
+            out[root] *= -1
+        order, pred = csgraph.breadth_first_order(mst, root, directed=False)
+        # flip in breadth-first order: each parent is final before its children
+        for v in order[1:]:
+            if out[v] @ out[pred[v]] < 0:
+                out[v] *= -1
+    return out
+
+
+def _planar_connectivity(points: np.ndarray):
+    """Delaunay triangulation inside the best-fit plane of (almost) coplanar points."""
+    centre = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - centre, full_matrices=False)
+    uv = (points - centre) @ vt[:2].T
+    tri = Delaunay(uv).simplices
+    normals = np.tile(vt[2], (len(points), 1))
+    return tri, normals
+
+
+def cocone_connectivity(cloud: PointCloud | np.ndarray, angle: float = COCONE_ANGLE) -> Connectivity:
+    """Cocone neighbour graph and oriented normals of a point cloud (thesis §7.2, Fig. 7.4).
+
+    Duplicates are merged first; coplanar input is triangulated in its plane; points that Qhull
+    leaves out or that end up with fewer than ``MIN_NEIGHBOURS`` Cocone neighbours are connected
+    to their nearest neighbours so that every point has a neighbourhood.
+
+    Parameters
+    ----------
+    cloud : PointCloud or (N0, 3) array_like
+    angle : float
+        Co-cone half opening angle in radians.
+
+    Returns
+    -------
+    Connectivity
+
+    Raises
+    ------
+    ConnectivityError
+        Fewer than 4 distinct points, or all points on a line.
+    """
+    pts = cloud.points if isinstance(cloud, PointCloud) else PointCloud(cloud).points
+    if len(pts) == 0:
+        raise ConnectivityError("the point cloud is empty")
+    points, inverse = deduplicate(pts)
+    n = len(points)
+    if n < 4:
+        raise ConnectivityError(f"at least 4 distinct points are needed, got {n}")
+    centred = points - points.mean(axis=0)
+    sv = np.linalg.svd(centred[:: max(1, n // 20000)], compute_uv=False)
+    if sv[1] <= 1e-9 * sv[0]:
+        raise ConnectivityError("all points lie on a line; no surface can be built")
+    if sv[2] <= 1e-9 * sv[0]:
+        faces, normals = _planar_connectivity(points)
+    else:
+        try:
+            dt = Delaunay(points, qhull_options="Qbb Qc Q12 Qt")
+        except QhullError:
+            dt = Delaunay(points, qhull_options="QJ")
+        centers = circumcenters(points[dt.simplices])
+        pole = poles(dt, points, centers)
+        faces = cocone_triangles(dt, points, pole, centers, angle)
+        normals = pole
+    tree = cKDTree(points)
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    degree = np.bincount(edges.ravel(), minlength=n)
+    lonely = np.flatnonzero(degree < 2 * MIN_NEIGHBOURS)  # each edge is counted twice per fan
+    if len(lonely):
+        k = min(SPACING_NEIGHBOURS, n - 1)
+        _, idx = tree.query(points[lonely], k=k + 1)
+        extra = np.stack([np.repeat(lonely, k), idx[:, 1:].ravel()], axis=1)
+        edges = np.concatenate([edges, extra])
+    edges = np.sort(edges, axis=1)
+    edges = np.unique(edges[edges[:, 0] != edges[:, 1]], axis=0)
+    length = np.linalg.norm(points[edges[:, 0]] - points[edges[:, 1]], axis=1)
+    graph = sparse.coo_matrix((length, (edges[:, 0], edges[:, 1])), shape=(n, n))
+    graph = (graph + graph.T).tocsr()
+    # points without a pole (isolated, degenerate cells) take a PCA normal of their neighbours
+    bad = np.flatnonzero(np.linalg.norm(normals, axis=1) < 0.5)
+    for i in bad:
+        nb = np.r_[i, graph.indices[graph.indptr[i] : graph.indptr[i + 1]]]
+        _, _, vt = np.linalg.svd(points[nb] - points[nb].mean(axis=0))
+        normals[i] = vt[-1]
+    normals = orient_normals(normals, graph, points)
+    spacing = local_spacing(tree, points)
+    return Connectivity(points, inverse, graph, normals, spacing, tree)
+
+
+def convex_hull_area(points2d: np.ndarray) -> float:
+    """Area of the 2-D convex hull of ``(M, 2)`` points (0 for degenerate sets)."""
+    try:
+        return float(ConvexHull(points2d).volume)
+    except (QhullError, ValueError):
+        return 0.0

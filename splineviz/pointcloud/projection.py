@@ -1,0 +1,465 @@
+"""Variable-degree local polynomial surfaces and the point projection (thesis §7.2).
+
+Conventions: input points ``(N, 3)`` float64; query points ``(M, 3)``.  Each input point
+``p_i`` owns a local coordinate system (LCS): origin ``p_i``, orthonormal rows
+``frames[i] = (x_axis, y_axis, z_axis)`` and a scale ``scale[i]`` (the local sample spacing) so
+that local coordinates ``frames[i] @ (x - p_i) / scale[i]`` have unit average spacing, which is
+where the condition number of the normal equations is a meaningful degree criterion (§7.2).
+The local surface is the graph ``z = p_i(x, y)`` of a bivariate polynomial of degree
+``degree[i]`` (1 ... ``q_max``) in the monomial basis ordered by total degree
+``(1, x, y, x^2, xy, y^2, ...)`` (eq. 7.3), so the basis of a lower degree is a prefix of the
+basis of a higher one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+from scipy import sparse
+
+from splineviz.core.errors import SplinevizError
+from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity
+
+#: highest polynomial degree tried (thesis: "around 5")
+Q_MAX = 5
+#: largest accepted condition number of A (eq. 7.4) after scaling to unit spacing
+COND_MAX = 1.0e4
+#: neighbours are collected out to this many smoothing lengths h (weight e^-9 ~ 1e-4 there)
+CUTOFF = 3.0
+#: LCS re-orientation (Fig. 7.5): bisect while the polynomial normal deviates more than this
+MAX_TILT = np.deg2rad(10.0)
+#: at most this many bisection steps
+MAX_BISECTIONS = 6
+#: breadth-first search depth limit (levels of the neighbour graph)
+MAX_LEVELS = 16
+#: number of angular sectors used by the overlap (convex-hull) rule of Fig. 7.6
+HULL_SECTORS = 12
+#: a point is an overlap when its projected radius is below this fraction of the region
+#: already covered in its direction by earlier breadth-first levels
+HULL_SHRINK = 0.5
+#: polynomials whose projections are combined by the component-wise median
+MEDIAN_NEIGHBOURS = 7
+#: Gauss-Newton iterations of the orthogonal projection onto a polynomial graph
+PROJECTION_ITERATIONS = 3
+
+
+class ProjectionError(SplinevizError, ValueError):
+    """Invalid parameters for the projection or invalid query points."""
+
+
+def monomial_exponents(q: int) -> np.ndarray:
+    """Exponents ``(a, b)`` of ``x^a y^b`` with ``a + b <= q``, ordered by total degree.
+
+    Returns
+    -------
+    (m, 2) int with ``m = (q + 1)(q + 2) / 2``; row order ``1, x, y, x^2, xy, y^2, ...``
+    (eq. 7.3), so the first ``(k + 1)(k + 2) / 2`` rows are the basis of degree ``k``.
+    """
+    return np.array([(t - b, b) for t in range(q + 1) for b in range(t + 1)], dtype=int)
+
+
+def basis_size(q: int) -> int:
+    """Dimension ``(q + 1)(q + 2) / 2`` of bivariate polynomials of degree ``q``."""
+    return (q + 1) * (q + 2) // 2
+
+
+def _powers(x: np.ndarray, q: int) -> np.ndarray:
+    """``x[..., None] ** arange(q + 1)`` without pow calls; shape ``x.shape + (q + 1,)``."""
+    out = np.empty(x.shape + (q + 1,))
+    out[..., 0] = 1.0
+    for k in range(1, q + 1):
+        out[..., k] = out[..., k - 1] * x
+    return out
+
+
+def basis(x: np.ndarray, y: np.ndarray, q: int) -> np.ndarray:
+    """Monomial basis ``b(x)`` of eq. (7.3) at points; shape ``x.shape + (m,)``."""
+    e = monomial_exponents(q)
+    return _powers(x, q)[..., e[:, 0]] * _powers(y, q)[..., e[:, 1]]
+
+
+@cache
+def _derivative_tables(q: int):
+    """Exponents and index/factor arrays for :func:`evaluate` (cached per degree)."""
+    e = monomial_exponents(q)
+    return (e[:, 0], e[:, 1], np.maximum(e[:, 0] - 1, 0), np.maximum(e[:, 1] - 1, 0),
+            e[:, 0].astype(float), e[:, 1].astype(float))
+
+
+def evaluate(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray):
+    """Polynomial values and first derivatives.
+
+    Parameters
+    ----------
+    coeffs : (P, m) coefficients for the basis of :func:`monomial_exponents`, zero-padded
+        for lower degrees.
+    x, y : (P,) local coordinates.
+
+    Returns
+    -------
+    z, z_x, z_y : (P,) each.
+    """
+    q = int(round((np.sqrt(8 * coeffs.shape[-1] + 1) - 3) / 2))
+    ea, eb, ea1, eb1, fa, fb = _derivative_tables(q)
+    px, py = _powers(x, q), _powers(y, q)
+    bx, by = px[..., ea], py[..., eb]
+    z = np.sum(coeffs * bx * by, axis=-1)
+    zx = np.sum(coeffs * (fa * px[..., ea1]) * by, axis=-1)
+    zy = np.sum(coeffs * bx * (fb * py[..., eb1]), axis=-1)
+    return z, zx, zy
+
+
+def frames_from_normals(normals: np.ndarray) -> np.ndarray:
+    """Orthonormal frames with z-axis ``normals``: ``(N, 3)`` -> ``(N, 3, 3)`` (rows x, y, z)."""
+    z = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    helper = np.zeros_like(z)
+    helper[np.arange(len(z)), np.argmin(np.abs(z), axis=1)] = 1.0
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    y = np.cross(z, x)
+    return np.stack([x, y, z], axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class Neighbourhoods:
+    """Padded neighbourhoods: ``index (N, K)`` point ids, ``level (N, K)`` breadth-first level
+    (0 for the point itself), ``valid (N, K)`` bool."""
+
+    index: np.ndarray
+    level: np.ndarray
+    valid: np.ndarray
+
+
+def collect_neighbourhoods(points: np.ndarray, graph: sparse.csr_matrix,
+                           radius: np.ndarray) -> Neighbourhoods:
+    """Breadth-first search over the neighbour graph with the r_c rule (§7.2).
+
+    ``p_j`` is collected for ``p_i`` when a graph path from ``p_i`` to ``p_j`` exists on which
+    no point is farther than ``r_c = radius[i]`` from ``p_i``: each level expands the previous
+    level by one graph step and drops the points outside the ball, so paths that leave the ball
+    (to another sheet of the surface, Fig. 7.3 right) are cut.  All rows are expanded at once
+    with sparse matrix products.
+
+    Parameters
+    ----------
+    points : (N, 3)
+    graph : (N, N) symmetric sparse neighbour graph
+    radius : (N,) r_c per point
+
+    Returns
+    -------
+    Neighbourhoods
+    """
+    n = len(points)
+    adj = graph.copy().tocsr()
+    adj.data = np.ones_like(adj.data)
+    eye = sparse.identity(n, format="csr")
+    reached = eye.copy()
+    level_of = eye.copy()  # value = level + 1
+    frontier = eye
+    for level in range(1, MAX_LEVELS + 1):
+        step = (frontier @ adj).tocoo()
+        d = np.linalg.norm(points[step.row] - points[step.col], axis=1)
+        keep = d <= radius[step.row]
+        step = sparse.csr_matrix((np.ones(keep.sum()), (step.row[keep], step.col[keep])),
+                                 shape=(n, n))
+        step.data[:] = 1.0
+        new = step - step.multiply(reached)
+        new.eliminate_zeros()
+        if new.nnz == 0:
+            break
+        new.data[:] = 1.0
+        reached = reached + new
+        level_of = level_of + new * (level + 1)
+        frontier = new
+    level_of = level_of.tocsr()
+    level_of.sort_indices()
+    counts = np.diff(level_of.indptr)
+    k = int(counts.max())
+    rows = np.repeat(np.arange(n), counts)
+    cols = np.arange(len(rows)) - np.repeat(level_of.indptr[:-1], counts)
+    index = np.repeat(np.arange(n)[:, None], k, axis=1)
+    level = np.zeros((n, k), dtype=int)
+    valid = np.zeros((n, k), dtype=bool)
+    index[rows, cols] = level_of.indices
+    level[rows, cols] = np.rint(level_of.data).astype(int) - 1
+    valid[rows, cols] = True
+    return Neighbourhoods(index, level, valid)
+
+
+def overlap_mask(local: np.ndarray, hood: Neighbourhoods) -> np.ndarray:
+    """Reject points whose projection falls inside the region already covered (Fig. 7.6).
+
+    The convex hull of the points collected at earlier breadth-first levels is approximated per
+    angular sector by its largest radius; a point of level ``l`` whose projected radius is below
+    ``HULL_SHRINK`` times the radius covered at levels ``< l`` in its sector overlaps the
+    collected region (the surface folds back under it) and is dropped.
+
+    Parameters
+    ----------
+    local : (N, K, 3) local coordinates
+    hood : Neighbourhoods
+
+    Returns
+    -------
+    (N, K) bool: True where the point is kept.
+    """
+    n, k = hood.valid.shape
+    r = np.hypot(local[..., 0], local[..., 1])
+    sector = ((np.arctan2(local[..., 1], local[..., 0]) + np.pi) / (2 * np.pi) * HULL_SECTORS)
+    sector = np.minimum(sector.astype(int), HULL_SECTORS - 1)
+    nlev = int(hood.level.max()) + 1
+    env = np.zeros((n, nlev + 1, HULL_SECTORS))
+    rows = np.repeat(np.arange(n)[:, None], k, axis=1)
+    lv = np.where(hood.valid, hood.level, nlev)
+    np.maximum.at(env, (rows, lv, sector), np.where(hood.valid, r, 0.0))
+    env = np.maximum.accumulate(env[:, :nlev], axis=1)
+    before = np.where(lv > 0, env[rows, np.maximum(lv - 1, 0), sector], 0.0)
+    return hood.valid & ((lv <= 1) | (r >= HULL_SHRINK * before))
+
+
+def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
+                    cond_max: float = COND_MAX):
+    """Weighted least squares with degree selection by the condition number (eq. 7.1-7.4).
+
+    Starting at ``q_max``, the degree is lowered while the condition number of the normal
+    matrix ``A`` of eq. (7.4) exceeds ``cond_max`` (points near an algebraic curve of that
+    degree, Fig. 7.7), down to degree 1.
+
+    Parameters
+    ----------
+    local : (N, K, 3) local coordinates (x, y, f) scaled to unit spacing
+    weights : (N, K) weights omega (zero for padding)
+
+    Returns
+    -------
+    coeffs : (N, m) coefficients, zero-padded beyond the chosen degree (m for ``q_max``)
+    degree : (N,) int
+    cond : (N,) condition number of the chosen A
+    """
+    b = basis(local[..., 0], local[..., 1], q_max)  # (N, K, m)
+    bw = b * weights[..., None]
+    a = np.einsum("nkm,nkl->nml", bw, b)
+    d = np.einsum("nkm,nk->nm", bw, local[..., 2])
+    n, m = d.shape
+    degree = np.ones(n, dtype=int)
+    cond = np.full(n, np.inf)
+    undecided = np.ones(n, dtype=bool)
+    for q in range(q_max, 0, -1):
+        mq = basis_size(q)
+        idx = np.flatnonzero(undecided)
+        if len(idx) == 0:
+            break
+        with np.errstate(all="ignore"):
+            c = np.linalg.cond(a[idx, :mq, :mq])
+        ok = np.isfinite(c) & (c <= cond_max) if q > 1 else np.ones(len(idx), dtype=bool)
+        degree[idx[ok]] = q
+        cond[idx[ok]] = c[ok]
+        undecided[idx[ok]] = False
+    coeffs = np.zeros((n, m))
+    for q in np.unique(degree):
+        idx = np.flatnonzero(degree == q)
+        mq = basis_size(q)
+        sub = a[idx, :mq, :mq] + 1e-12 * np.eye(mq)  # guards exactly singular degree-1 systems
+        coeffs[idx, :mq] = np.linalg.solve(sub, d[idx, :mq, None])[..., 0]
+    return coeffs, degree, cond
+
+
+def _local_normals(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Unit normals ``(-z_x, -z_y, 1)/|.|`` of polynomial graphs in local coordinates."""
+    _, zx, zy = evaluate(coeffs, x, y)
+    nrm = np.stack([-zx, -zy, np.ones_like(zx)], axis=-1)
+    return nrm / np.linalg.norm(nrm, axis=-1, keepdims=True)
+
+
+class Projector:
+    """Projection onto the point-set surface of thesis §7.2.
+
+    Precomputes Cocone connectivity, breadth-first neighbourhoods (r_c rule and overlap rule,
+    Fig. 7.6), and per point a weighted least-squares polynomial of variable degree in a local
+    coordinate system re-oriented by bisection (Fig. 7.5).
+
+    Parameters
+    ----------
+    cloud : PointCloud or (N, 3) array_like
+    smoothing : float
+        Multiplies the Gaussian width ``h`` (eq. 7.2), which defaults to the local spacing;
+        raise it (e.g. 2-3) to smooth out measurement noise.
+    q_max : int
+        Highest polynomial degree (1 ... 6).
+    cond_max : float
+        Condition-number threshold for the degree reduction.
+    fixed_degree : int, optional
+        Use this degree everywhere and skip the condition test: an MLS-style ablation.
+    connectivity : Connectivity, optional
+        Reuse a previously computed :func:`cocone_connectivity`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> v = rng.normal(size=(3000, 3)); v /= np.linalg.norm(v, axis=1, keepdims=True)
+    >>> proj = Projector(v)
+    >>> q = proj.project(np.array([[0.0, 0.0, 1.2]]))
+    >>> bool(abs(np.linalg.norm(q) - 1.0) < 1e-3)
+    True
+    """
+
+    def __init__(self, cloud, smoothing: float = 1.0, q_max: int = Q_MAX,
+                 cond_max: float = COND_MAX, fixed_degree: int | None = None,
+                 connectivity: Connectivity | None = None):
+        if not (np.isfinite(smoothing) and smoothing > 0):
+            raise ProjectionError(f"smoothing must be a positive number, got {smoothing}")
+        if not 1 <= int(q_max) <= 6:
+            raise ProjectionError(f"q_max must be between 1 and 6, got {q_max}")
+        if fixed_degree is not None and not 1 <= int(fixed_degree) <= int(q_max):
+            raise ProjectionError(f"fixed_degree must be between 1 and q_max, got {fixed_degree}")
+        self.conn = connectivity if connectivity is not None else cocone_connectivity(cloud)
+        self.q_max = int(q_max)
+        self.smoothing = float(smoothing)
+        self.points = self.conn.points
+        self.scale = self.conn.spacing.copy()
+        self._fit(fixed_degree, cond_max)
+        self._median_sets()
+
+    # -- precomputation ------------------------------------------------------------------
+    def _fit(self, fixed_degree, cond_max):
+        pts, n = self.points, len(self.points)
+        h = self.smoothing * self.scale
+        hood = collect_neighbourhoods(pts, self.conn.graph, CUTOFF * h)
+        self.neighbourhoods = hood
+        rel = pts[hood.index] - pts[:, None, :]  # (N, K, 3)
+        dist2 = np.einsum("nkc,nkc->nk", rel, rel)
+        weights = np.exp(-dist2 / h[:, None] ** 2)  # eq. (7.2)
+        normals = self.conn.normals.copy()
+        frames = frames_from_normals(normals)
+        coeffs = np.zeros((n, basis_size(self.q_max)))
+        degree = np.ones(n, dtype=int)
+        cond = np.zeros(n)
+        todo = np.arange(n)
+        for it in range(MAX_BISECTIONS + 1):
+            local = np.einsum("nij,nkj->nki", frames[todo], rel[todo]) / self.scale[todo, None, None]
+            keep = overlap_mask(local, Neighbourhoods(hood.index[todo], hood.level[todo],
+                                                      hood.valid[todo]))
+            w = np.where(keep, weights[todo], 0.0)
+            if fixed_degree is None:
+                c, q, k = fit_polynomials(local, w, self.q_max, cond_max)
+            else:
+                c, q, k = fit_polynomials(local, w, int(fixed_degree), np.inf)
+                c = np.pad(c, ((0, 0), (0, coeffs.shape[1] - c.shape[1])))
+            coeffs[todo], degree[todo], cond[todo] = c, q, k
+            zero = np.zeros(len(todo))
+            nloc = _local_normals(c, zero, zero)
+            tilt = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0))
+            bad = tilt > MAX_TILT
+            if it == MAX_BISECTIONS or not bad.any():
+                break
+            # Fig. 7.5: the new z-axis bisects the old one and the polynomial normal
+            nworld = np.einsum("nji,nj->ni", frames[todo[bad]], nloc[bad])
+            newz = frames[todo[bad], 2] + nworld
+            frames[todo[bad]] = frames_from_normals(newz)
+            todo = todo[bad]
+        self.frames, self.coeffs, self.degree, self.cond = frames, coeffs, degree, cond
+        zero = np.zeros(n)
+        nloc = _local_normals(coeffs, zero, zero)
+        self.normals = np.einsum("nji,nj->ni", frames, nloc)
+
+    def _median_sets(self):
+        """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""
+        g, n = self.conn.graph, len(self.points)
+        k = MEDIAN_NEIGHBOURS
+        sets = np.repeat(np.arange(n)[:, None], k, axis=1)
+        counts = np.diff(g.indptr)
+        rows = np.repeat(np.arange(n), counts)
+        order = np.lexsort((g.data, rows))
+        rank = np.arange(len(order)) - np.repeat(g.indptr[:-1], counts)
+        take = rank < k - 1
+        sets[rows[order][take], 1 + rank[take]] = g.indices[order][take]
+        self.median_sets = sets
+
+    # -- queries ---------------------------------------------------------------------------
+    def principal_curvatures(self) -> np.ndarray:
+        """Principal curvatures ``(N, 2)`` (world units, ``k1 >= k2`` signed along ``normals``)
+        of the local polynomial at each input point's foot point."""
+        c, s = self.coeffs, self.scale
+        # Monge patch z = p(x, y): first and second derivatives at the origin (scaled units)
+        zx, zy, zxx, zxy, zyy = c[:, 1], c[:, 2], 2 * c[:, 3], c[:, 4], 2 * c[:, 5]
+        g = 1.0 + zx**2 + zy**2
+        k_gauss = (zxx * zyy - zxy**2) / g**2
+        k_mean = ((1 + zx**2) * zyy - 2 * zx * zy * zxy + (1 + zy**2) * zxx) / (2 * g**1.5)
+        disc = np.sqrt(np.maximum(k_mean**2 - k_gauss, 0.0))
+        return np.stack([k_mean + disc, k_mean - disc], axis=1) / s[:, None]
+
+    def _project_on(self, ids: np.ndarray, r: np.ndarray):
+        """Orthogonal projection of ``r`` onto the polynomial graphs of points ``ids``.
+
+        Gauss-Newton on the foot parameters, started at the vertical projection; the step is
+        limited to the query's distance so that far points cannot diverge.
+
+        Parameters
+        ----------
+        ids : (P,) int
+        r : (P, 3)
+
+        Returns
+        -------
+        positions (P, 3), normals (P, 3) in world coordinates.
+        """
+        f, s, c = self.frames[ids], self.scale[ids], self.coeffs[ids]
+        loc = np.einsum("pij,pj->pi", f, r - self.points[ids]) / s[:, None]
+        u, v = loc[:, 0].copy(), loc[:, 1].copy()
+        limit = np.linalg.norm(loc, axis=1) + 1.0
+        for _ in range(PROJECTION_ITERATIONS):
+            z, zx, zy = evaluate(c, u, v)
+            res = loc - np.stack([u, v, z], axis=1)
+            # J = [[1,0],[0,1],[zx,zy]];  solve (J^T J) du = J^T res
+            g0 = res[:, 0] + zx * res[:, 2]
+            g1 = res[:, 1] + zy * res[:, 2]
+            a00, a01, a11 = 1 + zx * zx, zx * zy, 1 + zy * zy
+            det = a00 * a11 - a01 * a01
+            du = (a11 * g0 - a01 * g1) / det
+            dv = (a00 * g1 - a01 * g0) / det
+            step = np.hypot(du, dv)
+            factor = np.minimum(1.0, limit / np.maximum(step, 1e-300))
+            u += du * factor
+            v += dv * factor
+        z, zx, zy = evaluate(c, u, v)
+        nloc = np.stack([-zx, -zy, np.ones_like(z)], axis=1)
+        nloc /= np.linalg.norm(nloc, axis=1, keepdims=True)
+        pos = self.points[ids] + np.einsum("pji,pj->pi", f, np.stack([u, v, z], axis=1)) * s[:, None]
+        return pos, np.einsum("pji,pj->pi", f, nloc)
+
+    def project_with_normals(self, points):
+        """Project points and return the surface normals there.
+
+        Parameters
+        ----------
+        points : (M, 3) array_like
+
+        Returns
+        -------
+        positions : (M, 3) component-wise median of the projections onto the polynomials of the
+            nearest input point and its nearest graph neighbours (§7.2).
+        normals : (M, 3) unit normals, oriented like the input's Cocone normals.
+        """
+        r = np.asarray(points, dtype=np.float64)
+        if r.ndim != 2 or r.shape[1] != 3:
+            raise ProjectionError(f"points must have shape (M, 3), got {r.shape}")
+        if not np.all(np.isfinite(r)):
+            raise ProjectionError("points to project contain NaN or infinite coordinates")
+        if len(r) == 0:
+            return np.empty((0, 3)), np.empty((0, 3))
+        _, nearest = self.conn.tree.query(r)
+        ids = self.median_sets[nearest]  # (M, k)
+        m, k = ids.shape
+        pos, nrm = self._project_on(ids.ravel(), np.repeat(r, k, axis=0))
+        pos = np.median(pos.reshape(m, k, 3), axis=1)
+        nrm = np.median(nrm.reshape(m, k, 3), axis=1)
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        return pos, nrm
+
+    def project(self, points) -> np.ndarray:
+        """Project ``(M, 3)`` points onto the local surfaces; returns ``(M, 3)`` (§7.2)."""
+        return self.project_with_normals(points)[0]
