@@ -19,6 +19,7 @@ from splineviz.core.errors import SplinevizError
 # sub-command name -> "module:register_function"
 SUBCOMMANDS: dict[str, str] = {
     "info": "splineviz.io.info:register",
+    "render": "splineviz.compute.cli_render:register",
 }
 
 

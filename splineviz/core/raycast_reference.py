@@ -69,7 +69,9 @@ def normalize_clip_planes(clip_planes) -> np.ndarray:
 
     A plane keeps the half-space its normal points to: ``dot(x - origin, normal) >= 0``.
     """
-    planes = list(clip_planes or ())
+    if clip_planes is None:
+        return np.zeros((0, 2, 3))
+    planes = list(clip_planes)
     if not planes:
         return np.zeros((0, 2, 3))
     try:

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.camera import Camera
-from splineviz.core.splines.base import Spline
 from splineviz.core.volume import Volume
 
 DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "volumes"
@@ -53,35 +52,6 @@ def cameras(volume: Volume) -> list[Camera]:
         d = np.asarray(d) / np.linalg.norm(d)
         out.append(Camera(c + 1.6 * r * d, c, view_up=up, view_angle=35.0))
     return out
-
-
-class LocalTrilinear(Spline):
-    """Trilinear interpolation written independently of the kernel (test oracle)."""
-
-    model = "trilinear"
-
-    def index_derivatives(self, u, order):
-        d = self.volume.data.astype(np.float64)
-        hi = np.asarray(d.shape) - 2
-        c = np.clip(np.floor(u).astype(np.int64), 0, hi)
-        p = u - c
-        val = np.zeros(len(u))
-        grad = np.zeros((len(u), 3))
-        for di in (0, 1):
-            for dj in (0, 1):
-                for dk in (0, 1):
-                    v = d[c[:, 0] + di, c[:, 1] + dj, c[:, 2] + dk]
-                    wx = p[:, 0] if di else 1 - p[:, 0]
-                    wy = p[:, 1] if dj else 1 - p[:, 1]
-                    wz = p[:, 2] if dk else 1 - p[:, 2]
-                    sx, sy, sz = (1 if di else -1), (1 if dj else -1), (1 if dk else -1)
-                    val += v * wx * wy * wz
-                    grad[:, 0] += v * sx * wy * wz
-                    grad[:, 1] += v * wx * sy * wz
-                    grad[:, 2] += v * wx * wy * sz
-        if order == 0:
-            return val[:, None]
-        return np.concatenate([val[:, None], grad], axis=1)
 
 
 def compare_frames(test, ref, spline, isovalue, clip_planes=()) -> dict:
