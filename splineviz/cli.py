@@ -20,6 +20,7 @@ from splineviz.core.errors import SplinevizError
 SUBCOMMANDS: dict[str, str] = {
     "info": "splineviz.io.info:register",
     "render": "splineviz.compute.cli_render:register",
+    "bench": "splineviz.compute.bench:register",
 }
 
 
