@@ -236,6 +236,22 @@ class CameraState(_Model):
     parallel_projection: bool = False
     parallel_scale: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] = 1.0
 
+    def to_camera(self):
+        """The :class:`splineviz.core.camera.Camera` of this state (perspective only)."""
+        from splineviz.core.camera import Camera, CameraError
+
+        try:
+            return Camera(self.position, self.focal_point, view_up=self.view_up,
+                          view_angle=self.view_angle)
+        except CameraError as exc:
+            raise SessionError(f"the session's camera is unusable: {exc}") from None
+
+    @classmethod
+    def from_camera(cls, camera) -> CameraState:
+        """State of a :class:`splineviz.core.camera.Camera` (or anything with its fields)."""
+        return cls(position=tuple(camera.position), focal_point=tuple(camera.focal_point),
+                   view_up=tuple(camera.view_up), view_angle=float(camera.view_angle))
+
 
 class Light(_Model):
     type: Literal["headlight", "camera", "scene"] = "headlight"
@@ -302,6 +318,56 @@ class Session(_Model):
         if obj.type not in FILE_TYPES:
             raise SessionError(f"object {obj_id!r} ({obj.type}) has no data file")
         obj.properties.path = str(Path(os.fspath(new_path)).expanduser().absolute())
+
+    # -- scene access for renderers and the GUI (no Qt, no VTK here)
+    def inputs_of(self, obj_id: str) -> list:
+        """The pipeline objects feeding ``obj_id``."""
+        return [self.object(i) for i in self.object(obj_id).inputs]
+
+    def clip_planes_for(self, obj_id: str) -> list[tuple[tuple, tuple]]:
+        """``(origin, normal)`` of every enabled clip plane that takes ``obj_id`` as input,
+        in the form :meth:`splineviz.RayCaster.render` expects."""
+        return [(o.properties.origin, o.properties.normal) for o in self.objects
+                if o.type == "ClipPlane" and o.properties.enabled and obj_id in o.inputs]
+
+    def visible(self, view_id: str | None = None) -> list:
+        """Displayable objects (isosurfaces, point clouds, meshes) shown in a view."""
+        view = self.views[0] if view_id is None else next(
+            (v for v in self.views if v.id == view_id), None)
+        if view is None:
+            raise KeyError(view_id)
+        return [o for o in self.objects
+                if o.type in ("Isosurface", "PointsFile", "MeshFile", "Remesh")
+                and o.properties.visible and o.id not in view.hidden]
+
+    def load_volume(self, obj_id: str):
+        """The :class:`~splineviz.Volume` behind ``obj_id`` (a VolumeFile, a Source, or an
+        Isosurface, whose input is read)."""
+        from splineviz.io.volumes import read_volume
+        from splineviz.plugins import source_volume
+
+        obj = self.object(obj_id)
+        if obj.type == "Isosurface":
+            obj = self.object(obj.inputs[0])
+        if obj.type == "Source":
+            return source_volume(obj.properties.source, obj.properties.shape)
+        if obj.type != "VolumeFile":
+            raise SessionError(f"object {obj_id!r} ({obj.type}) holds no volume")
+        p = obj.properties
+        return read_volume(p.path, format=p.format, dims=p.dims, dtype=p.dtype,
+                           byteorder=p.byteorder, offset=p.offset, spacing=p.spacing,
+                           origin=p.origin)
+
+    def load_points(self, obj_id: str):
+        """The :class:`~splineviz.PointCloud` of a PointsFile (or of a Remesh's input)."""
+        from splineviz.io.points import read_points
+
+        obj = self.object(obj_id)
+        if obj.type == "Remesh":
+            obj = self.object(obj.inputs[0])
+        if obj.type != "PointsFile":
+            raise SessionError(f"object {obj_id!r} ({obj.type}) holds no point cloud")
+        return read_points(obj.properties.path, format=obj.properties.format)
 
     def to_document(self, base_dir=None) -> dict:
         """The JSON document (non-default properties only), paths relative to ``base_dir``."""
