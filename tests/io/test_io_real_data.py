@@ -129,3 +129,18 @@ def test_bunny_bounds_match_the_stanford_model():
     pc = sv.read_points(PTS / "bunny.ply")
     np.testing.assert_allclose(pc.points[0], (-0.0378297, 0.12794, 0.00447467), rtol=1e-5)
     assert pc.bounds[1][1] == pytest.approx(0.187, abs=1e-3)
+
+
+def test_cli_info_reports_dims_dtype_range_spacing(capsys):
+    import json
+
+    from splineviz import cli
+
+    assert cli.main(["info", str(VOL / "headsq" / "quarter.nhdr"), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert info["kind"] == "volume" and info["format"] == "nrrd"
+    assert info["dims"] == [64, 64, 93] and info["dtype"] == "int16"
+    assert info["range"] == [0.0, 3926.0] and info["spacing"] == [3.2, 3.2, 1.5]
+    assert cli.main(["info", str(PTS / "kitten.xyz")]) == 0
+    text = capsys.readouterr().out
+    assert "points: 5210" in text and "normals: True" in text

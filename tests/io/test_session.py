@@ -141,3 +141,21 @@ def test_saving_leaves_no_partial_file_on_error(project):
         save_session(s, project / "out.svs")
     assert (project / "out.svs").read_bytes() == before
     assert sorted(p.name for p in project.iterdir() if p.name.startswith(".")) == []
+
+
+def test_absolute_path_inside_the_folder_is_stored_relative(project):
+    doc = scene_doc(vol=str(project / "data" / "head.mhd"))
+    s = load_session(write(project / "abs.svs", doc))
+    save_session(s, project / "rel.svs")
+    saved = json.loads((project / "rel.svs").read_text())
+    assert saved["objects"][0]["properties"]["path"] == "data/head.mhd"
+
+
+def test_scene_access_for_renderers(project):
+    s = load_session(write(project / "scene.svs", scene_doc()))
+    assert [o.id for o in s.visible()] == ["iso1", "iso2", "pc1"]
+    assert s.clip_planes_for("iso2") == [((90.0, 120.0, 80.0), (0.0, 1.0, 0.0))]
+    assert s.clip_planes_for("vol1") == []
+    assert s.load_volume("iso1").spacing == (4.0, 4.0, 4.0)
+    cam = s.views[0].camera.to_camera()
+    assert cam.position == (300.0, -200.0, 150.0) and cam.view_up == (0.0, 0.0, 1.0)
