@@ -71,8 +71,11 @@ def _check_count(count: int, path: Path, bytes_per_point: int) -> None:
 
 
 # ---------------------------------------------------------------------------- PLY
+_TRIANGLES = {"face": {"vertex_indices": 3, "vertex_index": 3}}
+
+
 def _read_ply(path: Path) -> PointData:
-    from plyfile import PlyData, PlyHeaderParseError, PlyParseError
+    from plyfile import PlyData, PlyElementParseError, PlyHeaderParseError, PlyParseError
 
     try:
         # ascii files are opened as text: plyfile would otherwise wrap the binary handle in
@@ -81,7 +84,15 @@ def _read_ply(path: Path) -> PointData:
         text = re.search(rb"^format\s+ascii", _head(path, 4096), re.M) is not None
         mode = {"mode": "r", "encoding": "latin-1", "newline": ""} if text else {"mode": "rb"}
         with open(path, **mode) as fh:
-            ply = PlyData.read(fh, mmap="c")
+            try:
+                # triangle faces of known length can be memory-mapped too (10x faster than
+                # plyfile's row-by-row list parsing); other meshes take the general path
+                ply = PlyData.read(fh, mmap="c", known_list_len=_TRIANGLES)
+            except PlyElementParseError as exc:
+                if "unexpected list length" not in str(exc):
+                    raise
+                fh.seek(0)
+                ply = PlyData.read(fh, mmap="c")
             if "vertex" not in ply:
                 raise InvalidDataError(f"{path.name} has no vertex element")
             v = ply["vertex"].data
