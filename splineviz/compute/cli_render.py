@@ -91,8 +91,12 @@ def run(args) -> int:
         planes.append((p[:3], p[3:]))
     rc = RayCaster(vol, model=args.model, device=args.device)
     if rc.stats["path"] == "numpy":
+        from splineviz.compute.raycast import KERNEL_MODELS
+
+        why = ("no OpenCL device" if args.model in KERNEL_MODELS
+               else f"OpenCL kernels exist for {', '.join(sorted(KERNEL_MODELS))} only")
         print(f"splineviz: note: model {args.model!r} renders on the NumPy reference path "
-              "(slow); only 'trilinear' has an OpenCL kernel so far", file=sys.stderr)
+              f"(slow): {why}", file=sys.stderr)
     rc.set_isovalue(iso)
     frame = rc.render(cam, size, clip_planes=planes)
     write_png(args.output, frame.color)

@@ -11,9 +11,25 @@ Pipeline on the device, without a CPU round trip of the volume:
   cell traversal, the exact restriction of the model to the ray in each active cell, first
   root, gradient, Phong headlight shading and OpenGL window depth.
 
-Models with an OpenCL kernel: ``"trilinear"``. The tetrahedral models render through the NumPy
-reference ray caster (:mod:`splineviz.core.raycast_reference`) until their kernels exist;
-``stats["path"]`` says which path made the frame.
+Models with an OpenCL kernel:
+
+* ``"trilinear"``: cells between samples; the restriction to the ray in a cell is an exact
+  cubic (split at its critical points, so no root is missed).
+* ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Data
+  change: conservative per-cube bounds from the 27-point stencil (every coefficient is an
+  affine combination of it). Isovalue change: candidate cubes -> scan compaction -> per
+  candidate all cube B-coefficients and the 24-bit tet code (convex hull test per tet,
+  §6.1.1) -> an OR pyramid of the cube activity gives exact skip codes. Per frame: in each
+  relevant cube, the ray part inside each relevant tet comes from the tet's four
+  barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
+  model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
+  root by the same monotone-piece cubic solver, the gradient from the last de Casteljau step.
+  Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
+  the neighbour table (same result, no special cases at cube faces).
+
+``"to-quadratic"`` renders through the NumPy reference ray caster
+(:mod:`splineviz.core.raycast_reference`) until its kernel exists; ``stats["path"]`` says
+which path made the frame.
 """
 
 from __future__ import annotations
@@ -30,7 +46,10 @@ from splineviz.core.errors import SplinevizError
 from splineviz.core.volume import Volume
 
 #: models with an OpenCL kernel, and their -D define
-KERNEL_MODELS = {"trilinear": "MODEL_TRILINEAR"}
+KERNEL_MODELS = {"trilinear": "MODEL_TRILINEAR", "cubic-c1": "MODEL_TYPE6",
+                 "super-quadratic": "MODEL_TYPE6"}
+#: slack of the barycentric inside test of a tetrahedron (rays on shared faces)
+TET_SLACK = 1e-6
 #: skip code of an active cell (classify.cl)
 SKIP_ACTIVE = 255
 
@@ -159,21 +178,27 @@ class RayCaster:
             raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
         self._volume = volume
         self._spline = None
-        self._cells = tuple(n - 1 for n in volume.shape)
+        # trilinear: cells between samples; type-6: cubes centred at the samples
+        shift = 0 if self.model == "trilinear" else 1
+        self._cells = tuple(n - 1 + shift for n in volume.shape)
         if self._device is not None:
             self._upload()
         if self._isovalue is not None:
             self.set_isovalue(self._isovalue)
+
+    def _defines(self) -> dict:
+        """-D options of this model's programs."""
+        d = {KERNEL_MODELS[self.model]: 1, **_shading_defines()}
+        if self.model != "trilinear":
+            d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK)
+        return d
 
     def _upload(self):
         import pyopencl.array as cla
 
         dev = self._device
         q = dev.queue
-        k_minmax = get_kernel(dev.context, "classify", "cell_minmax")
-        k_reduce = get_kernel(dev.context, "classify", "reduce_level")
-        self._k_skip = get_kernel(dev.context, "classify", "skip_codes")
-        self._data = cla.to_device(q, self._volume.data)
+        ctx = dev.context
         levels = _octree_levels(self._cells)
         total = levels[-1][0] + int(np.prod(levels[-1][1:]))
         self._levels = levels
@@ -182,18 +207,73 @@ class RayCaster:
         self._vmax = cla.empty(q, total, np.float32)
         nx, ny, nz = self._volume.shape
         cx, cy, cz = self._cells
-        k_minmax(q, (cz, cy, cx), None, self._data.data, self._vmin.data,
-                                   self._vmax.data, np.int32(nx), np.int32(ny), np.int32(nz))
+        if self.model == "trilinear":
+            cls_defines = None
+            self._data = cla.to_device(q, self._volume.data)
+            self._strides = (ny, nz)
+            k_minmax = get_kernel(ctx, "classify", "cell_minmax")
+            k_minmax(q, (cz, cy, cx), None, self._data.data, self._vmin.data,
+                     self._vmax.data, np.int32(nx), np.int32(ny), np.int32(nz))
+        else:
+            cls_defines = self._type6_tables()
+            k_bounds = get_kernel(ctx, "classify", "stencil_bounds", cls_defines)
+            k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
+                     np.int32(self._strides[1]), np.int32(nx), np.int32(ny), np.int32(nz),
+                     np.float32(self._negmass), self._vmin.data, self._vmax.data)
+        self._cls_defines = cls_defines
+        k_reduce = get_kernel(ctx, "classify", "reduce_level", cls_defines)
         for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
             k_reduce(q, (dz, dy, dx), None, self._vmin.data, self._vmax.data,
-                                        *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
+                     *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
+        self._k_skip = get_kernel(ctx, "classify", "skip_codes", cls_defines)
         ncell = cx * cy * cz
         self._skip = cla.empty(q, ncell, np.uint8)
         self._active_flags = cla.empty(q, ncell, np.int32)
         self._active_list = cla.empty(q, ncell, np.int32)
         self._count = cla.empty(q, 1, np.int32)
-        self._scan = _compaction_kernel(dev.context)
+        self._scan = _compaction_kernel(ctx)
+        if self.model != "trilinear":
+            self._tetcode = cla.zeros(q, ncell, np.uint32)
+            self._n_relevant = cla.empty(q, ncell, np.int32)
+            self._activity = cla.empty(q, total, np.uint8)
         q.finish()
+
+    def _type6_tables(self) -> dict:
+        """Upload the padded samples and the constant tables of a type-6 model.
+
+        All tables come from the core model (``self.spline.scheme``), so the kernel computes
+        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), the cube point
+        of each tet coefficient (24, n_d), barycentric matrices (24, 4, 4) and the
+        de Casteljau reduction tables of :mod:`splineviz.core.bform`.
+        """
+        import pyopencl.array as cla
+
+        from splineviz.core import bform
+        from splineviz.core.partitions import type6
+        from splineviz.core.splines import type6_rules
+        from splineviz.core.splines.boundary import pad_linear
+
+        q = self._device.queue
+        spline = self.spline
+        scheme = spline.scheme
+        ghost = 1
+        padded = np.ascontiguousarray(pad_linear(self._volume.data, ghost), dtype=np.float32)
+        _, py, pz = padded.shape
+        self._data = cla.to_device(q, padded)
+        self._strides = (py, pz)
+        stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
+        self._stencil = cla.to_device(q, stencil)
+        self._masks = cla.to_device(q, np.ascontiguousarray(scheme.tet_masks, np.float32))
+        self._cube_masks = cla.to_device(q, np.ascontiguousarray(scheme.cube_masks, np.float32))
+        self._tet_points = cla.to_device(q, np.ascontiguousarray(scheme.tet_points, np.int32))
+        self._bary = cla.to_device(
+            q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
+        red = [_reduction_table(k) for k in range(scheme.degree, 0, -1)]
+        self._red = cla.to_device(q, np.concatenate([r.ravel() for r in red]).astype(np.int32))
+        # largest negative weight mass of any coefficient (bounds of stencil_bounds)
+        self._negmass = float(np.max(np.sum(np.clip(-scheme.cube_masks, 0, None), axis=1)))
+        return {"MODEL_TYPE6": 1, "NCOEF": bform.n_coefficients(scheme.degree),
+                "NPOINTS": len(scheme.cube_points), "SKIP_ACTIVE": SKIP_ACTIVE}
 
     # -- classification ------------------------------------------------------------------
 
@@ -204,15 +284,17 @@ class RayCaster:
             raise RayCastError(f"the isovalue must be finite, got {value}")
         self._isovalue = value
         t = time.perf_counter()
+        tets = None
         if self._device is not None:
             q = self._device.queue
             cx, cy, cz = self._cells
             self._k_skip(q, (cz, cy, cx), None, self._vmin.data, self._vmax.data,
-                                      self._levels_buf.data, np.int32(len(self._levels)),
-                                      np.float32(value), self._skip.data,
-                                      self._active_flags.data)
+                         self._levels_buf.data, np.int32(len(self._levels)),
+                         np.float32(value), self._skip.data, self._active_flags.data)
             self._scan(self._active_flags, self._active_list, self._count, queue=q)
             count = int(self._count.get(queue=q)[0])
+            if self.model != "trilinear":
+                count, tets = self._classify_tets(value, count)
         elif self.model == "trilinear":
             vmin, vmax = numpy_cell_bounds(self._volume.data)
             count = int(np.count_nonzero((vmin <= np.float32(value)) & (np.float32(value) <= vmax)))
@@ -220,7 +302,44 @@ class RayCaster:
             count = None  # the NumPy path of the tetrahedral models does no classification
         self.stats["classify_s"] = time.perf_counter() - t
         self.stats["active_cells"] = count
-        self.stats["active_tets"] = None
+        self.stats["active_tets"] = tets
+
+    def _classify_tets(self, value: float, candidates: int) -> tuple[int, int]:
+        """Tet codes of the candidate cubes, then exact skip codes from the activity pyramid.
+
+        Returns (cubes with a relevant tetrahedron, relevant tetrahedra).
+        """
+        dev = self._device
+        q = dev.queue
+        ctx = dev.context
+        d = self._cls_defines
+        self._tetcode.fill(np.uint32(0), queue=q)
+        relevant_cubes = relevant_tets = 0
+        if candidates:
+            k_tet = get_kernel(ctx, "classify", "tet_codes", d)
+            _, ny, nz = self._volume.shape
+            k_tet(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
+                  np.int32(self._strides[1]), np.int32(ny), np.int32(nz),
+                  self._active_list.data, self._stencil.data, self._cube_masks.data,
+                  self._tet_points.data, np.float32(value), self._tetcode.data,
+                  self._n_relevant.data)
+            nrel = self._n_relevant[:candidates]
+            relevant_tets = int(cla_sum(nrel, q))
+            relevant_cubes = int(cla_count_nonzero(nrel, q))
+        # the skip volume from the exact per-cube activity (an OR pyramid, §6.2.1)
+        ncell = int(np.prod(self._cells))
+        get_kernel(ctx, "classify", "activity_level0", d)(
+            q, (ncell,), None, self._tetcode.data, self._activity.data, np.int32(ncell))
+        k_or = get_kernel(ctx, "classify", "reduce_or", d)
+        levels = self._levels
+        for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
+            k_or(q, (dz, dy, dx), None, self._activity.data,
+                 *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
+        cx, cy, cz = self._cells
+        get_kernel(ctx, "classify", "skip_from_activity", d)(
+            q, (cz, cy, cx), None, self._activity.data, self._levels_buf.data,
+            np.int32(len(levels)), self._skip.data)
+        return relevant_cubes, relevant_tets
 
     def active_cells(self) -> np.ndarray:
         """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the active cells."""
@@ -274,8 +393,7 @@ class RayCaster:
 
         dev = self._device
         q = dev.queue
-        k_ray = get_kernel(dev.context, "raycast", "raycast",
-                           {KERNEL_MODELS[self.model]: 1, **_shading_defines()})
+        k_ray = get_kernel(dev.context, "raycast", "raycast", self._defines())
         vol = self._volume
         spacing = np.asarray(vol.spacing, dtype=np.float64)
         origin = np.asarray(vol.origin, dtype=np.float64)
@@ -302,9 +420,16 @@ class RayCaster:
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
         nx, ny, nz = vol.shape
+        type6_args = []
+        if self.model != "trilinear":
+            type6_args = [self._tetcode.data, self._stencil.data, self._masks.data,
+                          self._bary.data, self._red.data]
+        shift = 0.0 if self.model == "trilinear" else 0.5
         k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
-                     self._skip.data, np.float32(self._isovalue), f3(eye), f3(eye_u), f3(dop),
-                     f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
+              np.int32(self._strides[0]), np.int32(self._strides[1]),
+              *(np.int32(c) for c in self._cells), np.float32(shift),
+              self._skip.data, *type6_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
+              f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
                      planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
                      np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
         hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
@@ -314,6 +439,34 @@ class RayCaster:
         normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
                          color.get(queue=q).reshape(h, w, 4))
+
+
+def _reduction_table(degree: int) -> np.ndarray:
+    """(n_{degree-1}, 4) positions of alpha + e_m among the degree-``degree`` multi-indices
+    (the de Casteljau step of :mod:`splineviz.core.bform`, as a table for the kernel)."""
+    from splineviz.core import bform
+
+    pos = bform.index_map(degree)
+    lower = bform.multi_indices(degree - 1)
+    out = np.empty((len(lower), 4), dtype=np.int32)
+    for a, alpha in enumerate(lower):
+        for m in range(4):
+            beta = [int(v) for v in alpha]
+            beta[m] += 1
+            out[a, m] = pos[tuple(beta)]
+    return out
+
+
+def cla_sum(arr, queue) -> float:
+    import pyopencl.array as cla
+
+    return cla.sum(arr, queue=queue).get()
+
+
+def cla_count_nonzero(arr, queue) -> int:
+    import pyopencl.array as cla
+
+    return int(cla.sum((arr != 0).astype(np.int32), queue=queue).get())
 
 
 _scan_cache: dict = {}

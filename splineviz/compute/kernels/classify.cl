@@ -78,3 +78,109 @@ __kernel void skip_codes(__global const float *vmin, __global const float *vmax,
     }
     skip[c] = 0;  // unreachable: level 0 is empty when the cell is not active
 }
+
+// ---- type-6 splines (cubes centred at the data points; padded samples, one ghost layer) ----
+#ifdef MODEL_TYPE6
+
+// Conservative value bounds of the spline on each cube: every B-coefficient is an affine
+// combination sum w_q f_q (sum w_q = 1) of the 27 stencil values, so it lies in
+// [min - N (max - min), max + N (max - min)] with N the largest negative weight mass.
+__kernel void stencil_bounds(__global const float *pdata, int PY, int PZ,
+                             int NX, int NY, int NZ, float negmass,
+                             __global float *vmin, __global float *vmax)
+{
+    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
+    if (i >= NX || j >= NY || k >= NZ) return;
+    float lo = INFINITY, hi = -INFINITY;
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+            for (int c = 0; c < 3; ++c) {
+                const float v = pdata[((i + a) * PY + (j + b)) * PZ + (k + c)];
+                lo = fmin(lo, v);
+                hi = fmax(hi, v);
+            }
+    const float w = negmass * (hi - lo);
+    const int q = (i * NY + j) * NZ + k;
+    vmin[q] = lo - w;
+    vmax[q] = hi + w;
+}
+
+// Per candidate cube: all cube B-coefficients from the stencil, then the 24-bit tet code:
+// bit t is set when the coefficients of tet t straddle the isovalue (convex hull property,
+// thesis §6.1.1).
+__kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
+                        __global const int *cubes, __constant const int *stencil,
+                        __global const float *cube_masks, __constant const int *tet_points,
+                        float iso, __global uint *tetcode, __global int *n_relevant)
+{
+    const int a = get_global_id(0);
+    const int cube = cubes[a];
+    const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
+    const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
+    float vals[27];
+    for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
+    float coef[NPOINTS];
+    for (int p = 0; p < NPOINTS; ++p) {
+        float acc = 0.0f;
+        for (int q = 0; q < 27; ++q) acc += cube_masks[p * 27 + q] * vals[q];
+        coef[p] = acc;
+    }
+    uint code = 0u;
+    for (int t = 0; t < 24; ++t) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (int m = 0; m < NCOEF; ++m) {
+            const float v = coef[tet_points[t * NCOEF + m]];
+            lo = fmin(lo, v);
+            hi = fmax(hi, v);
+        }
+        if (lo <= iso && iso <= hi) code |= 1u << t;
+    }
+    tetcode[cube] = code;
+    n_relevant[a] = popcount(code);
+}
+
+#endif
+
+// ---- activity pyramid: exact skip codes from per-cell activity (any model) ----
+
+__kernel void activity_level0(__global const uint *code, __global uchar *act, int n)
+{
+    const int i = get_global_id(0);
+    if (i < n) act[i] = code[i] != 0u ? 1 : 0;
+}
+
+__kernel void reduce_or(__global uchar *act, int src_off, int sx, int sy, int sz,
+                        int dst_off, int dx, int dy, int dz)
+{
+    const int c = get_global_id(0), b = get_global_id(1), a = get_global_id(2);
+    if (a >= dx || b >= dy || c >= dz) return;
+    uchar any_ = 0;
+    for (int da = 0; da < 2; ++da)
+        for (int db = 0; db < 2; ++db)
+            for (int dc = 0; dc < 2; ++dc) {
+                const int i = 2 * a + da, j = 2 * b + db, k = 2 * c + dc;
+                if (i < sx && j < sy && k < sz) any_ |= act[src_off + (i * sy + j) * sz + k];
+            }
+    act[dst_off + (a * dy + b) * dz + c] = any_;
+}
+
+__kernel void skip_from_activity(__global const uchar *act, __global const int4 *levels,
+                                 int n_levels, __global uchar *skip)
+{
+    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
+    const int4 l0 = levels[0];
+    if (i >= l0.y || j >= l0.z || k >= l0.w) return;
+    const int c = (i * l0.z + j) * l0.w + k;
+    if (act[c]) {
+        skip[c] = SKIP_ACTIVE;
+        return;
+    }
+    for (int L = n_levels - 1; L >= 0; --L) {
+        const int4 lv = levels[L];
+        if (!act[lv.x + (((i >> L) * lv.z + (j >> L)) * lv.w + (k >> L))]) {
+            skip[c] = (uchar)L;
+            return;
+        }
+    }
+    skip[c] = 0;
+}

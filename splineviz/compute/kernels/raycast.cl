@@ -1,6 +1,9 @@
 // Image-based ray casting of spline isosurfaces (thesis §6.2, Listing 6.2), one work-item per
 // pixel. Specialised by -D options:
 //   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
+//   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
+//                        the relevant tets from the 27-point data stencil, blossoms of the
+//                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2)
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
 //   SKIP_ACTIVE          skip code of an active cell (see classify.cl)
 //
@@ -133,6 +136,57 @@ inline float first_cubic_root(float4 k, float len)
     return -1.0f;
 }
 
+
+#ifdef MODEL_TYPE6
+#define NCOEF ((DEGREE + 1) * (DEGREE + 2) * (DEGREE + 3) / 6)
+#if DEGREE == 3
+#define NRED (10 + 4 + 1)
+#else
+#define NRED (4 + 1)
+#endif
+
+// One de Casteljau step (thesis §3.4.1) from degree k to k-1 with the barycentric argument
+// lam; red[a*4 + m] is the position of alpha + e_m among the degree-k indices.
+inline void decasteljau(const float *in, float *out, int n_out, __constant const int *red,
+                        float4 lam)
+{
+    for (int a = 0; a < n_out; ++a)
+        out[a] = lam.x * in[red[4 * a]] + lam.y * in[red[4 * a + 1]]
+                 + lam.z * in[red[4 * a + 2]] + lam.w * in[red[4 * a + 3]];
+}
+
+// Blossom b(lam0^(DEGREE - j), lam1^j) of the coefficients c (thesis §3.4.3).
+inline float blossom_ij(const float *c, __constant const int *red, float4 lam0, float4 lam1,
+                        int j)
+{
+    float t1[10], t2[4], t3[1];
+#if DEGREE == 3
+    decasteljau(c, t1, 10, red, (j >= 3) ? lam1 : lam0);
+    decasteljau(t1, t2, 4, red + 40, (j >= 2) ? lam1 : lam0);
+    decasteljau(t2, t3, 1, red + 56, (j >= 1) ? lam1 : lam0);
+#else
+    decasteljau(c, t2, 4, red, (j >= 2) ? lam1 : lam0);
+    decasteljau(t2, t3, 1, red + 16, (j >= 1) ? lam1 : lam0);
+#endif
+    return t3[0];
+}
+
+// The DEGREE-1 fold de Casteljau at lam: the 4 linear coefficients whose combination with the
+// barycentric gradients gives the gradient (thesis §3.4.2).
+inline float4 linear_part(const float *c, __constant const int *red, float4 lam)
+{
+    float t1[10], t2[4];
+#if DEGREE == 3
+    decasteljau(c, t1, 10, red, lam);
+    decasteljau(t1, t2, 4, red + 40, lam);
+#else
+    for (int i = 0; i < 10; ++i) t1[i] = c[i];
+    decasteljau(t1, t2, 4, red, lam);
+#endif
+    return (float4)(t2[0], t2[1], t2[2], t2[3]);
+}
+#endif
+
 inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
 {
     // parameters where the ray leaves the box [lo, hi] through the plane chosen by the
@@ -150,10 +204,86 @@ inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
 
 inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t.z ? 1 : 2); }
 
-__kernel void raycast(__global const float *data, int NX, int NY, int NZ,
+#ifdef MODEL_TYPE6
+// First root of the type-6 spline - iso on the ray segment p0 + s d, s in [0, len], inside the
+// cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
+// Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
+// Returns the smallest root (or -1) and the index-space gradient there.
+inline float type6_cube_root(__global const float *pdata, int base,
+                             __constant const int *stencil, __constant const float *masks,
+                             __constant const float4 *bary, __constant const int *red,
+                             uint code, float3 p0, float3 d, float len, float iso,
+                             float3 *grad)
+{
+    float vals[27];
+    for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
+    float best = -1.0f;
+    for (int t = 0; t < 24; ++t) {
+        if (!(code & (1u << t))) continue;
+        // barycentric coordinates along the segment: lam(s) = l + s a
+        const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
+                     r3 = bary[4 * t + 3];
+        const float4 l = (float4)(dot(r0.xyz, p0) + r0.w, dot(r1.xyz, p0) + r1.w,
+                                  dot(r2.xyz, p0) + r2.w, dot(r3.xyz, p0) + r3.w);
+        const float4 av = (float4)(dot(r0.xyz, d), dot(r1.xyz, d), dot(r2.xyz, d),
+                                   dot(r3.xyz, d));
+        float lo = 0.0f, hi = best >= 0.0f ? best : len;
+        const float lv[4] = {l.x, l.y, l.z, l.w}, avv[4] = {av.x, av.y, av.z, av.w};
+        bool empty = false;
+        for (int m = 0; m < 4; ++m) {
+            // a tiny slack keeps rays on shared faces from falling between two tets
+            const float lm = lv[m] + TET_SLACK;
+            if (avv[m] > 0.0f) lo = fmax(lo, -lm / avv[m]);
+            else if (avv[m] < 0.0f) hi = fmin(hi, -lm / avv[m]);
+            else if (lm < 0.0f) empty = true;
+        }
+        if (empty || lo > hi) continue;
+        float c[NCOEF];
+        for (int i = 0; i < NCOEF; ++i) {
+            __constant const float *w = masks + (t * NCOEF + i) * 27;
+            float acc = 0.0f;
+            for (int q = 0; q < 27; ++q) acc += w[q] * vals[q];
+            c[i] = acc - iso;  // the coefficients of p - iso (constants reproduce exactly)
+        }
+        const float4 lam0 = l + lo * av, lam1 = l + hi * av;
+        // Bernstein coefficients of the segment restriction, then power form in u in [0, 1]
+        float4 k;
+#if DEGREE == 3
+        const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
+        const float b2 = blossom_ij(c, red, lam0, lam1, 2), b3 = blossom_ij(c, red, lam0, lam1, 3);
+        k = (float4)(b0, 3.0f * (b1 - b0), 3.0f * (b2 - 2.0f * b1 + b0),
+                     b3 - 3.0f * b2 + 3.0f * b1 - b0);
+#else
+        const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
+        const float b2 = blossom_ij(c, red, lam0, lam1, 2);
+        k = (float4)(b0, 2.0f * (b1 - b0), b2 - 2.0f * b1 + b0, 0.0f);
+#endif
+        const float u = first_cubic_root(k, 1.0f);
+        if (u < 0.0f) continue;
+        const float sh = lo + u * (hi - lo);
+        if (best >= 0.0f && sh >= best) continue;
+        best = sh;
+        const float4 lh = l + sh * av;
+        const float4 e = linear_part(c, red, lh);
+        // grad p = DEGREE * sum_m e_m grad(lam_m)
+        *grad = DEGREE * (e.x * r0.xyz + e.y * r1.xyz + e.z * r2.xyz + e.w * r3.xyz);
+    }
+    return best;
+}
+#endif
+
+__kernel void raycast(__global const float *data,   // samples; type-6: the padded samples
+                      int NX, int NY, int NZ,        // sample counts (data box [0, n-1])
+                      int SY, int SZ,                // strides of `data` (i*SY*SZ + j*SZ + k)
+                      int CX, int CY, int CZ,        // cells of the skip volume per axis
+                      float grid_shift,              // cell c covers [c, c+1) - shift in u
                       __global const uchar *skip,
+#ifdef MODEL_TYPE6
+                      __global const uint *tetcode,
+                      __constant const int *stencil, __constant const float *masks,
+                      __constant const float4 *bary, __constant const int *red,
+#endif
                       float iso,
-                      float3 eye_w,        // eye, world
                       float3 eye_u,        // eye, index space
                       float3 dop, float3 right_s, float3 up_s,  // right/up scaled by tan
                       float3 inv_spacing,
@@ -173,7 +303,7 @@ __kernel void raycast(__global const float *data, int NX, int NY, int NZ,
     const float3 d = dw * inv_spacing;  // index-space direction per world unit
     const float3 inv_d = 1.0f / d;
 
-    // interval of the ray inside the box [0, n-1] ...
+    // interval of the ray inside the data box [0, n-1] ...
     const float3 hiB = (float3)(NX - 1, NY - 1, NZ - 1);
     float3 ta = (0.0f - eye_u) * inv_d, tb = (hiB - eye_u) * inv_d;
     float3 tn = fmin(ta, tb), tf = fmax(ta, tb);
@@ -199,21 +329,23 @@ __kernel void raycast(__global const float *data, int NX, int NY, int NZ,
     float t_hit = 0.0f;
 
     if (t0 <= t1) {
-        const float3 ue = eye_u + t0 * d;  // entry point
+        const float3 ue = eye_u + t0 * d;           // entry point, index space
+        const float3 we = ue + grid_shift;          // the same in cell coordinates
         const float send = t1 - t0;
-        const int3 ncell = (int3)(NX - 1, NY - 1, NZ - 1);
-        int3 cell = clamp(convert_int3_rtn(ue), (int3)(0), ncell - 1);
+        const int3 ncell = (int3)(CX, CY, CZ);
+        int3 cell = clamp(convert_int3_rtn(we), (int3)(0), ncell - 1);
         float s = 0.0f;
-        const int max_steps = 4 * (NX + NY + NZ) + 16;
+        const int max_steps = 4 * (CX + CY + CZ) + 16;
         for (int step = 0; step < max_steps; ++step) {
             const int c = (cell.x * ncell.y + cell.y) * ncell.z + cell.z;
             const uchar code = skip[c];
             if (code == SKIP_ACTIVE) {
-                const float3 te = exit_params(ue, d, inv_d, cell, cell + 1);
+                const float3 te = exit_params(we, d, inv_d, cell, cell + 1);
                 const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
                 const float s_end = fmin(s_exit, send);
+#ifdef MODEL_TRILINEAR
                 const Trilinear f = trilinear_coeffs(data, cell, NY, NZ);
-                const float3 p = ue + s * d - convert_float3(cell);
+                const float3 p = we + s * d - convert_float3(cell);
                 const float4 k = tri_ray_cubic(&f, p, d, iso);
                 const float r = first_cubic_root(k, s_end - s);
                 if (r >= 0.0f) {
@@ -224,6 +356,24 @@ __kernel void raycast(__global const float *data, int NX, int NY, int NZ,
                     found = true;
                     break;
                 }
+#else
+                const uint tc = tetcode[c];
+                if (tc != 0u) {
+                    // cube centred at data point `cell`; p relative to the centre
+                    const float3 p = ue + s * d - convert_float3(cell);
+                    const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
+                    float3 g;
+                    const float r = type6_cube_root(data, base, stencil, masks, bary, red, tc,
+                                                    p, d, s_end - s, iso, &g);
+                    if (r >= 0.0f) {
+                        upos = convert_float3(cell) + p + r * d;
+                        grad_u = g;
+                        t_hit = t0 + s + r;
+                        found = true;
+                        break;
+                    }
+                }
+#endif
                 if (s_exit >= send) break;
                 s = s_exit;
                 const int a = argmin3(te);
@@ -236,11 +386,11 @@ __kernel void raycast(__global const float *data, int NX, int NY, int NZ,
                 const int L = code;
                 const int3 lo = (cell >> L) << L;
                 const int3 hi = min(lo + (1 << L), ncell);
-                const float3 te = exit_params(ue, d, inv_d, lo, hi);
+                const float3 te = exit_params(we, d, inv_d, lo, hi);
                 const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
                 if (s_exit >= send) break;
                 const int a = argmin3(te);
-                const float3 q = ue + s_exit * d;
+                const float3 q = we + s_exit * d;
                 int3 nc = clamp(convert_int3_rtn(q), lo, hi - 1);
                 if (a == 0) nc.x = d.x > 0.0f ? hi.x : lo.x - 1;
                 else if (a == 1) nc.y = d.y > 0.0f ? hi.y : lo.y - 1;
