@@ -241,3 +241,36 @@ def test_stored_dtype_is_kept_in_volume_data(tmp_path):
     np.save(tmp_path / "i.npy", a)
     vd = load_volume_data(tmp_path / "i.npy")
     assert vd.data.dtype == np.int16 and vd.format == "npy"
+
+
+@pytest.mark.parametrize("compressed", [False, True])
+def test_metaimage_mha_written_by_vtk(tmp_path, field, compressed):
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtkmodules.vtkIOImage import vtkMetaImageWriter
+
+    img = vtkImageData()
+    img.SetDimensions(*field.shape)
+    img.SetSpacing(0.5, 1.5, 2.5)
+    img.SetOrigin(-1, -2, -3)
+    img.GetPointData().SetScalars(numpy_to_vtk(field.ravel(order="F"), deep=True))
+    w = vtkMetaImageWriter()
+    w.SetFileName(str(tmp_path / "v.mha"))
+    w.SetCompression(compressed)
+    w.SetInputData(img)
+    w.Write()
+    vol = sv.read_volume(tmp_path / "v.mha")
+    np.testing.assert_array_equal(vol.data, field)
+    assert vol.spacing == (0.5, 1.5, 2.5) and vol.origin == (-1, -2, -3)
+
+
+def test_nrrd_detached_header_written_by_pynrrd(tmp_path, field):
+    import nrrd
+
+    header = {"space dimension": 3, "space directions": np.diag([0.25, 0.5, 4.0]),
+              "space origin": np.array([1.0, 2.0, 3.0]), "encoding": "gzip"}
+    nrrd.write(str(tmp_path / "v.nhdr"), field, header, detached_header=True, index_order="F")
+    assert (tmp_path / "v.raw.gz").exists()
+    vol = sv.read_volume(tmp_path / "v.nhdr")
+    np.testing.assert_array_equal(vol.data, field)
+    assert vol.spacing == (0.25, 0.5, 4.0) and vol.origin == (1, 2, 3)
