@@ -1,0 +1,288 @@
+"""An isosurface layer: the state of one ray-cast spline isosurface, free of any view.
+
+A layer holds the volume, the spline model, the isovalue, the appearance (colour, opacity,
+material) and the ray casters that make its frames. Views (:class:`~splineviz.render.scene.
+SplineScene`) ask it for frames of *their* camera and size with :meth:`IsosurfaceLayer.compute`
+and show them with a :class:`~splineviz.render.quad.FrameQuad`; several views (the window,
+an off-screen export) can show one layer. ``compute`` may run in a worker thread: the ray
+casters are guarded by a lock.
+
+Preview: tetrahedral models without an OpenCL kernel render through the NumPy reference
+(seconds per frame). While the camera moves, a layer can render a *preview* at reduced
+resolution, with the trilinear OpenCL kernel when its own model has none (same data, same
+isovalue; the surfaces differ by the model error only); the exact frame follows when the
+interaction ends (thesis §6.3: interactive rates for the trilinear model, exact pictures for
+the smooth ones).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from splineviz.core.camera import Camera
+from splineviz.core.errors import SplinevizError
+from splineviz.core.raycast_reference import Frame
+from splineviz.core.volume import Volume
+
+#: the spline models a layer offers, with the names users see (thesis ch. 4-5)
+MODEL_LABELS = {
+    "trilinear": "Trilinear (C0)",
+    "super-quadratic": "Quadratic super spline (type-6)",
+    "cubic-c1": "Cubic C1 (type-6)",
+    "to-quadratic": "Quadratic C1 (truncated octahedra)",
+}
+
+#: default front colours of successive layers (a qualitative palette: tell surfaces apart)
+PALETTE = ((0.93, 0.78, 0.55), (0.55, 0.80, 0.55), (0.90, 0.50, 0.45), (0.60, 0.65, 0.95))
+
+
+class LayerError(SplinevizError, ValueError):
+    """Bad isosurface layer settings (unknown model, isovalue or opacity out of range)."""
+
+
+@dataclass(frozen=True)
+class ViewState:
+    """What a frame depends on in the view: camera (with clipping range) and pixel size."""
+
+    camera: Camera
+    size: tuple[int, int]
+    clip_planes: tuple = ()
+
+    def key(self) -> tuple:
+        c = self.camera
+        planes = tuple(tuple(np.round(np.ravel(p), 12)) for p in self.clip_planes)
+        return (c.position, c.focal_point, c.view_up, c.view_angle, c.clipping_range,
+                tuple(self.size), planes)
+
+
+@dataclass
+class RenderedFrame:
+    """A frame with what it was made for (the key of the view and the layer's state)."""
+
+    frame: Frame
+    view: ViewState
+    state: tuple
+    scale: float
+    seconds: float
+    path: str
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def final(self) -> bool:
+        return self.scale >= 1.0 and self.path != "preview"
+
+
+@dataclass
+class Material:
+    """Phong constants of the headlight model (defaults: the reference ray caster's)."""
+
+    ambient: float = 0.15
+    diffuse: float = 0.75
+    specular: float = 0.35
+    shininess: float = 24.0
+
+
+#: named materials offered in the GUI
+MATERIALS = {
+    "default": Material(),
+    "matte": Material(0.2, 0.8, 0.0, 1.0),
+    "shiny": Material(0.1, 0.7, 0.7, 60.0),
+    "metal": Material(0.25, 0.55, 0.9, 12.0),
+}
+
+
+class IsosurfaceLayer:
+    """One spline isosurface of a volume (see module docstring).
+
+    Parameters
+    ----------
+    volume : Volume
+    model : str
+        One of :data:`MODEL_LABELS`.
+    isovalue : float or None
+        ``None``: the middle of the data range.
+    color : (3,) float in [0, 1]
+    opacity : float in (0, 1]
+    name : str
+    device : str or None
+        OpenCL device preference passed to :class:`splineviz.RayCaster`.
+    """
+
+    def __init__(self, volume: Volume, model: str = "trilinear", isovalue=None,
+                 color=PALETTE[0], opacity: float = 1.0, name: str = "isosurface",
+                 device: str | None = None, material: str = "default"):
+        if model not in MODEL_LABELS:
+            raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODEL_LABELS)}")
+        self.name = name
+        self.visible = True
+        self._device = device
+        self._lock = threading.RLock()
+        self._listeners = []
+        self._volume = volume
+        self._model = model
+        self._version = 0
+        self._caster = None
+        self._preview = None
+        self.color = tuple(float(c) for c in color)
+        self.opacity = 1.0
+        self.set_opacity(opacity)
+        self.material_name = "default"
+        self.set_material(material)
+        lo, hi = volume.finite_range
+        self._isovalue = 0.5 * (lo + hi) if isovalue is None else float(isovalue)
+        self.last_stats: dict = {}
+
+    # -- events --------------------------------------------------------------------------
+
+    def connect(self, callback) -> None:
+        """Call ``callback(layer, what)`` after a change; ``what`` is ``"frame"`` when frames
+        must be recomputed and ``"appearance"`` when only the shading uniforms changed."""
+        self._listeners.append(callback)
+
+    def disconnect(self, callback) -> None:
+        if callback in self._listeners:
+            self._listeners.remove(callback)
+
+    def _emit(self, what: str) -> None:
+        if what == "frame":
+            self._version += 1
+        for cb in list(self._listeners):
+            cb(self, what)
+
+    # -- state ---------------------------------------------------------------------------
+
+    @property
+    def volume(self) -> Volume:
+        return self._volume
+
+    @property
+    def model(self) -> str:
+        return self._model
+
+    @property
+    def isovalue(self) -> float:
+        return self._isovalue
+
+    @property
+    def state(self) -> tuple:
+        """Changes whenever frames of this layer must be recomputed."""
+        return (self._version, self._model, self._isovalue)
+
+    def set_volume(self, volume: Volume) -> None:
+        """New data (e.g. smoothed); keeps model and isovalue."""
+        with self._lock:
+            self._volume = volume
+            for rc in (self._caster, self._preview):
+                if rc is not None:
+                    rc.set_volume(volume)
+        self._emit("frame")
+
+    def set_model(self, model: str) -> None:
+        if model not in MODEL_LABELS:
+            raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODEL_LABELS)}")
+        if model == self._model:
+            return
+        with self._lock:
+            self._model = model
+            self._caster = None
+            self._preview = None
+        self._emit("frame")
+
+    def set_isovalue(self, value) -> None:
+        value = float(value)
+        if not np.isfinite(value):
+            raise LayerError(f"the isovalue must be finite, got {value}")
+        if value == self._isovalue:
+            return
+        self._isovalue = value  # classification happens lazily, in compute()
+        self._emit("frame")
+
+    def set_color(self, color) -> None:
+        c = tuple(float(v) for v in color)
+        if len(c) != 3 or not all(0.0 <= v <= 1.0 for v in c):
+            raise LayerError(f"a colour is three numbers in [0, 1], got {color!r}")
+        self.color = c
+        self._emit("appearance")
+
+    def set_opacity(self, opacity) -> None:
+        o = float(opacity)
+        if not 0.0 < o <= 1.0:
+            raise LayerError(f"opacity must be in (0, 1], got {opacity}")
+        self.opacity = o
+        self._emit("appearance")
+
+    def set_material(self, name: str) -> None:
+        if name not in MATERIALS:
+            raise LayerError(f"unknown material {name!r}; choose one of {list(MATERIALS)}")
+        self.material_name = name
+        self._emit("appearance")
+
+    @property
+    def material(self) -> Material:
+        return MATERIALS[self.material_name]
+
+    def set_visible(self, visible: bool) -> None:
+        self.visible = bool(visible)
+        self._emit("appearance")
+
+    def _get_state(self) -> dict:
+        """Properties that differ from the defaults (for session files)."""
+        state = {"name": self.name, "model": self._model, "isovalue": self._isovalue}
+        if self.color != PALETTE[0]:
+            state["color"] = list(self.color)
+        if self.opacity != 1.0:
+            state["opacity"] = self.opacity
+        if self.material_name != "default":
+            state["material"] = self.material_name
+        if not self.visible:
+            state["visible"] = False
+        return state
+
+    # -- frames --------------------------------------------------------------------------
+
+    def _casters(self):
+        from splineviz.compute.raycast import RayCaster
+
+        if self._caster is None:
+            self._caster = RayCaster(self._volume, model=self._model, device=self._device)
+        if self._caster.stats.get("path") != "opencl" and self._preview is None:
+            self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
+        return self._caster, self._preview
+
+    @property
+    def exact_path(self) -> str:
+        """``"opencl"`` or ``"numpy"``: how exact frames of this layer are made."""
+        with self._lock:
+            return self._casters()[0].stats.get("path", "numpy")
+
+    def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False
+                ) -> RenderedFrame:
+        """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
+
+        Parameters
+        ----------
+        view : ViewState
+        scale : float in (0, 1]
+            Resolution factor: the frame has ``ceil(scale * size)`` pixels per axis.
+        preview : bool
+            Use the fast trilinear OpenCL caster when this model has no kernel.
+        """
+        w, h = view.size
+        sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
+        with self._lock:
+            state = self.state
+            exact, fast = self._casters()
+            rc = fast if (preview and fast is not None) else exact
+            if rc.isovalue != self._isovalue:
+                rc.set_isovalue(self._isovalue)
+            t = time.perf_counter()
+            frame = rc.render(view.camera, size=(sw, sh), clip_planes=view.clip_planes)
+            seconds = time.perf_counter() - t
+            stats = dict(rc.stats)
+        path = "preview" if rc is not exact else stats.get("path", "numpy")
+        self.last_stats = stats
+        return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats)

@@ -1,0 +1,366 @@
+"""A VTK scene that shows ray-cast spline isosurfaces among ordinary props (thesis §6.3).
+
+:class:`SplineScene` wraps a pyvista plotter (an off-screen ``pyvista.Plotter`` or the Qt
+``QtInteractor``). Before every render (the renderer's ``StartEvent``) it
+
+1. resets the camera clipping range over the visible props (the isosurface quads report the
+   data box as their bounds),
+2. compares each visible layer's shown frame with what the view needs now (camera, clipping
+   range, window size, clip planes, layer state) and, if it differs, ray casts a new one,
+3. orders the quads after all other props, opaque layers first and translucent ones back to
+   front, so a translucent surface blends over the meshes already drawn and is hidden where a
+   mesh is nearer (its fragments fail the depth test).
+
+Modes: ``progressive=False`` (scripts, screenshots) casts exact frames synchronously at full
+size. ``progressive=True`` (the GUI) casts a reduced-resolution preview synchronously, sized
+to a time budget, and calls :attr:`SplineScene.request_refine` so that the owner can compute
+the exact frames in a worker thread (:meth:`refine`) and show them (:meth:`apply`).
+
+The scene also keeps what it shows (meshes, point clouds, outline) as data plus display
+options, so :func:`offscreen_screenshot` can rebuild it in an off-screen window of any size.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from splineviz.core.camera import Camera
+from splineviz.core.errors import SplinevizError
+from splineviz.core.raycast_reference import normalize_clip_planes
+from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
+from splineviz.render.quad import FrameQuad, view_normals
+
+#: seconds a synchronous preview may take (keeps the window responsive while dragging)
+PREVIEW_BUDGET_S = 0.06
+#: smallest preview resolution factor
+MIN_PREVIEW_SCALE = 1.0 / 16.0
+
+
+class SceneError(SplinevizError, ValueError):
+    """Bad scene request (unknown object, bad screenshot size)."""
+
+
+@dataclass
+class PropRecord:
+    """An ordinary prop of the scene: its data and ``add_mesh`` options (for re-creation)."""
+
+    name: str
+    dataset: object
+    options: dict
+    actor: object
+    kind: str = "mesh"
+    visible: bool = True
+
+
+@dataclass
+class _LayerView:
+    quad: FrameQuad
+    shown: RenderedFrame | None = None
+    seconds_per_pixel: float | None = None
+    preview_seconds_per_pixel: float | None = None
+    mean_depth: float = 1.0
+    callback: object = None
+    pending: dict = field(default_factory=dict)
+
+
+def view_state_of(renderer, size, clip_planes=()) -> ViewState:
+    """The :class:`ViewState` of a VTK renderer's active camera at ``size`` (width, height)."""
+    cam = renderer.GetActiveCamera()
+    if cam.GetParallelProjection():
+        cam.ParallelProjectionOff()  # the ray caster is perspective only
+    camera = Camera(cam.GetPosition(), cam.GetFocalPoint(), cam.GetViewUp(), cam.GetViewAngle(),
+                    clipping_range=cam.GetClippingRange())
+    planes = tuple(tuple(map(tuple, p)) for p in normalize_clip_planes(clip_planes))
+    return ViewState(camera, (int(size[0]), int(size[1])), planes)
+
+
+class SplineScene:
+    """Spline isosurfaces and ordinary props in one pyvista plotter (see module docstring).
+
+    Parameters
+    ----------
+    plotter : pyvista.Plotter or pyvistaqt.QtInteractor
+    progressive : bool
+        Preview + :attr:`request_refine` instead of synchronous exact frames.
+    """
+
+    def __init__(self, plotter, progressive: bool = False):
+        self.plotter = plotter
+        self.renderer = plotter.renderer
+        self.progressive = progressive
+        #: called with no argument when exact frames are due (progressive mode)
+        self.request_refine = None
+        self.layers: list[IsosurfaceLayer] = []
+        self._views: dict[int, _LayerView] = {}
+        self.props: dict[str, PropRecord] = {}
+        self._clip_planes: list = []
+        self._interacting = False
+        self._force_exact = False
+        self.last_frame_s = None
+        self.frame_times: list[float] = []
+        self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
+
+    # -- objects -------------------------------------------------------------------------
+
+    def add_layer(self, layer: IsosurfaceLayer) -> None:
+        quad = FrameQuad(layer.volume.bounds)
+        lv = _LayerView(quad)
+
+        def changed(_layer, what, lv=lv):
+            self._apply_appearance(_layer, lv)
+            if what == "frame":
+                lv.quad.set_bounds(_layer.volume.bounds)
+
+        lv.callback = changed
+        layer.connect(changed)
+        self.layers.append(layer)
+        self._views[id(layer)] = lv
+        self.renderer.AddActor(quad.actor)
+        self._apply_appearance(layer, lv)
+
+    def remove_layer(self, layer: IsosurfaceLayer) -> None:
+        lv = self._views.pop(id(layer), None)
+        if lv is None:
+            raise SceneError(f"layer {layer.name!r} is not in this scene")
+        layer.disconnect(lv.callback)
+        self.layers.remove(layer)
+        self.renderer.RemoveActor(lv.quad.actor)
+
+    def quad(self, layer: IsosurfaceLayer) -> FrameQuad:
+        return self._views[id(layer)].quad
+
+    def shown_frame(self, layer: IsosurfaceLayer) -> RenderedFrame | None:
+        """The frame the layer's quad shows now (None before the first render)."""
+        return self._views[id(layer)].shown
+
+    def add_mesh(self, name: str, dataset, kind: str = "mesh", **options) -> PropRecord:
+        """Add a pyvista dataset with ``plotter.add_mesh`` options; replaces ``name``."""
+        if name in self.props:
+            self.remove_prop(name)
+        actor = self.plotter.add_mesh(dataset, name=name, reset_camera=False, **options)
+        rec = PropRecord(name, dataset, dict(options), actor, kind)
+        self.props[name] = rec
+        return rec
+
+    def remove_prop(self, name: str) -> None:
+        rec = self.props.pop(name, None)
+        if rec is None:
+            raise SceneError(f"no object named {name!r} in the scene")
+        self.plotter.remove_actor(rec.actor, reset_camera=False, render=False)
+
+    def set_prop_visible(self, name: str, visible: bool) -> None:
+        rec = self.props[name]
+        rec.visible = bool(visible)
+        rec.actor.SetVisibility(rec.visible)
+
+    # -- clip planes ---------------------------------------------------------------------
+
+    @property
+    def clip_planes(self) -> tuple:
+        return tuple(self._clip_planes)
+
+    def set_clip_planes(self, planes) -> None:
+        """Clip planes of the isosurfaces: (origin, normal) pairs, each keeps the side its
+        normal points to (DESIGN.md). Meshes are not clipped: they show what the cut opens."""
+        self._clip_planes = [tuple(map(tuple, p)) for p in normalize_clip_planes(planes)]
+
+    # -- rendering -----------------------------------------------------------------------
+
+    def window_size(self) -> tuple[int, int]:
+        w, h = self.plotter.render_window.GetSize()
+        return max(int(w), 1), max(int(h), 1)
+
+    def view_state(self) -> ViewState:
+        return view_state_of(self.renderer, self.window_size(), self._clip_planes)
+
+    def set_interacting(self, flag: bool) -> None:
+        """Tell the scene a camera drag is in progress (previews) or over (refine)."""
+        self._interacting = bool(flag)
+
+    def _apply_appearance(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
+        q = lv.quad
+        m = layer.material
+        q.set_appearance(layer.color, layer.opacity)
+        q.set_material(m.ambient, m.diffuse, m.specular, m.shininess)
+        q.actor.SetVisibility(bool(layer.visible and q.has_image))
+
+    def _show(self, layer: IsosurfaceLayer, rf: RenderedFrame) -> None:
+        lv = self._views.get(id(layer))
+        if lv is None:
+            return
+        f = rf.frame
+        cam = rf.view.camera
+        lv.quad.set_image(f.hit, view_normals(f.normal, f.hit, cam.basis()), f.depth)
+        w, h = rf.view.size
+        t = np.tan(np.radians(cam.view_angle) / 2.0)
+        lv.quad.set_view_scale(t * w / h, t)
+        lv.shown = rf
+        lv.mean_depth = float(f.depth[f.hit].mean()) if f.hit.any() else 1.0
+        npx = f.hit.size
+        if rf.path == "preview" or rf.scale < 1.0:
+            lv.preview_seconds_per_pixel = rf.seconds / npx
+        if rf.path != "preview":
+            lv.seconds_per_pixel = rf.seconds / npx
+        self._apply_appearance(layer, lv)
+
+    def _is_current(self, layer, lv, view) -> bool:
+        return (lv.shown is not None and lv.shown.view.key() == view.key()
+                and lv.shown.state == layer.state)
+
+    def _preview_scale(self, layer, lv, view) -> tuple[float, bool]:
+        """(scale, use fast caster) of a preview that fits :data:`PREVIEW_BUDGET_S`."""
+        npx = view.size[0] * view.size[1]
+        spp = lv.preview_seconds_per_pixel
+        if spp is None:
+            spp = lv.seconds_per_pixel
+        if spp is None:
+            return 0.25, True
+        scale = float(np.sqrt(PREVIEW_BUDGET_S / max(spp * npx, 1e-12)))
+        return float(np.clip(scale, MIN_PREVIEW_SCALE, 1.0)), True
+
+    def _before_render(self, *_args) -> None:
+        t0 = time.perf_counter()
+        self.renderer.ResetCameraClippingRange()
+        view = self.view_state()
+        stale = []
+        for layer in self.layers:
+            lv = self._views[id(layer)]
+            if not layer.visible:
+                lv.quad.actor.VisibilityOff()
+                continue
+            if self._is_current(layer, lv, view):
+                continue
+            if not self.progressive or self._force_exact:
+                self._show(layer, layer.compute(view))
+            else:
+                scale, fast = self._preview_scale(layer, lv, view)
+                self._show(layer, layer.compute(view, scale=scale, preview=fast))
+                stale.append(layer)
+        self._order_quads()
+        self.last_frame_s = time.perf_counter() - t0
+        self.frame_times.append(self.last_frame_s)
+        del self.frame_times[:-50]
+        if stale and self.request_refine is not None and not self._interacting:
+            self.request_refine()
+
+    def _order_quads(self) -> None:
+        """Quads after all other props: opaque, then translucent from far to near."""
+        quads = []
+        for layer in self.layers:
+            lv = self._views[id(layer)]
+            quads.append((layer.opacity < 1.0, -lv.mean_depth, lv.quad.actor))
+        for _, _, actor in quads:
+            self.renderer.RemoveActor(actor)
+        for _, _, actor in sorted(quads, key=lambda q: (q[0], q[1])):
+            self.renderer.AddActor(actor)
+
+    def needs_refine(self) -> bool:
+        """Whether a visible layer shows a preview or a frame of another view."""
+        view = self.view_state()
+        for layer in self.layers:
+            lv = self._views[id(layer)]
+            if layer.visible and not (self._is_current(layer, lv, view) and lv.shown.final):
+                return True
+        return False
+
+    def refine(self, view: ViewState | None = None, cancelled=None):
+        """Exact frames of all visible layers that show a preview (thread safe).
+
+        Parameters
+        ----------
+        view : ViewState or None
+            The view to render for (taken now when None; the caller takes it in the main
+            thread before starting a worker).
+        cancelled : callable or None
+            Returns True to stop between layers.
+
+        Returns
+        -------
+        list of (layer, RenderedFrame)
+        """
+        view = self.view_state() if view is None else view
+        out = []
+        for layer in list(self.layers):
+            if cancelled is not None and cancelled():
+                break
+            lv = self._views.get(id(layer))
+            if lv is None or not layer.visible:
+                continue
+            if self._is_current(layer, lv, view) and lv.shown.final:
+                continue
+            out.append((layer, layer.compute(view)))
+        return out
+
+    def apply(self, results) -> bool:
+        """Show refined frames that still match the view and the layers; True if any did."""
+        view = self.view_state()
+        used = False
+        for layer, rf in results:
+            if layer in self.layers and rf.view.key() == view.key() and rf.state == layer.state:
+                self._show(layer, rf)
+                used = True
+        return used
+
+    def render_exact(self) -> None:
+        """One synchronous render with exact frames (for screenshots)."""
+        self._force_exact = True
+        try:
+            # the window itself: pyvista's render() does nothing before show()
+            self.plotter.render_window.Render()
+        finally:
+            self._force_exact = False
+
+    def close(self) -> None:
+        self.renderer.RemoveObserver(self._observer)
+        for layer in list(self.layers):
+            self.remove_layer(layer)
+
+
+def offscreen_screenshot(scene: SplineScene, filename=None, size=None,
+                         transparent_background: bool = False, background=None) -> np.ndarray:
+    """Render ``scene`` again in an off-screen window of ``size`` and return the image.
+
+    The new window gets the same camera (view angle kept, so a different aspect ratio shows
+    more or less at the sides), the same layers (exact frames) and the same props.
+
+    Parameters
+    ----------
+    scene : SplineScene
+    filename : str or Path or None
+        PNG to write.
+    size : (width, height) or None (the scene's window size)
+    transparent_background : bool
+        RGBA image with alpha 0 where nothing was drawn.
+
+    Returns
+    -------
+    (H, W, 3) or (H, W, 4) uint8
+    """
+    import pyvista as pv
+
+    w, h = scene.window_size() if size is None else (int(size[0]), int(size[1]))
+    if w < 1 or h < 1 or w > 16384 or h > 16384:
+        raise SceneError(f"screenshot size must be 1..16384 pixels per side, got {w}x{h}")
+    pl = pv.Plotter(off_screen=True, window_size=(w, h))
+    try:
+        bg = background if background is not None else scene.renderer.GetBackground()
+        pl.set_background(bg)
+        copy = SplineScene(pl, progressive=False)
+        for rec in scene.props.values():
+            if rec.visible:
+                copy.add_mesh(rec.name, rec.dataset, kind=rec.kind, **rec.options)
+        for layer in scene.layers:
+            copy.add_layer(layer)
+        copy.set_clip_planes(scene.clip_planes)
+        pl.renderer.GetActiveCamera().DeepCopy(scene.renderer.GetActiveCamera())
+        pl.camera_set = True  # else pyvista resets the camera on the first render
+        copy.render_exact()
+        img = pl.screenshot(filename, transparent_background=transparent_background,
+                            return_img=True)
+        copy.close()
+        return img
+    finally:
+        pl.close()
