@@ -30,6 +30,7 @@ _LAZY = {
     "save_session": "splineviz.io.session:save_session",
     "Session": "splineviz.io.session:Session",
     "register_format": "splineviz.io.registry:register_format",
+    "open_path": "splineviz.io.opening:open_path",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

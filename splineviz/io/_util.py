@@ -13,7 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from splineviz.io.errors import DataFileNotFoundError, DataTooLargeError, WriteError
+from splineviz.core.errors import SplinevizError
+from splineviz.io.errors import (
+    CorruptFileError,
+    DataFileNotFoundError,
+    DataTooLargeError,
+    WriteError,
+)
 
 #: environment variable overriding the memory budget of one volume, in bytes
 MAX_BYTES_ENV = "SPLINEVIZ_MAX_VOLUME_BYTES"
@@ -129,3 +135,23 @@ def as_float_triplet(value, name: str) -> tuple[float, float, float]:
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {tuple(arr.tolist())}")
     return tuple(float(v) for v in arr)
+
+
+@contextlib.contextmanager
+def reader_errors(name: str, fmt: str):
+    """Safety net around a reader: anything a library raises on damaged input that the
+    reader did not translate itself becomes a CorruptFileError (MemoryError a
+    DataTooLargeError), so a bad file can never surface as a traceback. Found necessary by
+    the mutation fuzzer: e.g. ``np.load`` raises ``tokenize.TokenError`` on a damaged header.
+    """
+    try:
+        yield
+    except SplinevizError:
+        raise
+    except MemoryError:
+        raise DataTooLargeError(f"{name} needs more memory than is available") from None
+    except RecursionError:
+        raise CorruptFileError(f"{name} is nested too deeply to be a {fmt} file") from None
+    except Exception as exc:  # noqa: BLE001 - the whole point: third-party failure modes
+        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise CorruptFileError(f"{name} cannot be read as {fmt}: {detail}") from None

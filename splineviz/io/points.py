@@ -20,7 +20,7 @@ import numpy as np
 
 from splineviz.core.points import PointCloud
 from splineviz.io import _vtk
-from splineviz.io._util import memory_budget, regular_input
+from splineviz.io._util import memory_budget, reader_errors, regular_input
 from splineviz.io.errors import (
     CorruptFileError,
     DataSizeError,
@@ -290,7 +290,8 @@ def load_point_data(path, *, format=None) -> PointData:
     ensure_loaded()
     p = regular_input(path)
     fmt = find_format(p, "points", name=format)
-    pd = fmt.reader(p)
+    with reader_errors(p.name, fmt.name):
+        pd = fmt.reader(p)
     if not isinstance(pd, PointData):
         raise FileFormatError(f"the {fmt.name} reader returned {type(pd).__name__}, "
                               "not PointData")

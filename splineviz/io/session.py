@@ -221,6 +221,10 @@ INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
     "ClipPlane": ((1, 64), ("Isosurface", "PointsFile", "MeshFile", "Remesh")),
 }
 
+#: type name -> model class (for :meth:`Session.add`)
+OBJECT_TYPES = {c.__name__: c for c in (VolumeFile, Source, PointsFile, MeshFile, Isosurface,
+                                        Remesh, ClipPlane)}
+
 #: object types whose ``properties.path`` names a data file
 FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
 
@@ -318,6 +322,62 @@ class Session(_Model):
         if obj.type not in FILE_TYPES:
             raise SessionError(f"object {obj_id!r} ({obj.type}) has no data file")
         obj.properties.path = str(Path(os.fspath(new_path)).expanduser().absolute())
+
+    # -- editing (the GUI builds sessions through these, never through widget values)
+    def new_id(self, prefix: str) -> str:
+        """An unused object id ``<prefix><n>``."""
+        used = {o.id for o in self.objects}
+        n = 1
+        while f"{prefix}{n}" in used:
+            n += 1
+        return f"{prefix}{n}"
+
+    def add(self, type: str, properties: dict | None = None, *, inputs=(), name: str = "",
+            id: str | None = None):
+        """Append a pipeline object after validating it and its inputs; returns it.
+
+        Examples
+        --------
+        >>> s = Session()
+        >>> src = s.add("Source", {"source": "marschner-lobb"})
+        >>> iso = s.add("Isosurface", {"isovalue": 0.5}, inputs=[src.id])
+        >>> iso.id, s.clip_planes_for(iso.id)
+        ('isosurface1', [])
+        """
+        cls = OBJECT_TYPES.get(type)
+        if cls is None:
+            raise SessionError(f"unknown object type {type!r}; valid: {', '.join(OBJECT_TYPES)}")
+        try:
+            obj = cls.model_validate({"id": id or self.new_id(type.lower()), "type": type,
+                                      "name": name, "inputs": list(inputs),
+                                      "properties": properties or {}})
+        except ValidationError as exc:
+            raise SessionError(f"invalid {type}: {_describe(exc)}") from None
+        if any(o.id == obj.id for o in self.objects):
+            raise SessionError(f"an object with id {obj.id!r} already exists")
+        (lo, hi), allowed = INPUT_RULES[type]
+        types = {o.id: o.type for o in self.objects}
+        if not lo <= len(obj.inputs) <= hi:
+            raise SessionError(f"{type} needs {lo if lo == hi else f'{lo} to {hi}'} input(s), "
+                               f"got {len(obj.inputs)}")
+        for i in obj.inputs:
+            if types.get(i) not in allowed:
+                raise SessionError(f"{type} cannot take {i!r} ({types.get(i, 'missing')}) as "
+                                   "input")
+        self.objects.append(obj)
+        return obj
+
+    def remove(self, obj_id: str) -> None:
+        """Remove an object that nothing else uses as input."""
+        users = [o.id for o in self.objects if obj_id in o.inputs]
+        if users:
+            raise SessionError(f"{obj_id!r} is the input of {', '.join(users)}; remove those "
+                               "first")
+        self.object(obj_id)
+        self.objects = [o for o in self.objects if o.id != obj_id]
+        for v in self.views:
+            if obj_id in v.hidden:
+                v.hidden = [h for h in v.hidden if h != obj_id]
 
     # -- scene access for renderers and the GUI (no Qt, no VTK here)
     def inputs_of(self, obj_id: str) -> list:

@@ -11,7 +11,6 @@ allocated, and against the payload size where the payload is uncompressed.
 
 from __future__ import annotations
 
-import gzip
 import os
 import re
 import warnings
@@ -28,6 +27,7 @@ from splineviz.io._util import (
     as_float_triplet,
     atomic_output,
     check_volume_size,
+    reader_errors,
     regular_input,
 )
 from splineviz.io.errors import (
@@ -612,13 +612,11 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
     if dims is not None or dtype is not None:
         format = format or "raw"
     fmt = find_format(p, "volume", name=format)
-    if fmt.name == "raw":
-        vd = fmt.reader(p, dims=dims, dtype=dtype, byteorder=byteorder, offset=offset)
-    else:
-        try:
+    with reader_errors(p.name, fmt.name):
+        if fmt.name == "raw":
+            vd = fmt.reader(p, dims=dims, dtype=dtype, byteorder=byteorder, offset=offset)
+        else:
             vd = fmt.reader(p)
-        except gzip.BadGzipFile as exc:
-            raise CorruptFileError(f"{p.name} has a damaged compressed payload: {exc}") from None
     if not isinstance(vd, VolumeData):
         raise FileFormatError(f"the {fmt.name} reader returned {type(vd).__name__}, "
                               "not VolumeData")

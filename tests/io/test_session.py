@@ -159,3 +159,37 @@ def test_scene_access_for_renderers(project):
     assert s.load_volume("iso1").spacing == (4.0, 4.0, 4.0)
     cam = s.views[0].camera.to_camera()
     assert cam.position == (300.0, -200.0, 150.0) and cam.view_up == (0.0, 0.0, 1.0)
+
+
+def test_building_a_session_in_code_and_saving_it(project):
+    from splineviz.io.session import Session
+
+    s = Session()
+    vol = s.add("VolumeFile", {"path": str(project / "data" / "head.mhd")}, name="head")
+    iso = s.add("Isosurface", {"isovalue": 50.0, "model": "cubic-c1"}, inputs=[vol.id])
+    s.add("ClipPlane", {"normal": [0, 0, 1]}, inputs=[iso.id])
+    assert [o.id for o in s.objects] == ["volumefile1", "isosurface1", "clipplane1"]
+    with pytest.raises(errors.SessionError, match="cannot take"):
+        s.add("Isosurface", {"isovalue": 1.0}, inputs=["clipplane1"])
+    with pytest.raises(errors.SessionError, match="isovalue"):
+        s.add("Isosurface", {"isovalue": float("inf")}, inputs=[vol.id])
+    with pytest.raises(errors.SessionError, match="input of"):
+        s.remove(vol.id)
+    save_session(s, project / "built.svs")
+    again = load_session(project / "built.svs")
+    assert again.object("isosurface1").properties.model == "cubic-c1"
+    assert again.object("volumefile1").name == "head"
+    s.remove("clipplane1")
+    assert [o.id for o in s.objects] == ["volumefile1", "isosurface1"]
+
+
+def test_open_path_dispatches_on_content(project):
+    from splineviz.io.opening import open_path
+
+    write(project / "scene.svs", scene_doc())
+    assert open_path(project / "scene.svs").kind == "session"
+    assert open_path(project / "data" / "head.mhd").kind == "volume"
+    assert open_path(project / "data" / "bunny.ply").kind == "points"
+    (project / "junk.bin2").write_bytes(b"\x00\x01junk")
+    with pytest.raises(errors.UnknownFormatError, match="svs sessions"):
+        open_path(project / "junk.bin2")
