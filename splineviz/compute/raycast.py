@@ -263,8 +263,8 @@ class RayCaster:
         self._strides = (py, pz)
         stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
         self._stencil = cla.to_device(q, stencil)
-        self._masks = cla.to_device(q, np.ascontiguousarray(scheme.tet_masks, np.float32))
-        self._cube_masks = cla.to_device(q, np.ascontiguousarray(scheme.cube_masks, np.float32))
+        self._tet_csr = [cla.to_device(q, a) for a in _csr(scheme.tet_masks.reshape(-1, 27))]
+        self._cube_csr = [cla.to_device(q, a) for a in _csr(scheme.cube_masks)]
         self._tet_points = cla.to_device(q, np.ascontiguousarray(scheme.tet_points, np.int32))
         self._bary = cla.to_device(
             q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
@@ -320,8 +320,8 @@ class RayCaster:
             _, ny, nz = self._volume.shape
             k_tet(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
                   np.int32(self._strides[1]), np.int32(ny), np.int32(nz),
-                  self._active_list.data, self._stencil.data, self._cube_masks.data,
-                  self._tet_points.data, np.float32(value), self._tetcode.data,
+                  self._active_list.data, self._stencil.data,
+                  *(a.data for a in self._cube_csr), self._tet_points.data, np.float32(value), self._tetcode.data,
                   self._n_relevant.data)
             nrel = self._n_relevant[:candidates]
             relevant_tets = int(cla_sum(nrel, q))
@@ -422,8 +422,8 @@ class RayCaster:
         nx, ny, nz = vol.shape
         type6_args = []
         if self.model != "trilinear":
-            type6_args = [self._tetcode.data, self._stencil.data, self._masks.data,
-                          self._bary.data, self._red.data]
+            type6_args = [self._tetcode.data, self._stencil.data,
+                          *(a.data for a in self._tet_csr), self._bary.data, self._red.data]
         shift = 0.0 if self.model == "trilinear" else 0.5
         k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
@@ -455,6 +455,14 @@ def _reduction_table(degree: int) -> np.ndarray:
             beta[m] += 1
             out[a, m] = pos[tuple(beta)]
     return out
+
+
+def _csr(masks: np.ndarray):
+    """Sparse rows of a (rows, 27) mask matrix: (row_ptr int32, cols int32, weights float32)."""
+    nz = masks != 0
+    row_ptr = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int32)
+    rows, cols = np.nonzero(nz)
+    return row_ptr, cols.astype(np.int32), masks[rows, cols].astype(np.float32)
 
 
 def cla_sum(arr, queue) -> float:

@@ -110,7 +110,8 @@ __kernel void stencil_bounds(__global const float *pdata, int PY, int PZ,
 // thesis §6.1.1).
 __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
-                        __global const float *cube_masks, __constant const int *tet_points,
+                        __constant const int *row_ptr, __constant const int *cols,
+                        __constant const float *weights, __constant const int *tet_points,
                         float iso, __global uint *tetcode, __global int *n_relevant)
 {
     const int a = get_global_id(0);
@@ -120,9 +121,10 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
     float vals[27];
     for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
     float coef[NPOINTS];
+    // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows
     for (int p = 0; p < NPOINTS; ++p) {
         float acc = 0.0f;
-        for (int q = 0; q < 27; ++q) acc += cube_masks[p * 27 + q] * vals[q];
+        for (int e = row_ptr[p]; e < row_ptr[p + 1]; ++e) acc += weights[e] * vals[cols[e]];
         coef[p] = acc;
     }
     uint code = 0u;

@@ -210,7 +210,8 @@ inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
 // Returns the smallest root (or -1) and the index-space gradient there.
 inline float type6_cube_root(__global const float *pdata, int base,
-                             __constant const int *stencil, __constant const float *masks,
+                             __constant const int *stencil, __constant const int *row_ptr,
+                             __constant const int *cols, __constant const float *masks,
                              __constant const float4 *bary, __constant const int *red,
                              uint code, float3 p0, float3 d, float len, float iso,
                              float3 *grad)
@@ -240,9 +241,10 @@ inline float type6_cube_root(__global const float *pdata, int base,
         if (empty || lo > hi) continue;
         float c[NCOEF];
         for (int i = 0; i < NCOEF; ++i) {
-            __constant const float *w = masks + (t * NCOEF + i) * 27;
+            // sparse tet masks (CSR over the 24 * NCOEF rows)
+            const int r = t * NCOEF + i;
             float acc = 0.0f;
-            for (int q = 0; q < 27; ++q) acc += w[q] * vals[q];
+            for (int e = row_ptr[r]; e < row_ptr[r + 1]; ++e) acc += masks[e] * vals[cols[e]];
             c[i] = acc - iso;  // the coefficients of p - iso (constants reproduce exactly)
         }
         const float4 lam0 = l + lo * av, lam1 = l + hi * av;
@@ -280,7 +282,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __global const uchar *skip,
 #ifdef MODEL_TYPE6
                       __global const uint *tetcode,
-                      __constant const int *stencil, __constant const float *masks,
+                      __constant const int *stencil, __constant const int *row_ptr,
+                      __constant const int *cols, __constant const float *masks,
                       __constant const float4 *bary, __constant const int *red,
 #endif
                       float iso,
@@ -363,8 +366,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     const float3 p = ue + s * d - convert_float3(cell);
                     const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
                     float3 g;
-                    const float r = type6_cube_root(data, base, stencil, masks, bary, red, tc,
-                                                    p, d, s_end - s, iso, &g);
+                    const float r = type6_cube_root(data, base, stencil, row_ptr, cols, masks,
+                                                    bary, red, tc, p, d, s_end - s, iso, &g);
                     if (r >= 0.0f) {
                         upos = convert_float3(cell) + p + r * d;
                         grad_u = g;
