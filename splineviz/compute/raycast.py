@@ -321,8 +321,8 @@ class RayCaster:
             k_tet(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
                   np.int32(self._strides[1]), np.int32(ny), np.int32(nz),
                   self._active_list.data, self._stencil.data,
-                  *(a.data for a in self._cube_csr), self._tet_points.data, np.float32(value), self._tetcode.data,
-                  self._n_relevant.data)
+                  *(a.data for a in self._cube_csr), self._tet_points.data,
+                  np.float32(value), self._tetcode.data, self._n_relevant.data)
             nrel = self._n_relevant[:candidates]
             relevant_tets = int(cla_sum(nrel, q))
             relevant_cubes = int(cla_count_nonzero(nrel, q))
