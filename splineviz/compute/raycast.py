@@ -47,7 +47,11 @@ from splineviz.core.volume import Volume
 
 #: models with an OpenCL kernel, and their -D define
 KERNEL_MODELS = {"trilinear": "MODEL_TRILINEAR", "cubic-c1": "MODEL_TYPE6",
-                 "super-quadratic": "MODEL_TYPE6"}
+                 "super-quadratic": "MODEL_TYPE6", "to-quadratic": "MODEL_TO"}
+#: ghost layers of the padded samples per kernel family (as the core models pad)
+GHOSTS = {"MODEL_TYPE6": 1, "MODEL_TO": 3}
+#: 32-bit words of a cell's bit set of relevant (TO, tet) pieces (<= 144 per cell)
+TO_WORDS = 5
 #: slack of the barycentric inside test of a tetrahedron (rays on shared faces)
 TET_SLACK = 1e-6
 #: skip code of an active cell (classify.cl)
@@ -138,6 +142,7 @@ class RayCaster:
         if model not in MODELS and model not in KERNEL_MODELS:
             raise RayCastError(f"unknown spline model {model!r}; choose one of {sorted(MODELS)}")
         self.model = model
+        self._family = KERNEL_MODELS.get(model)
         self._model_kwargs = model_kwargs
         self._device = None
         if model in KERNEL_MODELS:
@@ -178,8 +183,8 @@ class RayCaster:
             raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
         self._volume = volume
         self._spline = None
-        # trilinear: cells between samples; type-6: cubes centred at the samples
-        shift = 0 if self.model == "trilinear" else 1
+        # trilinear and TO: unit cells between samples; type-6: cubes centred at the samples
+        shift = 1 if self._family == "MODEL_TYPE6" else 0
         self._cells = tuple(n - 1 + shift for n in volume.shape)
         if self._device is not None:
             self._upload()
@@ -188,9 +193,11 @@ class RayCaster:
 
     def _defines(self) -> dict:
         """-D options of this model's programs."""
-        d = {KERNEL_MODELS[self.model]: 1, **_shading_defines()}
-        if self.model != "trilinear":
+        d = {self._family: 1, **_shading_defines()}
+        if self._family == "MODEL_TYPE6":
             d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK)
+        elif self._family == "MODEL_TO":
+            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS)
         return d
 
     def _upload(self):
@@ -214,6 +221,13 @@ class RayCaster:
             k_minmax = get_kernel(ctx, "classify", "cell_minmax")
             k_minmax(q, (cz, cy, cx), None, self._data.data, self._vmin.data,
                      self._vmax.data, np.int32(nx), np.int32(ny), np.int32(nz))
+        elif self._family == "MODEL_TO":
+            cls_defines = self._to_tables()
+            k_bounds = get_kernel(ctx, "classify", "to_bounds", cls_defines)
+            k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
+                     np.int32(self._strides[1]), np.int32(cx), np.int32(cy), np.int32(cz),
+                     self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass),
+                     self._vmin.data, self._vmax.data)
         else:
             cls_defines = self._type6_tables()
             k_bounds = get_kernel(ctx, "classify", "stencil_bounds", cls_defines)
@@ -232,11 +246,77 @@ class RayCaster:
         self._active_list = cla.empty(q, ncell, np.int32)
         self._count = cla.empty(q, 1, np.int32)
         self._scan = _compaction_kernel(ctx)
+        if self._family == "MODEL_TO":
+            self._slots = cla.empty(q, ncell, np.int32)
+            self._bits = cla.empty(q, max(1, ncell // 64) * TO_WORDS, np.uint32)
         if self.model != "trilinear":
             self._tetcode = cla.zeros(q, ncell, np.uint32)
             self._n_relevant = cla.empty(q, ncell, np.int32)
             self._activity = cla.empty(q, total, np.uint8)
         q.finish()
+
+    def _to_tables(self) -> dict:
+        """Upload the padded samples and the tables of the truncated-octahedral model.
+
+        From the core model: the 144 x 10 coefficient stencils of Q_k (CSR, offsets from each
+        TO's base data point flattened with the padded strides), barycentric matrices
+        (144, 4, 4); from :mod:`splineviz.compute.to_tables`: the (TO, tet) pieces per cell
+        parity class and the union of the data each class reads (for the cell bounds).
+        """
+        import pyopencl.array as cla
+
+        from splineviz.compute.to_tables import cell_classes
+        from splineviz.core.partitions import truncated_octahedra as to
+        from splineviz.core.splines import to_quadratic
+        from splineviz.core.splines.boundary import pad_linear
+
+        q = self._device.queue
+        spline = self.spline
+        ghost = GHOSTS["MODEL_TO"]
+        if ghost != to_quadratic.GHOST_LAYERS:
+            raise AssertionError("TO ghost layers differ from the core model")  # a bug
+        padded = np.ascontiguousarray(pad_linear(self._volume.data, ghost), dtype=np.float32)
+        _, py, pz = padded.shape
+        strides = np.array([py * pz, pz, 1], dtype=np.int64)
+        self._data = cla.to_device(q, padded)
+        self._strides = (py, pz)
+        rows = []
+        for offsets, w in to_quadratic.stencils(spline.k):
+            flat = offsets @ strides
+            rows.extend((flat, w[i]) for i in range(w.shape[0]))
+        row_ptr = np.concatenate([[0], np.cumsum([np.count_nonzero(w) for _, w in rows])])
+        cols = np.concatenate([f[w != 0] for f, w in rows]).astype(np.int32)
+        wts = np.concatenate([w[w != 0] for _, w in rows]).astype(np.float32)
+        self._to_csr = [cla.to_device(q, a) for a in
+                        (row_ptr.astype(np.int32), cols, wts)]
+        self._negmass = float(max(np.sum(np.clip(-w, 0, None)) for _, w in rows))
+        start, centre, tet = cell_classes()
+        # base data point of each piece's TO relative to the cell corner: centre - 1/2
+        base_off = np.rint(centre.astype(np.float64) - 0.5).astype(np.int64)
+        self._ent = {
+            "start": cla.to_device(q, start),
+            "centre": cla.to_device(q, np.c_[centre, np.zeros(len(centre))].astype(np.float32)),
+            "base": cla.to_device(q, (base_off @ strides).astype(np.int32)),
+            "tet": cla.to_device(q, tet),
+        }
+        if np.diff(start).max() > 32 * TO_WORDS:
+            raise AssertionError("more pieces per cell than the bit set holds")  # a bug
+        # union of the data offsets read by each class, for the conservative cell bounds
+        tables = to_quadratic.stencils(spline.k)
+        cls_offsets, cls_start = [], [0]
+        for c in range(8):
+            pts = set()
+            for e in range(start[c], start[c + 1]):
+                pts.update(map(tuple, tables[tet[e]][0] + base_off[e]))
+            cls_offsets.extend(np.array(sorted(pts)) @ strides)
+            cls_start.append(len(cls_offsets))
+        self._cls_start = cla.to_device(q, np.array(cls_start, np.int32))
+        self._cls_offsets = cla.to_device(q, np.array(cls_offsets, np.int32))
+        self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
+        self._red = cla.to_device(
+            q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
+        return {"MODEL_TO": 1, "NCOEF": 10, "GHOST": ghost, "NWORDS": TO_WORDS,
+                "SKIP_ACTIVE": SKIP_ACTIVE}
 
     def _type6_tables(self) -> dict:
         """Upload the padded samples and the constant tables of a type-6 model.
@@ -315,7 +395,23 @@ class RayCaster:
         d = self._cls_defines
         self._tetcode.fill(np.uint32(0), queue=q)
         relevant_cubes = relevant_tets = 0
-        if candidates:
+        if candidates and self._family == "MODEL_TO":
+            import pyopencl.array as cla
+
+            if self._bits.size < candidates * TO_WORDS:
+                self._bits = cla.empty(q, candidates * TO_WORDS * 5 // 4, np.uint32)
+            k_to = get_kernel(ctx, "classify", "to_codes", d)
+            _, cy, cz = self._cells
+            e = self._ent
+            k_to(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
+                 np.int32(self._strides[1]), np.int32(cy), np.int32(cz),
+                 self._active_list.data, e["start"].data, e["base"].data, e["tet"].data,
+                 *(a.data for a in self._to_csr), np.float32(value), self._tetcode.data,
+                 self._slots.data, self._bits.data, self._n_relevant.data)
+            nrel = self._n_relevant[:candidates]
+            relevant_tets = int(cla_sum(nrel, q))
+            relevant_cubes = int(cla_count_nonzero(nrel, q))
+        elif candidates:
             k_tet = get_kernel(ctx, "classify", "tet_codes", d)
             _, ny, nz = self._volume.shape
             k_tet(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
@@ -421,10 +517,15 @@ class RayCaster:
         color = cla.empty(q, (n, 4), np.uint8)
         nx, ny, nz = vol.shape
         type6_args = []
-        if self.model != "trilinear":
+        if self._family == "MODEL_TYPE6":
             type6_args = [self._tetcode.data, self._stencil.data,
                           *(a.data for a in self._tet_csr), self._bary.data, self._red.data]
-        shift = 0.0 if self.model == "trilinear" else 0.5
+        elif self._family == "MODEL_TO":
+            e = self._ent
+            type6_args = [self._tetcode.data, self._slots.data, self._bits.data,
+                          e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
+                          *(a.data for a in self._to_csr), self._bary.data, self._red.data]
+        shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
               *(np.int32(c) for c in self._cells), np.float32(shift),

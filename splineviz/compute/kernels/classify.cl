@@ -186,3 +186,72 @@ __kernel void skip_from_activity(__global const uchar *act, __global const int4 
     }
     skip[c] = 0;
 }
+
+// ---- truncated-octahedral spline Q_k: unit cells of the data grid, parity-class tables ----
+#ifdef MODEL_TO
+
+// Conservative bounds per cell from the union of the data its pieces use (offsets per parity
+// class, relative to the cell corner in the padded array), widened by the negative mass.
+__kernel void to_bounds(__global const float *pdata, int PY, int PZ, int CX, int CY, int CZ,
+                        __constant const int *cls_start, __constant const int *cls_offsets,
+                        float negmass, __global float *vmin, __global float *vmax)
+{
+    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
+    if (i >= CX || j >= CY || k >= CZ) return;
+    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
+    const int base = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
+    float lo = INFINITY, hi = -INFINITY;
+    for (int e = cls_start[cls]; e < cls_start[cls + 1]; ++e) {
+        const float v = pdata[base + cls_offsets[e]];
+        lo = fmin(lo, v);
+        hi = fmax(hi, v);
+    }
+    const float w = negmass * (hi - lo);
+    const int q = (i * CY + j) * CZ + k;
+    vmin[q] = lo - w;
+    vmax[q] = hi + w;
+}
+
+// Per candidate cell: B-coefficients of every (TO, tet) piece meeting it, and a bit set of the
+// relevant ones (NWORDS x 32 bits; the thesis' tet code for the 144 tets of a TO).
+__kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int CZ,
+                       __global const int *cells, __constant const int *ent_start,
+                       __constant const int *ent_base, __constant const int *ent_tet,
+                       __constant const int *row_ptr, __constant const int *cols,
+                       __constant const float *weights, float iso,
+                       __global uint *anycode, __global int *slot, __global uint *bits,
+                       __global int *n_relevant)
+{
+    const int a = get_global_id(0);
+    const int cell = cells[a];
+    const int k = cell % CZ, j = (cell / CZ) % CY, i = cell / (CY * CZ);
+    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
+    const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
+    uint words[NWORDS];
+    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+    int count = 0;
+    const int e0 = ent_start[cls];
+    for (int e = e0; e < ent_start[cls + 1]; ++e) {
+        const int base = corner + ent_base[e];
+        const int t = ent_tet[e];
+        float lo = INFINITY, hi = -INFINITY;
+        for (int m = 0; m < NCOEF; ++m) {
+            const int r = t * NCOEF + m;
+            float acc = 0.0f;
+            for (int q = row_ptr[r]; q < row_ptr[r + 1]; ++q)
+                acc += weights[q] * pdata[base + cols[q]];
+            lo = fmin(lo, acc);
+            hi = fmax(hi, acc);
+        }
+        if (lo <= iso && iso <= hi) {
+            words[(e - e0) >> 5] |= 1u << ((e - e0) & 31);
+            ++count;
+        }
+    }
+    for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
+    slot[cell] = a;
+    anycode[cell] = count > 0 ? 1u : 0u;
+    n_relevant[a] = count;
+}
+
+#endif

@@ -1,6 +1,8 @@
 // Image-based ray casting of spline isosurfaces (thesis §6.2, Listing 6.2), one work-item per
 // pixel. Specialised by -D options:
 //   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
+//   MODEL_TO, GHOST      the truncated-octahedral spline Q_k (DEGREE 2): unit cells of the
+//                        grid with per-parity-class (TO, tet) tables and per-cell bit sets
 //   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
 //                        the relevant tets from the 27-point data stencil, blossoms of the
 //                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2)
@@ -137,7 +139,7 @@ inline float first_cubic_root(float4 k, float len)
 }
 
 
-#ifdef MODEL_TYPE6
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
 #define NCOEF ((DEGREE + 1) * (DEGREE + 2) * (DEGREE + 3) / 6)
 #if DEGREE == 3
 #define NRED (10 + 4 + 1)
@@ -204,11 +206,64 @@ inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
 
 inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t.z ? 1 : 2); }
 
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
+// The part [*lo, *hi] of the segment p0 + s d, s in [0, hi], inside the tetrahedron with
+// barycentric rows r0..r3 (its four plane equations, thesis §6.2.2); false if empty.
+// l and av receive the barycentric coordinates at s = 0 and their change per unit s.
+inline bool tet_interval(float4 r0, float4 r1, float4 r2, float4 r3, float3 p0, float3 d,
+                         float *lo_out, float *hi_io, float4 *l_out, float4 *av_out)
+{
+    const float4 l = (float4)(dot(r0.xyz, p0) + r0.w, dot(r1.xyz, p0) + r1.w,
+                              dot(r2.xyz, p0) + r2.w, dot(r3.xyz, p0) + r3.w);
+    const float4 av = (float4)(dot(r0.xyz, d), dot(r1.xyz, d), dot(r2.xyz, d), dot(r3.xyz, d));
+    float lo = 0.0f, hi = *hi_io;
+    const float lv[4] = {l.x, l.y, l.z, l.w}, avv[4] = {av.x, av.y, av.z, av.w};
+    for (int m = 0; m < 4; ++m) {
+        // a tiny slack keeps rays on shared faces from falling between two tets
+        const float lm = lv[m] + TET_SLACK;
+        if (avv[m] > 0.0f) lo = fmax(lo, -lm / avv[m]);
+        else if (avv[m] < 0.0f) hi = fmin(hi, -lm / avv[m]);
+        else if (lm < 0.0f) return false;
+    }
+    *lo_out = lo;
+    *hi_io = hi;
+    *l_out = l;
+    *av_out = av;
+    return lo <= hi;
+}
+
+// First root of the polynomial with B-coefficients c (already minus iso) on [lo, hi] of the
+// ray, from the blossoms of the segment (thesis §6.1.2); -1 if none; *grad at the root.
+inline float tet_segment_root(const float *c, __constant const int *red, float4 r0, float4 r1,
+                              float4 r2, float4 r3, float4 l, float4 av, float lo, float hi,
+                              float3 *grad)
+{
+    const float4 lam0 = l + lo * av, lam1 = l + hi * av;
+    float4 k;
+#if DEGREE == 3
+    const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
+    const float b2 = blossom_ij(c, red, lam0, lam1, 2), b3 = blossom_ij(c, red, lam0, lam1, 3);
+    k = (float4)(b0, 3.0f * (b1 - b0), 3.0f * (b2 - 2.0f * b1 + b0),
+                 b3 - 3.0f * b2 + 3.0f * b1 - b0);
+#else
+    const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
+    const float b2 = blossom_ij(c, red, lam0, lam1, 2);
+    k = (float4)(b0, 2.0f * (b1 - b0), b2 - 2.0f * b1 + b0, 0.0f);
+#endif
+    const float u = first_cubic_root(k, 1.0f);
+    if (u < 0.0f) return -1.0f;
+    const float sh = lo + u * (hi - lo);
+    const float4 e = linear_part(c, red, l + sh * av);
+    // grad p = DEGREE * sum_m e_m grad(lam_m)
+    *grad = DEGREE * (e.x * r0.xyz + e.y * r1.xyz + e.z * r2.xyz + e.w * r3.xyz);
+    return sh;
+}
+#endif
+
 #ifdef MODEL_TYPE6
 // First root of the type-6 spline - iso on the ray segment p0 + s d, s in [0, len], inside the
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
-// Returns the smallest root (or -1) and the index-space gradient there.
 inline float type6_cube_root(__global const float *pdata, int base,
                              __constant const int *stencil, __constant const int *row_ptr,
                              __constant const int *cols, __constant const float *masks,
@@ -221,24 +276,11 @@ inline float type6_cube_root(__global const float *pdata, int base,
     float best = -1.0f;
     for (int t = 0; t < 24; ++t) {
         if (!(code & (1u << t))) continue;
-        // barycentric coordinates along the segment: lam(s) = l + s a
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
                      r3 = bary[4 * t + 3];
-        const float4 l = (float4)(dot(r0.xyz, p0) + r0.w, dot(r1.xyz, p0) + r1.w,
-                                  dot(r2.xyz, p0) + r2.w, dot(r3.xyz, p0) + r3.w);
-        const float4 av = (float4)(dot(r0.xyz, d), dot(r1.xyz, d), dot(r2.xyz, d),
-                                   dot(r3.xyz, d));
-        float lo = 0.0f, hi = best >= 0.0f ? best : len;
-        const float lv[4] = {l.x, l.y, l.z, l.w}, avv[4] = {av.x, av.y, av.z, av.w};
-        bool empty = false;
-        for (int m = 0; m < 4; ++m) {
-            // a tiny slack keeps rays on shared faces from falling between two tets
-            const float lm = lv[m] + TET_SLACK;
-            if (avv[m] > 0.0f) lo = fmax(lo, -lm / avv[m]);
-            else if (avv[m] < 0.0f) hi = fmin(hi, -lm / avv[m]);
-            else if (lm < 0.0f) empty = true;
-        }
-        if (empty || lo > hi) continue;
+        float lo, hi = best >= 0.0f ? best : len;
+        float4 l, av;
+        if (!tet_interval(r0, r1, r2, r3, p0, d, &lo, &hi, &l, &av)) continue;
         float c[NCOEF];
         for (int i = 0; i < NCOEF; ++i) {
             // sparse tet masks (CSR over the 24 * NCOEF rows)
@@ -247,28 +289,56 @@ inline float type6_cube_root(__global const float *pdata, int base,
             for (int e = row_ptr[r]; e < row_ptr[r + 1]; ++e) acc += masks[e] * vals[cols[e]];
             c[i] = acc - iso;  // the coefficients of p - iso (constants reproduce exactly)
         }
-        const float4 lam0 = l + lo * av, lam1 = l + hi * av;
-        // Bernstein coefficients of the segment restriction, then power form in u in [0, 1]
-        float4 k;
-#if DEGREE == 3
-        const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
-        const float b2 = blossom_ij(c, red, lam0, lam1, 2), b3 = blossom_ij(c, red, lam0, lam1, 3);
-        k = (float4)(b0, 3.0f * (b1 - b0), 3.0f * (b2 - 2.0f * b1 + b0),
-                     b3 - 3.0f * b2 + 3.0f * b1 - b0);
-#else
-        const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
-        const float b2 = blossom_ij(c, red, lam0, lam1, 2);
-        k = (float4)(b0, 2.0f * (b1 - b0), b2 - 2.0f * b1 + b0, 0.0f);
+        float3 g;
+        const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g);
+        if (sh >= 0.0f && (best < 0.0f || sh < best)) {
+            best = sh;
+            *grad = g;
+        }
+    }
+    return best;
+}
 #endif
-        const float u = first_cubic_root(k, 1.0f);
-        if (u < 0.0f) continue;
-        const float sh = lo + u * (hi - lo);
-        if (best >= 0.0f && sh >= best) continue;
-        best = sh;
-        const float4 lh = l + sh * av;
-        const float4 e = linear_part(c, red, lh);
-        // grad p = DEGREE * sum_m e_m grad(lam_m)
-        *grad = DEGREE * (e.x * r0.xyz + e.y * r1.xyz + e.z * r2.xyz + e.w * r3.xyz);
+
+#ifdef MODEL_TO
+// First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
+// corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
+// only those with their bit set are tested.
+inline float to_cell_root(__global const float *pdata, int corner, int cls, int slot,
+                          __global const uint *bits, __constant const int *ent_start,
+                          __constant const float4 *ent_centre, __constant const int *ent_base,
+                          __constant const int *ent_tet, __constant const int *row_ptr,
+                          __constant const int *cols, __constant const float *weights,
+                          __constant const float4 *bary, __constant const int *red,
+                          float3 p0, float3 d, float len, float iso, float3 *grad)
+{
+    float best = -1.0f;
+    const int e0 = ent_start[cls];
+    for (int e = e0; e < ent_start[cls + 1]; ++e) {
+        const int q = e - e0;
+        if (!(bits[slot * NWORDS + (q >> 5)] & (1u << (q & 31)))) continue;
+        const int t = ent_tet[e];
+        const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
+                     r3 = bary[4 * t + 3];
+        const float3 pc = p0 - ent_centre[e].xyz;  // relative to the TO centre
+        float lo, hi = best >= 0.0f ? best : len;
+        float4 l, av;
+        if (!tet_interval(r0, r1, r2, r3, pc, d, &lo, &hi, &l, &av)) continue;
+        const int base = corner + ent_base[e];
+        float c[NCOEF];
+        for (int i = 0; i < NCOEF; ++i) {
+            const int r = t * NCOEF + i;
+            float acc = 0.0f;
+            for (int m = row_ptr[r]; m < row_ptr[r + 1]; ++m)
+                acc += weights[m] * pdata[base + cols[m]];
+            c[i] = acc - iso;
+        }
+        float3 g;
+        const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g);
+        if (sh >= 0.0f && (best < 0.0f || sh < best)) {
+            best = sh;
+            *grad = g;
+        }
     }
     return best;
 }
@@ -284,6 +354,14 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __global const uint *tetcode,
                       __constant const int *stencil, __constant const int *row_ptr,
                       __constant const int *cols, __constant const float *masks,
+                      __constant const float4 *bary, __constant const int *red,
+#endif
+#ifdef MODEL_TO
+                      __global const uint *anycode, __global const int *slots,
+                      __global const uint *bits, __constant const int *ent_start,
+                      __constant const float4 *ent_centre, __constant const int *ent_base,
+                      __constant const int *ent_tet, __constant const int *row_ptr,
+                      __constant const int *cols, __constant const float *weights,
                       __constant const float4 *bary, __constant const int *red,
 #endif
                       float iso,
@@ -358,6 +436,24 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     t_hit = t0 + s + r;
                     found = true;
                     break;
+                }
+#elif defined(MODEL_TO)
+                if (anycode[c] != 0u) {
+                    const float3 p = we + s * d - convert_float3(cell);
+                    const int corner = ((cell.x + GHOST) * SY + (cell.y + GHOST)) * SZ
+                                       + (cell.z + GHOST);
+                    const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
+                    float3 g;
+                    const float r = to_cell_root(data, corner, cls, slots[c], bits, ent_start,
+                                                 ent_centre, ent_base, ent_tet, row_ptr, cols,
+                                                 weights, bary, red, p, d, s_end - s, iso, &g);
+                    if (r >= 0.0f) {
+                        upos = convert_float3(cell) + p + r * d;
+                        grad_u = g;
+                        t_hit = t0 + s + r;
+                        found = true;
+                        break;
+                    }
                 }
 #else
                 const uint tc = tetcode[c];

@@ -1,0 +1,76 @@
+"""Cell tables of the truncated-octahedral partition for the OpenCL ray caster (thesis §5.2).
+
+The ray caster walks the unit cells ``[i, i+1] x [j, j+1] x [k, k+1]`` of the data grid (the
+same traversal and skip volume as the other models). The TO lattice has period 2 on every
+axis, so the pieces of the spline meeting a cell depend only on the cell's parity class
+``(i % 2, j % 2, k % 2)``. For each of the 8 classes this module lists the (TO, generic
+tetrahedron) pairs whose tetrahedron meets the cell with positive volume, generated from the
+definitions in :mod:`splineviz.core.partitions.truncated_octahedra` by a separating-axis test
+(convex polytopes overlap iff no face normal or edge-cross-product axis separates them).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+import numpy as np
+
+from splineviz.core.partitions import truncated_octahedra as to
+
+#: overlap margin of the separating-axis test (index units)
+SAT_EPS = 1e-9
+
+_BOX_EDGES = np.eye(3)
+
+
+def _overlaps(tet: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Whether tetrahedra overlap the box [lo, hi] with positive volume.
+
+    Parameters
+    ----------
+    tet : (N, 4, 3) vertices
+    lo, hi : (3,)
+
+    Returns
+    -------
+    (N,) bool
+    """
+    box = np.stack(np.meshgrid(*zip(lo, hi, strict=True), indexing="ij"), -1).reshape(-1, 3)
+    e = tet[:, [1, 2, 3, 2, 3, 3]] - tet[:, [0, 0, 0, 1, 1, 2]]  # (N, 6, 3) edges
+    faces = np.stack([np.cross(tet[:, b] - tet[:, a], tet[:, c] - tet[:, a])
+                      for a, b, c in ((1, 2, 3), (0, 2, 3), (0, 1, 3), (0, 1, 2))], axis=1)
+    cross = np.cross(e[:, :, None, :], _BOX_EDGES[None, None, :, :]).reshape(len(tet), 18, 3)
+    axes = np.concatenate([np.broadcast_to(_BOX_EDGES, (len(tet), 3, 3)), faces, cross], axis=1)
+    norm = np.linalg.norm(axes, axis=2, keepdims=True)
+    axes = np.where(norm > 1e-12, axes / np.where(norm > 0, norm, 1), 0.0)
+    pt = np.einsum("nvc,nac->nav", tet, axes)  # (N, A, 4)
+    pb = np.einsum("vc,nac->nav", box, axes)   # (N, A, 8)
+    valid = norm[..., 0] > 1e-12
+    separated = valid & ((pt.max(-1) <= pb.min(-1) + SAT_EPS) | (pb.max(-1) <= pt.min(-1) + SAT_EPS))
+    return ~separated.any(axis=1)
+
+
+@cache
+def cell_classes():
+    """The (TO, tetrahedron) pairs meeting a cell, per parity class.
+
+    Returns
+    -------
+    start : (9,) int32, entries of class c are ``start[c]:start[c+1]``; class
+        c = 4 (i % 2) + 2 (j % 2) + (k % 2)
+    centre : (E, 3) float32 TO centre relative to the cell corner (i, j, k)
+    tet : (E,) int32 generic tetrahedron
+    """
+    verts = to.generic_tetrahedra()[0]  # (144, 4, 3) relative to the TO centre
+    starts, centres, tets = [0], [], []
+    for c in range(8):
+        corner = np.array([(c >> 2) & 1, (c >> 1) & 1, c & 1], dtype=np.float64)
+        lo, hi = corner, corner + 1
+        for ctr in to.centres_covering(lo, hi):
+            ok = _overlaps(verts + ctr, lo, hi)
+            for t in np.flatnonzero(ok):
+                centres.append(ctr - corner)
+                tets.append(t)
+        starts.append(len(tets))
+    return (np.array(starts, np.int32), np.array(centres, np.float32).reshape(-1, 3),
+            np.array(tets, np.int32))
