@@ -65,15 +65,24 @@ def captured_vtk_output():
 
 
 def first_vtk_error(text: str) -> str | None:
-    """The first error message in VTK output text, stripped of file/line noise."""
+    """The most specific error message in VTK output text, without file/line noise.
+
+    The pipeline's generic "Algorithm ... returned failure" is used only when nothing more
+    specific was reported.
+    """
+    found = []
     for block in re.split(r"\n(?=(?:ERROR|Generic Warning|Warning))", (text or "").lstrip()):
         if not block.startswith("ERROR"):
             continue
         lines = [ln.strip() for ln in block.splitlines()[1:] if ln.strip()]
-        msg = " ".join(lines) if lines else block
+        msg = lines[0] if lines else block
         msg = re.sub(r"^\S+ \(0x[0-9a-fA-F]+\):\s*", "", msg)
-        return msg.rstrip(".") or "unspecified VTK error"
-    return None
+        msg = re.sub(r"\s*\(0x[0-9a-fA-F]+\)", "", msg).rstrip(".")
+        found.append(msg or "unspecified VTK error")
+    specific = [m for m in found if "returned failure for request" not in m]
+    if specific:
+        return specific[0]
+    return "the reader failed" if found else None
 
 
 def run_vtk(algorithm, name: str, *, information_only: bool = False):
@@ -89,22 +98,13 @@ def run_vtk(algorithm, name: str, *, information_only: bool = False):
     """
     from splineviz.io.errors import CorruptFileError
 
-    core = _vtk()
-    seen: list[str] = []
-
-    def on_error(obj, event):  # observers stop VTK from printing the message itself
-        seen.append(event)
-
-    tags = [algorithm.AddObserver(core.vtkCommand.ErrorEvent, on_error)]
-    try:
-        with captured_vtk_output() as out:
-            ok = algorithm.UpdateInformation() if information_only else algorithm.Update()
-    finally:
-        for t in tags:
-            algorithm.RemoveObserver(t)
+    # no ErrorEvent observer: an observer would swallow the reader's own message and leave
+    # only the executive's generic "returned failure" text in the output window
+    with captured_vtk_output() as out:
+        ok = algorithm.UpdateInformation() if information_only else algorithm.Update()
     msg = first_vtk_error(out[0] if out else "")
     failed = ok == 0 if isinstance(ok, int) else False
-    if msg or seen or failed:
+    if msg or failed:
         detail = msg or "the reader reported an error"
         raise CorruptFileError(f"{name} cannot be read: {detail}")
 
