@@ -561,9 +561,13 @@ def parse_document(text: str) -> dict:
     except json.JSONDecodeError as exc:
         raise SessionError(f"the session is not valid JSON: {exc.msg} at line {exc.lineno}, "
                            f"column {exc.colno}") from None
+    except SessionError:
+        raise
     except RecursionError:
         raise SessionError("the session is nested too deeply to be a session file") from None
-    except ValueError as exc:  # e.g. an integer with more digits than Python converts
+    except ValueError as exc:
+        if "integer string conversion" in str(exc):  # more digits than Python converts
+            raise SessionError("the session holds a number with thousands of digits") from None
         raise SessionError(f"the session holds an unreadable value: {exc}") from None
     if not isinstance(doc, dict):
         raise SessionError("a session file must hold a JSON object at the top level")

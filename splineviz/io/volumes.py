@@ -223,8 +223,9 @@ def _read_nrrd(path: Path) -> VolumeData:
         raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume")
     try:
         itemsize = np.dtype(nrrd.reader._determine_datatype(header)).itemsize
-    except Exception:  # noqa: BLE001 - an unknown type is reported by the read below
-        itemsize = 8
+    except (KeyError, TypeError, ValueError, nrrd.NRRDError):
+        raise CorruptFileError(f"{path.name} has the unknown NRRD sample type "
+                               f"{header.get('type')!r}") from None
     check_volume_size(sizes, itemsize, path.name)
     datafile = str(header.get("data file", header.get("datafile", "")))
     if datafile and (datafile.upper().startswith("LIST") or "%" in datafile):
