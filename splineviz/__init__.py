@@ -15,7 +15,7 @@ _LAZY = {
     "VolumeError": "splineviz.core.volume:VolumeError",
     "PointCloud": "splineviz.core.points:PointCloud",
     "PointCloudError": "splineviz.core.points:PointCloudError",
-    "build_spline": "splineviz.core.splines:build_spline",
+    "build_spline": "splineviz.plugins:build_spline",  # core's, plus plugin models
     "testfunctions": "splineviz.core.testfunctions:",
     "Camera": "splineviz.core.camera:Camera",
     "RayCaster": "splineviz.compute.raycast:RayCaster",

@@ -277,3 +277,18 @@ def source_volume(name: str, shape=None):
         names = ", ".join(sorted(srcs)) or "none"
         raise PluginError(f"unknown source {name!r}; available: {names}")
     return srcs[name].volume(shape)
+
+
+def build_spline(volume, model: str = "to-quadratic", **kwargs):
+    """:func:`splineviz.core.splines.build_spline`, with plugin models available.
+
+    ``splineviz.build_spline`` points here: a model name that the core does not know loads
+    the plugins (once) before giving up, so a model plugin works without any change to core
+    code, while ``import splineviz`` and built-in models never import plugin code.
+    """
+    from splineviz.core.splines import MODELS
+    from splineviz.core.splines import build_spline as core_build_spline
+
+    if model not in MODELS:
+        ensure_loaded()
+    return core_build_spline(volume, model, **kwargs)
