@@ -104,7 +104,12 @@ def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
             f"{path.name} announces {tuple(dims)} samples but only {tuple(got)} could be read"
         )
     data = _vtk.image_to_array(image, path.name)
-    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt)
+    meta = {}
+    direction = [image.GetDirectionMatrix().GetElement(i, j) for i in range(3)
+                 for j in range(3)]
+    if not np.allclose(direction, np.eye(3).ravel()):
+        meta["direction"] = direction  # a rotated grid: shown axis-aligned (Volume has none)
+    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt, meta)
 
 
 def _read_vti(path: Path) -> VolumeData:
@@ -497,6 +502,12 @@ def _read_dicom_folder(path: Path) -> VolumeData:
             ds = pydicom.dcmread(str(f))
             px = ds.pixel_array.astype(np.float32)
         except Exception as exc:  # noqa: BLE001 - pixel handlers raise many types
+            ts = getattr(getattr(ds, "file_meta", None), "TransferSyntaxUID", None) \
+                if "ds" in locals() else None
+            if ts is not None and getattr(ts, "is_compressed", False):
+                raise FileFormatError(
+                    f"{f.name} uses the compressed transfer syntax {ts.name}; install a "
+                    "pydicom pixel handler for it (e.g. pylibjpeg or gdcm)") from None
             raise CorruptFileError(f"cannot decode the pixels of {f.name}: {exc}") from None
         if px.shape != (rows, cols):
             raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, "
@@ -507,8 +518,10 @@ def _read_dicom_folder(path: Path) -> VolumeData:
     ps = slices[0][1].get("PixelSpacing", [1.0, 1.0])
     spacing = (float(ps[1]), float(ps[0]), dz)  # PixelSpacing is (row step, column step)
     origin = tuple(float(v) for v in pos[order[0]])
+    # the volume is axis-aligned; an oblique series keeps its orientation in meta only
     return VolumeData(out, spacing, origin, "dicom",
-                      {"series": str(slices[0][1].get("SeriesInstanceUID", ""))})
+                      {"series": str(slices[0][1].get("SeriesInstanceUID", "")),
+                       "orientation": [float(v) for v in iop]})
 
 
 # ---------------------------------------------------------------------------- NumPy, raw

@@ -274,3 +274,13 @@ def test_nrrd_detached_header_written_by_pynrrd(tmp_path, field):
     vol = sv.read_volume(tmp_path / "v.nhdr")
     np.testing.assert_array_equal(vol.data, field)
     assert vol.spacing == (0.25, 0.5, 4.0) and vol.origin == (1, 2, 3)
+
+
+def test_info_on_a_dicom_folder(tmp_path):
+    from splineviz.io.info import describe
+
+    for n, z in enumerate((0.0, 1.5, 3.0)):
+        _dicom_slice(tmp_path / f"s{n}.dcm", np.full((3, 4), n, np.uint16), z, instance=n)
+    info = describe(tmp_path)
+    assert info["format"] == "dicom" and info["dims"] == [4, 3, 3]
+    assert info["spacing"] == [0.6, 0.8, 1.5] and info["range"] == [-100.0, -96.0]

@@ -132,3 +132,12 @@ def test_first_party_sources_plugin_is_installed_and_lists_the_thesis_functions(
     x = np.linspace(*srcs["marschner-lobb"].bounds[0], 9)
     expect = TEST_FUNCTIONS["ml"](x[3], x[5], x[7])
     assert ml.data[3, 5, 7] == pytest.approx(float(expect), rel=1e-6)
+
+
+def test_a_plugin_reader_that_raises_anything_gives_a_typed_error(fake_plugins, tmp_path):
+    from splineviz.io import errors
+
+    plugins.load_plugins(reload=True)
+    (tmp_path / "bad.plugtest").write_text("0x")  # int("0x") inside the plugin's reader
+    with pytest.raises(errors.CorruptFileError, match="cannot be read as plugtest-fake"):
+        sv.read_volume(tmp_path / "bad.plugtest", format="plugtest-fake")
