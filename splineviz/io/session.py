@@ -21,7 +21,10 @@ Document layout (schema :data:`SCHEMA_VERSION`)::
 Only properties that differ from their defaults are written (the napari ``_get_state`` habit).
 Data paths are stored relative to the session file and resolved against its folder on load;
 an absolute path is accepted only inside that folder, and a missing file can be re-pointed
-with the ``repoint`` callback of :func:`load_session`.
+with the ``repoint`` callback of :func:`load_session`. Relative paths may climb out of the
+folder (``../data/ct.nrrd``: projects often keep data beside their sessions), but every path
+must name a regular file or a folder: device files and pipes (``/dev/zero``, FIFOs) that could
+hang a reader are refused.
 
 Safety: a session is data only. It is parsed with :func:`json.loads` (NaN/Infinity and
 duplicate keys refused), validated by pydantic models that forbid unknown keys, bounded in
@@ -447,7 +450,7 @@ class Session(_Model):
             mode="json", exclude_defaults=True).items() if k not in ("id", "type")}}
             for v in self.views]
         doc = {"format": FORMAT, "schema_version": SCHEMA_VERSION,
-               "app_version": self.app_version or _app_version(),
+               "app_version": _app_version(),  # the version that wrote this document
                "objects": objects, "views": views}
         return doc
 
