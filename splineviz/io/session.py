@@ -462,9 +462,10 @@ def _app_version() -> str:
 
 
 def _relative(path: str, base: Path) -> str:
-    p = Path(path)
-    if not p.is_absolute():
-        return PurePosixPath(*Path(os.path.normpath(path)).parts).as_posix()
+    """``path`` relative to ``base`` in POSIX form. Paths of a loaded session are absolute;
+    a relative path set in memory (e.g. by :meth:`Session.add`) is relative to the current
+    directory, like any path the user typed."""
+    p = Path(path).expanduser().absolute()
     try:
         rel = os.path.relpath(p, base.absolute())
     except ValueError:  # another drive on Windows: no relative path exists

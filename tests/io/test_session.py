@@ -193,3 +193,19 @@ def test_open_path_dispatches_on_content(project):
     (project / "junk.bin2").write_bytes(b"\x00\x01junk")
     with pytest.raises(errors.UnknownFormatError, match="svs sessions"):
         open_path(project / "junk.bin2")
+
+
+def test_relative_paths_set_in_memory_are_relative_to_the_working_directory(project,
+                                                                          monkeypatch):
+    from splineviz.io.session import Session
+
+    monkeypatch.chdir(project / "data")
+    s = Session()
+    s.add("VolumeFile", {"path": "head.mhd"})
+    (project / "sessions").mkdir()
+    save_session(s, project / "sessions" / "s.svs")
+    doc = json.loads((project / "sessions" / "s.svs").read_text())
+    assert doc["objects"][0]["properties"]["path"] == "../data/head.mhd"
+    monkeypatch.chdir(project)
+    again = load_session(project / "sessions" / "s.svs")
+    assert Path(again.object("volumefile1").properties.path) == project / "data" / "head.mhd"
