@@ -31,6 +31,9 @@ _LAZY = {
     "Session": "splineviz.io.session:Session",
     "register_format": "splineviz.io.registry:register_format",
     "open_path": "splineviz.io.opening:open_path",
+    "Projector": "splineviz.pointcloud.projection:Projector",
+    "remesh": "splineviz.pointcloud.remesh:remesh",
+    "mesh_quality": "splineviz.pointcloud.quality:mesh_quality",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

@@ -1,10 +1,11 @@
 """The ``splineviz`` command line.
 
-``splineviz [FILE|SESSION]`` opens the viewer; sub-commands (``render``, ``remesh``, ``info``,
-``bench``) are registered in :data:`SUBCOMMANDS` by the package that implements them: each entry
-names a function ``register(subparsers)`` that adds its parser and sets ``func`` (called with the
-parsed arguments, returns an exit code). User errors (:class:`SplinevizError`, ``OSError``)
-are printed as one line on stderr with exit code 2; no traceback.
+``splineviz [FILE|SESSION]`` opens the app (:mod:`splineviz.gui`); sub-commands (``render``,
+``remesh``, ``info``, ``bench``) are registered in :data:`SUBCOMMANDS` by the package that
+implements them: each entry names a function ``register(subparsers)`` that adds its parser
+and sets ``func`` (called with the parsed arguments, returns an exit code). User errors
+(:class:`SplinevizError`, ``OSError``) are printed as one line on stderr with exit code 2; no
+traceback.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ SUBCOMMANDS: dict[str, str] = {
     "info": "splineviz.io.info:register",
     "render": "splineviz.compute.cli_render:register",
     "bench": "splineviz.compute.bench:register",
+    "remesh": "splineviz.pointcloud.cli_remesh:register",
 }
 
 
@@ -41,7 +43,8 @@ def _viewer_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="splineviz", description="Open the splineviz viewer.")
     parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
     parser.add_argument("--iso", type=float, default=None, help="isovalue")
-    parser.add_argument("--model", default="to-quadratic", help="spline model")
+    parser.add_argument("--model", default=None,
+                        help="spline model (default: the smoothest one with an OpenCL kernel)")
     parser.add_argument("--screenshot", metavar="PNG", help="save the view to PNG and quit")
     parser.add_argument("--size", metavar="WxH", help="window / screenshot size, e.g. 1024x768")
     return parser
@@ -54,9 +57,9 @@ def main(argv: list[str] | None = None) -> int:
             args = _build_parser().parse_args(argv)
             return int(args.func(args) or 0)
         args = _viewer_parser().parse_args(argv)
-        from splineviz.viewer import run_viewer
+        from splineviz.gui.app import run_gui
 
-        return int(run_viewer(args) or 0)
+        return int(run_gui(args) or 0)
     except (SplinevizError, OSError) as exc:
         print(f"splineviz: error: {exc}", file=sys.stderr)
         return 2

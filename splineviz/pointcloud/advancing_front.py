@@ -37,10 +37,13 @@ MIN_ANGLE_NEW = np.deg2rad(30.0)
 MIN_ANGLE_CONNECT = np.deg2rad(12.0)
 #: a candidate triangle's normal must be within this angle of the surface normal
 MAX_NORMAL_DEVIATION = np.deg2rad(60.0)
-#: the predicted point is past a border of the cloud when its distance to the nearest input
-#: point exceeds max(BORDER_SPACINGS * spacing, BORDER_LENGTHS * target length)
-BORDER_SPACINGS = 1.5
-BORDER_LENGTHS = 0.35
+#: border test (see AdvancingFront._outside): inside within INSIDE_SPACINGS of the nearest
+#: input point, outside beyond OUTSIDE_SPACINGS, in between outside when the nearest
+#: BORDER_NEIGHBOURS points leave an angular gap wider than BORDER_GAP in the tangent plane
+INSIDE_SPACINGS = 0.75
+OUTSIDE_SPACINGS = 3.0
+BORDER_NEIGHBOURS = 24
+BORDER_GAP = np.deg2rad(180.0)
 #: number of times an edge is postponed before the relaxed rules apply, and before giving up
 RETRIES = 2
 GIVE_UP = 4
@@ -52,6 +55,10 @@ RELAXED_EAR_ANGLE = np.deg2rad(110.0)
 SEED_DISTANCE = 3.0
 #: at most this many seeds (connected components)
 MAX_SEEDS = 64
+#: front loops left with at most this many edges are closed by ear clipping at the end
+SMALL_LOOP_EDGES = 8
+#: smallest triangle angle accepted when closing a small loop
+MIN_ANGLE_CLOSE = np.deg2rad(3.0)
 
 
 class FrontError(SplinevizError, RuntimeError):
@@ -159,6 +166,7 @@ class AdvancingFront:
         self.grid: dict[tuple[int, int, int], set] = {}
         self.area_done = 0.0
         self.spacing = projector.scale
+        self.median_spacing = float(np.median(projector.scale))
         # the total area estimate drives the progress fraction
         self.area_total = float(np.sum(np.pi * (0.5 * projector.scale) ** 2)) * 1.1
 
@@ -298,9 +306,8 @@ class AdvancingFront:
             if existing and not self._inside_wedge(v, _sub(xa, xv), n):
                 return False
         centre = np.array([(xa[i] + xb[i] + xv[i]) / 3.0 for i in range(3)])
-        # a triangle whose centre is far from every input point spans a hole of the scan
-        dist, near_pt = self.proj.conn.tree.query(centre)
-        if dist > self._border_tolerance(near_pt, max(la, lb, lc)):
+        # a triangle whose centre is outside the cloud spans a hole of the scan
+        if self._outside(centre, n):
             return False
         radius = max(la, lb, lc) * 1.5
         near = self._front_vertices_near(centre, radius)
@@ -341,9 +348,30 @@ class AdvancingFront:
                 return False
         return True
 
-    def _border_tolerance(self, nearest_point, length):
-        """Largest distance from the cloud that still counts as on the surface."""
-        return max(BORDER_SPACINGS * self.spacing[nearest_point], BORDER_LENGTHS * length)
+    def _outside(self, x, n):
+        """Whether surface point ``x`` (normal ``n``) lies beyond a border of the cloud.
+
+        Inside the cloud the nearest input points surround ``x``; past a border (or in a hole
+        of the scan) they all lie to one side.  So ``x`` is outside when its nearest input point
+        is farther than ``INSIDE_SPACINGS`` spacings and the directions to its
+        ``BORDER_NEIGHBOURS`` nearest points, seen in the tangent plane, leave a gap wider than
+        ``BORDER_GAP``; or unconditionally beyond ``OUTSIDE_SPACINGS`` spacings.  Random
+        sampling gaps are surrounded by points and do not count.
+        """
+        dist, idx = self.proj.conn.tree.query(x, k=BORDER_NEIGHBOURS)
+        spacing = min(float(self.spacing[idx[0]]), self.median_spacing)
+        if dist[0] <= INSIDE_SPACINGS * spacing:
+            return False
+        if dist[0] > OUTSIDE_SPACINGS * spacing:
+            return True
+        nv = np.asarray(n)
+        rel = self.proj.points[idx] - x
+        rel -= np.outer(rel @ nv, nv)
+        t1 = rel[0] / max(np.linalg.norm(rel[0]), 1e-300)
+        t2 = np.cross(nv, t1)
+        ang = np.sort(np.arctan2(rel @ t2, rel @ t1))
+        gaps = np.diff(np.r_[ang, ang[0] + 2 * np.pi])
+        return bool(gaps.max() > BORDER_GAP)
 
     # -- the front step --------------------------------------------------------------------
     def _neighbour(self, vertex, other, incoming, n):
@@ -398,8 +426,7 @@ class AdvancingFront:
         guess = np.array([0.5 * (xa[i] + xb[i]) + height * d[i] for i in range(3)])
         pts, nrm = self.proj.project_with_normals(guess[None])
         xp, npn = pts[0], nrm[0]
-        dist, near_pt = self.proj.conn.tree.query(xp)
-        if dist > self._border_tolerance(near_pt, target):
+        if self._outside(xp, npn):
             # 3. the point left the cloud: this edge is a border of an open scan
             self.border.add((a, b))
             st.borders += 1
@@ -490,7 +517,54 @@ class AdvancingFront:
             self._advance()
         if self.nv == 0:
             raise FrontError("no seed triangle could be placed on the point cloud")
+        self._close_small_loops()
         return self.V[: self.nv].copy(), np.array(self.faces, dtype=np.int64).reshape(-1, 3)
+
+    def front_loops(self):
+        """The front as closed vertex loops (each loop lists ``a`` for its edges ``a -> b``).
+
+        Loops through a vertex with several outgoing front edges are not traced.
+        """
+        seen, loops = set(), []
+        for start in list(self.front):
+            if start in seen:
+                continue
+            loop, (a, b) = [], start
+            while (a, b) not in seen:
+                seen.add((a, b))
+                loop.append(a)
+                if len(self.out_nb[b]) != 1:
+                    loop = None
+                    break
+                a, b = b, next(iter(self.out_nb[b]))
+            if loop is not None and (a, b) == start:
+                loops.append(loop)
+        return loops
+
+    def _close_small_loops(self):
+        """Close front loops of at most ``SMALL_LOOP_EDGES`` edges by ear clipping (smallest
+        front angle first), unless they are borders of the scan."""
+        for loop in self.front_loops():
+            if len(loop) > SMALL_LOOP_EDGES:
+                continue
+            while len(loop) >= 3:
+                k = len(loop)
+                n = np.sum(self.N[loop], axis=0)
+                n = _unit(tuple(float(c) for c in n / np.linalg.norm(n)))
+                best = None
+                for i in range(k):
+                    a, b, c = loop[i], loop[(i + 1) % k], loop[(i + 2) % k]
+                    ang = _angle_ccw(_sub(self.P[c], self.P[b]), _sub(self.P[a], self.P[b]), n)
+                    if (best is None or ang < best[0]) and \
+                            self._triangle_ok(a, b, c, self.P[c], n, MIN_ANGLE_CLOSE, True):
+                        best = (ang, i)
+                if best is None:
+                    break
+                i = best[1]
+                a, b, c = loop[i], loop[(i + 1) % k], loop[(i + 2) % k]
+                self._add_triangle(a, b, c)
+                self.stats.ears += 1
+                del loop[(i + 1) % k]
 
     def _advance(self):
         steps = 0

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
-from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
+from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
@@ -159,8 +159,8 @@ def poles(dt: Delaunay, points: np.ndarray, centers: np.ndarray) -> np.ndarray:
     return np.divide(pole, length, out=np.zeros_like(pole), where=length > 0)
 
 
-def _in_cocone(points, pole, ids, x, sin_theta):
-    """cos of the angle between x - p and the pole of p, and whether x is in the co-cone."""
+def _pole_cosine(points, pole, ids, x):
+    """Cosine of the angle between ``x - p`` and the pole vector of ``p`` (p = points[ids])."""
     v = x - points[ids]
     cos = np.einsum("ij,ij->i", v, pole[ids]) / (np.linalg.norm(v, axis=1) + 1e-300)
     return cos
@@ -206,8 +206,8 @@ def cocone_triangles(dt: Delaunay, points: np.ndarray, pole: np.ndarray, centers
     s = np.sin(angle)
     ok = np.ones(len(faces), dtype=bool)
     for j in range(3):
-        c0 = _in_cocone(points, pole, faces[:, j], start, s)
-        c1 = _in_cocone(points, pole, faces[:, j], end, s)
+        c0 = _pole_cosine(points, pole, faces[:, j], start)
+        c1 = _pole_cosine(points, pole, faces[:, j], end)
         # the angle is continuous along the edge: it meets the co-cone if an end lies inside
         # or the ends lie in opposite halves of the double cone around the pole
         ok &= (np.abs(c0) <= s) | (np.abs(c1) <= s) | (c0 * c1 < 0)
@@ -260,7 +260,8 @@ def _planar_connectivity(points: np.ndarray):
     return tri, normals
 
 
-def cocone_connectivity(cloud: PointCloud | np.ndarray, angle: float = COCONE_ANGLE) -> Connectivity:
+def cocone_connectivity(cloud: PointCloud | np.ndarray,
+                        angle: float = COCONE_ANGLE) -> Connectivity:
     """Cocone neighbour graph and oriented normals of a point cloud (thesis §7.2, Fig. 7.4).
 
     Duplicates are merged first; coplanar input is triangulated in its plane; points that Qhull
@@ -328,10 +329,3 @@ def cocone_connectivity(cloud: PointCloud | np.ndarray, angle: float = COCONE_AN
     spacing = local_spacing(tree, points)
     return Connectivity(points, inverse, graph, normals, spacing, tree)
 
-
-def convex_hull_area(points2d: np.ndarray) -> float:
-    """Area of the 2-D convex hull of ``(M, 2)`` points (0 for degenerate sets)."""
-    try:
-        return float(ConvexHull(points2d).volume)
-    except (QhullError, ValueError):
-        return 0.0

@@ -41,6 +41,8 @@ HULL_SECTORS = 12
 HULL_SHRINK = 0.5
 #: polynomials whose projections are combined by the component-wise median
 MEDIAN_NEIGHBOURS = 7
+#: queries that move farther than this many spacings are projected a second time
+FAR_SPACINGS = 2.0
 #: Gauss-Newton iterations of the orthogonal projection onto a polynomial graph
 PROJECTION_ITERATIONS = 3
 
@@ -340,7 +342,8 @@ class Projector:
         cond = np.zeros(n)
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
-            local = np.einsum("nij,nkj->nki", frames[todo], rel[todo]) / self.scale[todo, None, None]
+            local = np.einsum("nij,nkj->nki", frames[todo], rel[todo])
+            local /= self.scale[todo, None, None]
             keep = overlap_mask(local, Neighbourhoods(hood.index[todo], hood.level[todo],
                                                       hood.valid[todo]))
             w = np.where(keep, weights[todo], 0.0)
@@ -396,7 +399,8 @@ class Projector:
         """Orthogonal projection of ``r`` onto the polynomial graphs of points ``ids``.
 
         Gauss-Newton on the foot parameters, started at the vertical projection; the step is
-        limited to the query's distance so that far points cannot diverge.
+        damped (one spacing per step) and the foot point kept inside the fitted disc, so that
+        far queries cannot diverge.
 
         Parameters
         ----------
@@ -410,7 +414,12 @@ class Projector:
         f, s, c = self.frames[ids], self.scale[ids], self.coeffs[ids]
         loc = np.einsum("pij,pj->pi", f, r - self.points[ids]) / s[:, None]
         u, v = loc[:, 0].copy(), loc[:, 1].copy()
-        limit = np.linalg.norm(loc, axis=1) + 1.0
+        limit = 1.0  # at most one spacing per step: damped for far queries
+        reach = CUTOFF * self.smoothing
+        rad = np.hypot(u, v)
+        shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
+        u *= shrink
+        v *= shrink
         for _ in range(PROJECTION_ITERATIONS):
             z, zx, zy = evaluate(c, u, v)
             res = loc - np.stack([u, v, z], axis=1)
@@ -425,10 +434,17 @@ class Projector:
             factor = np.minimum(1.0, limit / np.maximum(step, 1e-300))
             u += du * factor
             v += dv * factor
+            # the polynomial is only valid where its points were: keep the foot point inside
+            # the fitted disc, so that far queries land near their nearest input point
+            rad = np.hypot(u, v)
+            shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
+            u *= shrink
+            v *= shrink
         z, zx, zy = evaluate(c, u, v)
         nloc = np.stack([-zx, -zy, np.ones_like(z)], axis=1)
         nloc /= np.linalg.norm(nloc, axis=1, keepdims=True)
-        pos = self.points[ids] + np.einsum("pji,pj->pi", f, np.stack([u, v, z], axis=1)) * s[:, None]
+        foot = np.stack([u, v, z], axis=1) * s[:, None]
+        pos = self.points[ids] + np.einsum("pji,pj->pi", f, foot)
         return pos, np.einsum("pji,pj->pi", f, nloc)
 
     def project_with_normals(self, points):
@@ -451,6 +467,16 @@ class Projector:
             raise ProjectionError("points to project contain NaN or infinite coordinates")
         if len(r) == 0:
             return np.empty((0, 3)), np.empty((0, 3))
+        pos, nrm, nearest = self._median_projection(r)
+        # the median of projections spread along a curved surface lies off it (by about
+        # spread^2 / 8R); queries from far away, whose projections spread, are projected once
+        # more from the median, where the polynomials agree
+        far = np.linalg.norm(pos - r, axis=1) > FAR_SPACINGS * self.scale[nearest]
+        if far.any():
+            pos[far], nrm[far], _ = self._median_projection(pos[far])
+        return pos, nrm
+
+    def _median_projection(self, r):
         _, nearest = self.conn.tree.query(r)
         ids = self.median_sets[nearest]  # (M, k)
         m, k = ids.shape
@@ -458,7 +484,7 @@ class Projector:
         pos = np.median(pos.reshape(m, k, 3), axis=1)
         nrm = np.median(nrm.reshape(m, k, 3), axis=1)
         nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-        return pos, nrm
+        return pos, nrm, nearest
 
     def project(self, points) -> np.ndarray:
         """Project ``(M, 3)`` points onto the local surfaces; returns ``(M, 3)`` (§7.2)."""

@@ -162,7 +162,7 @@ def mesh_quality(mesh, reference=None) -> dict:
         "radius_ratio_mean": float(rr.mean()),
         "radius_ratio_min": float(rr.min()),
         "valence6_fraction": float(np.mean(val[interior] == 6)) if interior.any() else 0.0,
-        "valence_histogram": {int(v): int(c) for v, c in zip(hist_v, hist_c)},
+        "valence_histogram": {int(v): int(c) for v, c in zip(hist_v, hist_c, strict=True)},
         "hausdorff": float("nan"),
         "rms_distance": float("nan"),
         "boundary_edges": int(np.sum(counts == 1)),

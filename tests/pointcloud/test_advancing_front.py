@@ -1,0 +1,126 @@
+"""Advancing front + sv.remesh on analytic surfaces: manifold, closed/open, quality, control."""
+
+import numpy as np
+import pc_surfaces as S
+import pytest
+
+import splineviz as sv
+from splineviz.pointcloud.advancing_front import Cancelled
+from splineviz.pointcloud.quality import edge_face_counts
+from splineviz.pointcloud.remesh import RemeshError, RemeshReport
+
+
+def _arrays(mesh):
+    return np.asarray(mesh.points), np.asarray(mesh.faces).reshape(-1, 4)[:, 1:]
+
+
+def _euler(v, f):
+    edges, _ = edge_face_counts(f)
+    return len(np.unique(f)) - len(edges) + len(f)
+
+
+def _signed_volume(v, f):
+    p = v[f]
+    return np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6
+
+
+@pytest.fixture(scope="module")
+def sphere_mesh():
+    pts = S.sphere(6000, seed=1)
+    report = RemeshReport()
+    mesh = sv.remesh(pts, edge_length=0.12, report=report)
+    return pts, mesh, report
+
+
+def test_sphere_is_closed_oriented_and_well_shaped(sphere_mesh):
+    pts, mesh, report = sphere_mesh
+    v, f = _arrays(mesh)
+    q = sv.mesh_quality(mesh, reference=pts)
+    assert q["boundary_edges"] == 0 and q["non_manifold_edges"] == 0
+    assert _euler(v, f) == 2
+    assert _signed_volume(v, f) == pytest.approx(4 / 3 * np.pi, rel=0.02)  # outward
+    assert q["radius_ratio_mean"] > 0.93 and q["valence6_fraction"] > 0.7
+    assert S.sphere_distance(v).max() < 1e-3
+    assert report.front["new_vertices"] > 0 and report.front["ears"] > 0
+
+
+def test_edge_length_is_followed(sphere_mesh):
+    _, mesh, _ = sphere_mesh
+    v, f = _arrays(mesh)
+    edges, _ = edge_face_counts(f)
+    length = np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
+    assert np.median(length) == pytest.approx(0.12, rel=0.1)
+    # an equilateral mesh of the sphere: F ~ area / (sqrt(3)/4 L^2)
+    assert len(f) == pytest.approx(4 * np.pi / (np.sqrt(3) / 4 * 0.12**2), rel=0.15)
+
+
+def test_torus_has_genus_one():
+    pts = S.torus(8000, seed=2)
+    mesh = sv.remesh(pts, edge_length=0.09)
+    v, f = _arrays(mesh)
+    q = sv.mesh_quality(mesh, reference=pts)
+    assert q["boundary_edges"] == 0 and q["non_manifold_edges"] == 0
+    assert _euler(v, f) == 0
+    assert S.torus_distance(v).max() < 1e-3
+    assert q["radius_ratio_mean"] > 0.9
+
+
+def test_open_patch_keeps_its_border():
+    pts = S.paraboloid(5000, seed=3)
+    mesh = sv.remesh(pts, edge_length=0.07)
+    v, f = _arrays(mesh)
+    edges, counts = edge_face_counts(f)
+    assert counts.max() == 2
+    rim = np.unique(edges[counts == 1])
+    r = np.hypot(v[rim, 0], v[rim, 1])
+    # the border follows the rim of the scan (radius 1), within about one edge length
+    assert len(rim) > 2 * np.pi / 0.07 * 0.6
+    assert np.all(r > 1 - 0.1) and np.all(r < 1 + 0.04)
+    assert _euler(v, f) == 1  # a disc
+    assert S.paraboloid_distance(v).max() < 1e-3
+
+
+def test_curvature_adaptation():
+    """With rho, edges are shorter where the surface bends more (tips of an ellipsoid)."""
+    axes = np.array([1.0, 0.35, 0.35])
+    pts = S.sphere(8000, seed=4) * axes
+    mesh = sv.remesh(pts, rho=0.3, min_length=0.02, max_length=0.2)
+    v, f = _arrays(mesh)
+    edges, _ = edge_face_counts(f)
+    mid = 0.5 * (v[edges[:, 0]] + v[edges[:, 1]])
+    length = np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
+    tips = np.abs(mid[:, 0]) > 0.9  # curvature 1/0.1225 ~ 8 there, ~2.9 around the waist
+    waist = np.abs(mid[:, 0]) < 0.3
+    assert np.median(length[tips]) < 0.7 * np.median(length[waist])
+
+
+def test_two_components_get_two_seeds():
+    a = S.sphere(3000, seed=5)
+    b = S.sphere(3000, seed=6) * 0.5 + np.array([3.0, 0, 0])
+    report = RemeshReport()
+    mesh = sv.remesh(np.vstack([a, b]), edge_length=0.15, report=report)
+    v, f = _arrays(mesh)
+    assert report.front["seeds"] == 2
+    assert _euler(v, f) == 4
+    assert sv.mesh_quality(mesh)["boundary_edges"] == 0
+
+
+def test_progress_and_cancel():
+    pts = S.sphere(3000, seed=7)
+    seen = []
+    sv.remesh(pts, edge_length=0.08, progress=lambda frac, msg: seen.append(frac))
+    assert seen[0] == 0.0 and seen[-1] == 1.0
+    assert np.all(np.diff(seen) >= 0) and len(seen) > 4
+    with pytest.raises(Cancelled):
+        sv.remesh(pts, edge_length=0.08, progress=lambda frac, msg: frac < 0.5)
+
+
+def test_bad_input():
+    with pytest.raises(RemeshError):
+        sv.remesh(np.zeros((3, 3)))
+    with pytest.raises(sv.SplinevizError):
+        sv.remesh(S.sphere(500), edge_length=-1.0)
+    with pytest.raises(sv.SplinevizError):
+        sv.remesh(S.sphere(500), rho=4.0)
+    with pytest.raises(sv.SplinevizError):
+        sv.remesh(np.zeros((10, 2)))

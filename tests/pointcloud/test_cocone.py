@@ -1,0 +1,98 @@
+"""Cocone connectivity (thesis §7.2, Fig. 7.4): poles, co-cone filter, graph, normals."""
+
+import numpy as np
+import pc_surfaces as S
+import pytest
+
+from splineviz.core.points import PointCloud, PointCloudError
+from splineviz.pointcloud.cocone import (
+    ConnectivityError,
+    circumcenters,
+    cocone_connectivity,
+    deduplicate,
+)
+
+
+def _ellipsoid(n, axes=(1.0, 0.6, 0.4), seed=0):
+    return S.sphere(n, seed=seed) * np.array(axes)
+
+
+def test_circumcenters_are_equidistant():
+    rng = np.random.default_rng(0)
+    tets = rng.normal(size=(100, 4, 3))
+    c = circumcenters(tets)
+    d = np.linalg.norm(tets - c[:, None], axis=2)
+    assert np.allclose(d, d[:, :1])
+    flat = np.zeros((1, 4, 3))
+    flat[0, :, 0] = [0, 1, 2, 3]
+    assert not np.isfinite(circumcenters(flat)).all()
+
+
+def test_ellipsoid_normals_are_outward_and_accurate():
+    axes = np.array([1.0, 0.6, 0.4])
+    conn = cocone_connectivity(_ellipsoid(4000))
+    p = conn.points
+    true = p / axes**2
+    true /= np.linalg.norm(true, axis=1, keepdims=True)
+    cos = np.einsum("ij,ij->i", conn.normals, true)
+    assert cos.min() > 0  # consistently outward
+    assert np.median(cos) > np.cos(np.deg2rad(3))
+
+
+def test_torus_normals_consistent_and_graph_local():
+    pts = S.torus(6000, seed=1)
+    conn = cocone_connectivity(pts)
+    p = conn.points
+    ring = np.stack([p[:, 0], p[:, 1], np.zeros(len(p))], 1)
+    ring *= 1.0 / np.linalg.norm(ring, axis=1, keepdims=True)
+    true = p - ring
+    true /= np.linalg.norm(true, axis=1, keepdims=True)
+    cos = np.einsum("ij,ij->i", conn.normals, true)
+    assert cos.min() > 0.5
+    g = conn.graph.tocoo()
+    assert g.data.max() < 5 * np.median(conn.spacing)  # no long-range edges
+    degree = np.diff(conn.graph.indptr)
+    assert degree.min() >= 3 and 5 <= np.median(degree) <= 7
+
+
+def test_close_parallel_sheets_are_not_connected():
+    """Fig. 7.3 right: small Euclidean but large Riemannian distance -> no graph edge."""
+    rng = np.random.default_rng(2)
+    xy = rng.uniform(0, 1, (2500, 2))
+    spacing = 1 / np.sqrt(2500)
+    top = np.c_[xy, np.full(2500, 3 * spacing)]
+    xy2 = rng.uniform(0, 1, (2500, 2))
+    bottom = np.c_[xy2, np.zeros(2500)]
+    conn = cocone_connectivity(np.vstack([top, bottom]))
+    g = conn.graph.tocoo()
+    z = conn.points[:, 2]
+    sheet = z > 1.5 * spacing
+    inner = (conn.points[:, :2].min(1) > 0.1) & (conn.points[:, :2].max(1) < 0.9)
+    cross = (sheet[g.row] != sheet[g.col]) & inner[g.row] & inner[g.col]
+    assert cross.sum() == 0
+
+
+def test_duplicates_and_inverse():
+    pts = _ellipsoid(800, seed=3)
+    doubled = np.vstack([pts, pts[:100], pts[:5] + 1e-15])
+    uniq, inverse = deduplicate(doubled)
+    assert len(uniq) == 800
+    assert np.allclose(uniq[inverse], doubled, atol=1e-12)
+    conn = cocone_connectivity(PointCloud(doubled))
+    assert len(conn.points) == 800 and len(conn.inverse) == len(doubled)
+
+
+def test_planar_and_degenerate_input():
+    rng = np.random.default_rng(4)
+    plane = np.c_[rng.uniform(0, 1, (500, 2)), np.zeros(500)]
+    conn = cocone_connectivity(plane)
+    assert np.allclose(np.abs(conn.normals[:, 2]), 1.0)
+    assert np.diff(conn.graph.indptr).min() >= 3
+    with pytest.raises(ConnectivityError, match="line"):
+        cocone_connectivity(np.c_[np.linspace(0, 1, 50), np.zeros((50, 2))])
+    with pytest.raises(ConnectivityError, match="at least 4"):
+        cocone_connectivity(np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0]]))
+    with pytest.raises(ConnectivityError, match="empty"):
+        cocone_connectivity(np.zeros((0, 3)))
+    with pytest.raises(PointCloudError):
+        cocone_connectivity(np.array([[np.nan, 0, 0]] * 5))

@@ -1,0 +1,181 @@
+"""Thesis §7.2 projection: accuracy on analytic surfaces, degree selection, LCS re-orientation."""
+
+import numpy as np
+import pc_surfaces as S
+import pytest
+
+from splineviz.pointcloud.cocone import cocone_connectivity
+from splineviz.pointcloud.projection import (
+    ProjectionError,
+    Projector,
+    basis,
+    basis_size,
+    evaluate,
+    fit_polynomials,
+    monomial_exponents,
+)
+
+CASES = {
+    "sphere": (lambda: S.sphere(5000, seed=1), S.sphere_distance),
+    "torus": (lambda: S.torus(7000, seed=2), S.torus_distance),
+    "paraboloid": (lambda: S.paraboloid(4000, seed=3), S.paraboloid_distance),
+}
+
+
+def _queries(pr, pts, rng, spacings, count=300):
+    """Points ``spacings`` local spacings off the surface, in random directions and sides."""
+    idx = rng.choice(len(pts), count, replace=False)
+    if np.ptp(pts[:, 2]) < 0.6:  # the paraboloid patch: one-sided fits near its border
+        idx = idx[np.hypot(pts[idx, 0], pts[idx, 1]) < 0.6]
+    sp = np.median(pr.scale)
+    side = rng.choice([-1.0, 1.0], size=(len(idx), 1))
+    return pts[idx] + spacings * sp * side * pr.normals[idx] + 0.5 * sp * rng.normal(
+        size=(len(idx), 3))
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+@pytest.mark.parametrize("noise,smoothing", [(0.0, 1.0), (2.5e-4, 2.0)])
+def test_projection_lands_on_analytic_surface(name, noise, smoothing):
+    sample, distance = CASES[name]
+    rng = np.random.default_rng(7)
+    pts = sample()
+    pts = pts + noise * rng.normal(size=pts.shape)
+    pr = Projector(pts, smoothing=smoothing)
+    # noise-free clouds: up to 5 spacings off the surface; noisy ones: up to 3
+    for spacings in (0.0, 1.0, 3.0, 5.0) if noise == 0 else (0.0, 1.0, 3.0):
+        q = _queries(pr, pts, rng, spacings)
+        err = distance(pr.project(q))
+        assert err.max() < 1e-3, (name, noise, spacings, err.max())
+
+
+def test_far_points_are_projected():
+    """Points many spacings away still land on the surface (no vicinity requirement)."""
+    pts = S.sphere(4000, seed=4)
+    pr = Projector(pts)
+    rng = np.random.default_rng(1)
+    d = rng.normal(size=(200, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    for radius in (0.5, 1.6, 3.0):
+        out = pr.project(radius * d)
+        assert S.sphere_distance(out).max() < 1e-3
+        # the result is the nearest surface point: along the ray through the query
+        assert np.min(np.einsum("ij,ij->i", out, d)) > 0.999
+
+
+def test_noise_needs_smoothing():
+    """With the Gaussian width at the spacing, noise is fitted; widening h averages it out."""
+    rng = np.random.default_rng(3)
+    pts = S.sphere(5000, seed=5) + 1e-3 * rng.normal(size=(5000, 3))
+    q = _queries(Projector(pts), pts, rng, 0.0)
+    tight = S.sphere_distance(Projector(pts, smoothing=1.0).project(q)).max()
+    wide = S.sphere_distance(Projector(pts, smoothing=3.0).project(q)).max()
+    assert wide < 2e-3 < tight
+
+
+def test_monomial_order_matches_eq_7_3():
+    assert monomial_exponents(2).tolist() == [[0, 0], [1, 0], [0, 1], [2, 0], [1, 1], [0, 2]]
+    for q in range(7):
+        assert len(monomial_exponents(q)) == basis_size(q) == (q + 1) * (q + 2) // 2
+    x, y = np.array([0.3]), np.array([-0.7])
+    assert np.allclose(basis(x, y, 2)[0], [1, 0.3, -0.7, 0.09, -0.21, 0.49])
+
+
+def test_evaluate_derivatives_match_finite_differences():
+    rng = np.random.default_rng(0)
+    c = rng.normal(size=(50, basis_size(5)))
+    x, y = rng.uniform(-1, 1, 50), rng.uniform(-1, 1, 50)
+    z, zx, zy = evaluate(c, x, y)
+    assert np.allclose(z, np.einsum("pm,pm->p", c, basis(x, y, 5)))
+    h = 1e-6
+    assert np.allclose(zx, (evaluate(c, x + h, y)[0] - evaluate(c, x - h, y)[0]) / (2 * h),
+                       atol=1e-6)
+    assert np.allclose(zy, (evaluate(c, x, y + h)[0] - evaluate(c, x, y - h)[0]) / (2 * h),
+                       atol=1e-6)
+
+
+def test_least_squares_reproduces_polynomials():
+    """Eq. (7.4) solves exactly for data on a polynomial of the chosen degree."""
+    rng = np.random.default_rng(2)
+    x, y = rng.uniform(-3, 3, (4, 60)), rng.uniform(-3, 3, (4, 60))
+    true = rng.normal(size=(4, basis_size(3)))
+    f = np.einsum("nkm,nm->nk", basis(x, y, 3), true)
+    c, degree, cond = fit_polynomials(np.stack([x, y, f], -1), np.ones((4, 60)), 3, np.inf)
+    assert (degree == 3).all() and np.isfinite(cond).all()
+    assert np.allclose(c, true, atol=1e-8)
+
+
+def test_degree_drops_near_an_algebraic_curve():
+    """Fig. 7.7: points near a conic make A singular for degree >= 2; the degree falls to 1,
+    while well-spread points keep a high degree."""
+    rng = np.random.default_rng(4)
+    t = rng.uniform(0, 2 * np.pi, (2, 80))
+    # all x_j on the circle x^2 + y^2 = 4 (plus rounding-level jitter): degree 2 is ambiguous
+    circle = np.stack([2 * np.cos(t), 2 * np.sin(t)], -1) + 1e-9 * rng.normal(size=(2, 80, 2))
+    spread = rng.uniform(-2.5, 2.5, (2, 80, 2))
+    xy = np.concatenate([circle, spread])
+    f = 0.1 * xy[..., 0] ** 2 - 0.05 * xy[..., 0] * xy[..., 1]
+    w = np.exp(-np.sum(xy**2, -1) / 9.0)
+    _, degree, _ = fit_polynomials(np.concatenate([xy, f[..., None]], -1), w)
+    assert degree[:2].tolist() == [1, 1]
+    assert (degree[2:] >= 3).all()
+    # a line of points: even degree 2 is impossible, degree 1 is used
+    xl = np.stack([np.linspace(-2, 2, 40), np.zeros(40)], -1)[None] + 1e-12
+    _, degree, _ = fit_polynomials(np.concatenate([xl, xl[..., :1] * 0.5], -1), np.ones((1, 40)))
+    assert degree.tolist() == [1]
+
+
+def test_degree_drops_on_the_projector_for_points_on_curves():
+    """Points sampled along lines of a plane (a 'scan-line' cloud) are near an algebraic curve
+    of low degree in every LCS: the projector's degrees must fall below those of a plane
+    sampled uniformly."""
+    rng = np.random.default_rng(6)
+    uniform = np.c_[rng.uniform(-1, 1, (3000, 2)), 0.01 * rng.normal(size=(3000, 1))]
+    lines = np.c_[rng.uniform(-1, 1, 3000), rng.integers(-10, 11, 3000) * 0.1,
+                  0.01 * rng.normal(size=3000)]
+    lines = lines + np.c_[np.zeros((3000, 1)), 1e-4 * rng.normal(size=(3000, 1)),
+                          np.zeros((3000, 1))]
+    d_uniform = np.mean(Projector(uniform).degree)
+    d_lines = np.mean(Projector(lines).degree)
+    assert d_lines < d_uniform - 0.5
+
+
+def test_bisection_reorients_a_bad_normal():
+    """Fig. 7.5: starting from normals tilted by 35 degrees, the LCS z-axes end close to the
+    polynomial normals, which are the true sphere normals."""
+    pts = S.sphere(4000, seed=8)
+    conn = cocone_connectivity(pts)
+    tilt = np.cross(conn.normals, [0.0, 0.0, 1.0])
+    tilt /= np.maximum(np.linalg.norm(tilt, axis=1, keepdims=True), 1e-12)
+    bad = np.cos(np.deg2rad(35)) * conn.normals + np.sin(np.deg2rad(35)) * tilt
+    object.__setattr__(conn, "normals", bad)
+    pr = Projector(pts, connectivity=conn)
+    truth = conn.points / np.linalg.norm(conn.points, axis=1, keepdims=True)
+    cos_frame = np.einsum("ij,ij->i", pr.frames[:, 2], truth)
+    cos_normal = np.einsum("ij,ij->i", pr.normals, truth)
+    assert np.median(cos_frame) > np.cos(np.deg2rad(10))
+    assert np.min(cos_normal) > np.cos(np.deg2rad(2))
+
+
+def test_curvature_of_sphere_and_paraboloid_apex():
+    pr = Projector(S.sphere(5000, radius=2.0, seed=9))
+    k = pr.principal_curvatures()
+    assert np.allclose(np.median(k, axis=0), [-0.5, -0.5], atol=5e-3)  # outward normals
+    pts = S.paraboloid(4000, a=0.5, seed=10)
+    pr = Projector(pts)
+    apex = np.argmin(np.hypot(pr.points[:, 0], pr.points[:, 1]))  # de-duplicated order
+    # z = (x^2 + y^2)/2 has both principal curvatures 1 at the apex (sign: normal side)
+    assert np.allclose(np.abs(pr.principal_curvatures()[apex]), [1.0, 1.0], atol=0.03)
+
+
+def test_bad_parameters_and_queries():
+    pts = S.sphere(500, seed=11)
+    with pytest.raises(ProjectionError):
+        Projector(pts, smoothing=0)
+    with pytest.raises(ProjectionError):
+        Projector(pts, q_max=9)
+    pr = Projector(pts)
+    with pytest.raises(ProjectionError):
+        pr.project(np.zeros((3, 2)))
+    with pytest.raises(ProjectionError):
+        pr.project(np.array([[np.nan, 0, 0]]))
+    assert pr.project(np.empty((0, 3))).shape == (0, 3)
