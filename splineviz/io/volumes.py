@@ -223,6 +223,10 @@ def _read_nrrd(path: Path) -> VolumeData:
             header = nrrd.read_header(str(path))
     except (nrrd.NRRDError, ValueError, TypeError, KeyError, UnicodeDecodeError) as exc:
         raise CorruptFileError(f"{path.name} has a malformed NRRD header: {exc}") from None
+    missing = [k for k in ("type", "dimension", "sizes", "encoding") if k not in header]
+    if missing:
+        raise CorruptFileError(f"{path.name} lacks the required NRRD field(s) "
+                               f"{', '.join(missing)}")
     sizes = [int(s) for s in np.atleast_1d(header.get("sizes", []))]
     if len(sizes) != 3:
         raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume")
