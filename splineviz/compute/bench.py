@@ -91,6 +91,7 @@ def run_bench(data_dir, size=(512, 512), repeats=3, models=MODELS, datasets=DATA
             if model == "trilinear":
                 tri_frame = frame
             row.update(classify_s=classify, frame_s=frame, active_cells=rc.stats["active_cells"],
+                       active_tets=rc.stats["active_tets"],
                        device=rc.stats["device"],
                        frame_vs_vtk_frame=frame / vtk_frame,
                        classify_vs_vtk_extract=classify / extract,
@@ -107,7 +108,8 @@ def _fmt(v, spec):
 
 def _print_table(rows, size, out):
     out(f"ray casting at {size[0]}x{size[1]} (median frame times); ratios < 1: ours faster")
-    out(f"{'data':11} {'model':15} {'classify s':>10} {'frame s':>8} {'active':>8} "
+    out(f"{'data':11} {'model':15} {'classify s':>10} {'frame s':>8} {'act cells':>9} "
+        f"{'act tets':>9} "
         f"{'VTK FE s':>8} {'VTK 1st s':>9} {'VTK frm s':>9} {'cls/FE':>7} {'frm/VTKfrm':>10} "
         f"{'frm/(FE+1st)':>12} {'frm/tri':>7}")
     for r in rows:
@@ -115,7 +117,8 @@ def _print_table(rows, size, out):
             out(f"{r['data']:11} {r['model']:15} {r['note']}")
             continue
         out(f"{r['data']:11} {r['model']:15} {r['classify_s']:10.4f} {r['frame_s']:8.4f} "
-            f"{r['active_cells']:8d} {r['vtk_extract_s']:8.4f} {r['vtk_first_frame_s']:9.4f} "
+            f"{r['active_cells']:9d} {_fmt(r['active_tets'], '9d')} {r['vtk_extract_s']:8.4f} "
+            f"{r['vtk_first_frame_s']:9.4f} "
             f"{r['vtk_frame_s']:9.4f} {r['classify_vs_vtk_extract']:7.3f} "
             f"{r['frame_vs_vtk_frame']:10.2f} {r['frame_vs_vtk_extract_plus_first']:12.3f} "
             f"{_fmt(r['frame_vs_trilinear'], '7.2f')}")

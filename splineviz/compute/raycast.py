@@ -399,7 +399,8 @@ class RayCaster:
             import pyopencl.array as cla
 
             if self._bits.size < candidates * TO_WORDS:
-                self._bits = cla.empty(q, candidates * TO_WORDS * 5 // 4, np.uint32)
+                # grow with headroom so that nearby isovalues reuse the buffer
+                self._bits = cla.empty(q, (candidates * 5 // 4 + 1) * TO_WORDS, np.uint32)
             k_to = get_kernel(ctx, "classify", "to_codes", d)
             _, cy, cz = self._cells
             e = self._ent

@@ -46,7 +46,8 @@ def _overlaps(tet: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     pt = np.einsum("nvc,nac->nav", tet, axes)  # (N, A, 4)
     pb = np.einsum("vc,nac->nav", box, axes)   # (N, A, 8)
     valid = norm[..., 0] > 1e-12
-    separated = valid & ((pt.max(-1) <= pb.min(-1) + SAT_EPS) | (pb.max(-1) <= pt.min(-1) + SAT_EPS))
+    separated = valid & ((pt.max(-1) <= pb.min(-1) + SAT_EPS)
+                         | (pb.max(-1) <= pt.min(-1) + SAT_EPS))
     return ~separated.any(axis=1)
 
 
