@@ -120,7 +120,10 @@ class IsosurfaceLayer:
         self.name = name
         self.visible = True
         self._device = device
+        # one lock per caster: a preview (GUI thread) never waits for an exact frame that a
+        # worker thread is computing with the other caster
         self._lock = threading.RLock()
+        self._preview_lock = threading.RLock()
         self._listeners = []
         self._volume = volume
         self._model = model
@@ -174,7 +177,7 @@ class IsosurfaceLayer:
 
     def set_volume(self, volume: Volume) -> None:
         """New data (e.g. smoothed); keeps model and isovalue."""
-        with self._lock:
+        with self._lock, self._preview_lock:
             self._volume = volume
             for rc in (self._caster, self._preview):
                 if rc is not None:
@@ -186,7 +189,7 @@ class IsosurfaceLayer:
             raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODEL_LABELS)}")
         if model == self._model:
             return
-        with self._lock:
+        with self._lock, self._preview_lock:
             self._model = model
             self._caster = None
             self._preview = None
@@ -247,20 +250,20 @@ class IsosurfaceLayer:
     def _casters(self):
         from splineviz.compute.raycast import RayCaster
 
-        if self._caster is None:
-            self._caster = RayCaster(self._volume, model=self._model, device=self._device)
-        if self._caster.stats.get("path") != "opencl" and self._preview is None:
-            self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
-        return self._caster, self._preview
+        with self._lock:
+            if self._caster is None:
+                self._caster = RayCaster(self._volume, model=self._model, device=self._device)
+            if self._caster.stats.get("path") != "opencl" and self._preview is None:
+                self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
+            return self._caster, self._preview
 
     @property
     def exact_path(self) -> str:
         """``"opencl"`` or ``"numpy"``: how exact frames of this layer are made."""
-        with self._lock:
-            return self._casters()[0].stats.get("path", "numpy")
+        return self._casters()[0].stats.get("path", "numpy")
 
-    def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False
-                ) -> RenderedFrame:
+    def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
+                blocking: bool = True) -> RenderedFrame | None:
         """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
 
         Parameters
@@ -270,19 +273,28 @@ class IsosurfaceLayer:
             Resolution factor: the frame has ``ceil(scale * size)`` pixels per axis.
         preview : bool
             Use the fast trilinear OpenCL caster when this model has no kernel.
+        blocking : bool
+            If False, return None instead of waiting while another thread uses the caster.
         """
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
-        with self._lock:
+        exact, fast = self._casters()
+        use_fast = preview and fast is not None
+        rc, lock = (fast, self._preview_lock) if use_fast else (exact, self._lock)
+        if not lock.acquire(blocking=blocking):
+            return None
+        try:
             state = self.state
-            exact, fast = self._casters()
-            rc = fast if (preview and fast is not None) else exact
+            if rc is not (self._preview if use_fast else self._caster):
+                return None  # the model changed meanwhile
             if rc.isovalue != self._isovalue:
                 rc.set_isovalue(self._isovalue)
             t = time.perf_counter()
             frame = rc.render(view.camera, size=(sw, sh), clip_planes=view.clip_planes)
             seconds = time.perf_counter() - t
             stats = dict(rc.stats)
+        finally:
+            lock.release()
         path = "preview" if rc is not exact else stats.get("path", "numpy")
         self.last_stats = stats
         return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats)

@@ -237,7 +237,9 @@ class SplineScene:
                 self._show(layer, layer.compute(view))
             else:
                 scale, fast = self._preview_scale(layer, lv, view)
-                self._show(layer, layer.compute(view, scale=scale, preview=fast))
+                rf = layer.compute(view, scale=scale, preview=fast, blocking=False)
+                if rf is not None:  # else a worker holds the caster: keep the old frame
+                    self._show(layer, rf)
                 stale.append(layer)
         self._order_quads()
         self.last_frame_s = time.perf_counter() - t0
@@ -291,7 +293,9 @@ class SplineScene:
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
-            out.append((layer, layer.compute(view)))
+            rf = layer.compute(view)
+            if rf is not None:
+                out.append((layer, rf))
         return out
 
     def apply(self, results) -> bool:

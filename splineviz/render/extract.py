@@ -1,16 +1,14 @@
-"""A plain pyvista viewer: the spline isosurface of a volume (or of the embedded default data).
+"""Spline isosurfaces as meshes (for "Export mesh") and the embedded default data set.
 
-This is what ``splineviz [FILE]`` opens until the Qt application exists. The surface is the
-isosurface *of the spline*: a flying-edges mesh of spline samples on a refined grid whose
-vertices are moved onto s(x) = iso by Newton steps along the spline gradient, shaded with the
-exact spline normals.
+The mesh is the isosurface *of the spline*: a flying-edges mesh of spline samples on a refined
+grid whose vertices are moved onto s(x) = iso by Newton steps along the spline gradient, with
+the exact spline normals. (The ray caster shows the surface exactly; this is its export.)
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from splineviz.core.errors import SplinevizError
 from splineviz.core.volume import Volume
 
 #: the embedded default data: Marschner-Lobb sampled on 41^3 points of [-1, 1]^3
@@ -91,44 +89,3 @@ def spline_isosurface(spline, iso: float, refine: int = 2):
     mesh.points = pts
     mesh.point_data.active_normals = normals
     return mesh
-
-
-def run_viewer(args) -> int:
-    """Open a window (or write ``args.screenshot``) showing the spline isosurface."""
-    import pyvista as pv
-
-    from splineviz.core.splines import build_spline
-
-    if args.file:
-        try:
-            from splineviz.io import read_volume
-        except ImportError as exc:  # io layer missing: say so instead of a traceback
-            raise SplinevizError(f"cannot read files: {exc}") from exc
-        volume, iso = read_volume(args.file), None
-    else:
-        volume, iso = default_volume()
-    if args.iso is not None:
-        iso = args.iso
-    if iso is None:
-        lo, hi = volume.finite_range
-        iso = 0.5 * (lo + hi)
-    spline = build_spline(volume, model=args.model)
-    mesh = spline_isosurface(spline, iso)
-    size = tuple(int(v) for v in args.size.lower().split("x")) if args.size else (1024, 768)
-    off_screen = bool(args.screenshot)
-    plotter = pv.Plotter(off_screen=off_screen, window_size=size,
-                         title=f"splineviz - {args.model} isosurface {iso:g}")
-    plotter.background_color = "white"
-    if mesh.n_points:
-        plotter.add_mesh(mesh, color="#d9b38c", smooth_shading=True, specular=0.4,
-                         specular_power=30)
-    plotter.add_mesh(pv.Box(bounds=np.ravel(volume.bounds)).outline(), color="black")
-    plotter.add_axes()
-    plotter.camera_position = "iso"
-    plotter.camera.azimuth = 20
-    if off_screen:
-        plotter.screenshot(args.screenshot)
-        plotter.close()
-    else:
-        plotter.show()
-    return 0

@@ -1,10 +1,10 @@
-"""The plain viewer behind ``splineviz`` with no argument: default data, spline isosurface."""
+"""Spline isosurface meshes (Export mesh) and the command line that opens the app."""
 
 import numpy as np
 
 import splineviz as sv
 from splineviz.cli import main
-from splineviz.viewer import default_volume, spline_isosurface
+from splineviz.render.extract import default_volume, spline_isosurface
 
 
 def test_default_isosurface_lies_on_the_spline_surface():
