@@ -45,7 +45,14 @@ from collections.abc import Callable
 from pathlib import Path, PurePosixPath
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from splineviz.io._util import atomic_output
 from splineviz.io.errors import SessionError, SessionPathError, SessionVersionError
@@ -242,6 +249,12 @@ class CameraState(_Model):
     view_angle: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 30.0
     parallel_projection: bool = False
     parallel_scale: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] = 1.0
+
+    @model_validator(mode="after")
+    def _distinct(self):
+        if self.position == self.focal_point:
+            raise ValueError("camera position and focal point must differ")
+        return self
 
     def to_camera(self):
         """The :class:`splineviz.core.camera.Camera` of this state (perspective only)."""

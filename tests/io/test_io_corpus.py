@@ -329,6 +329,9 @@ CASES = {
         {"id": "v", "type": "VolumeFile", "properties": {"path": "v.npy"}}]))), E.SessionError),
     "session-opacity-out-of-range": lambda d: (lambda: LS(_session(d, _iso(opacity=7))),
                                                E.SessionError),
+    "session-degenerate-camera": lambda d: (lambda: LS(_session(d, _doc(views=[
+        {"id": "v", "camera": {"position": [1, 2, 3], "focal_point": [1, 2, 3]}}]))),
+        E.SessionError),
     "session-too-large": lambda d: (lambda: LS(_session(d, " " * (17 * 2**20) + "{}")),
                                     E.SessionError),
     "session-not-utf8": lambda d: ((d / "s.svs").write_bytes(b"\xff\xfe{\x00}"),
