@@ -10,8 +10,14 @@ import numpy as np
 from splineviz.io.errors import UnknownFormatError
 
 
-def describe(path) -> dict:
+def describe(path, **raw) -> dict:
     """Summary of a file: kind, format and geometry.
+
+    Parameters
+    ----------
+    path : path-like
+    **raw
+        ``dims``, ``dtype``, ``byteorder``, ``offset`` for headerless raw volumes.
 
     Returns
     -------
@@ -32,7 +38,7 @@ def describe(path) -> dict:
                 "objects": [f"{o.id} ({o.type})" for o in s.objects],
                 "views": [v.id for v in s.views]}
     try:
-        vd = load_volume_data(p)
+        vd = load_volume_data(p, **{k: v for k, v in raw.items() if v is not None})
     except UnknownFormatError:
         try:
             raw = load_point_data(p)
@@ -81,12 +87,19 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("info", help="what a file holds (dims, dtype, range, spacing)")
     p.add_argument("file", help="volume, point cloud, mesh or session file (or DICOM folder)")
     p.add_argument("--json", action="store_true", help="print JSON instead of text")
+    p.add_argument("--dims", type=int, nargs=3, metavar=("NX", "NY", "NZ"),
+                   help="raw volumes: samples per axis (x fastest)")
+    p.add_argument("--dtype", help="raw volumes: sample type, e.g. uint8, int16, float32")
+    p.add_argument("--byteorder", choices=("little", "big"), default=None,
+                   help="raw volumes: byte order (default little)")
+    p.add_argument("--offset", type=int, default=None, help="raw volumes: header bytes to skip")
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
     import json
 
-    info = describe(Path(os.fspath(args.file)))
+    info = describe(Path(os.fspath(args.file)), dims=args.dims, dtype=args.dtype,
+                    byteorder=args.byteorder, offset=args.offset)
     print(json.dumps(info, indent=2) if args.json else format_info(info))
     return 0

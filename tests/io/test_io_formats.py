@@ -284,3 +284,17 @@ def test_info_on_a_dicom_folder(tmp_path):
     info = describe(tmp_path)
     assert info["format"] == "dicom" and info["dims"] == [4, 3, 3]
     assert info["spacing"] == [0.6, 0.8, 1.5] and info["range"] == [-100.0, -96.0]
+
+
+def test_info_on_a_raw_file_with_dims(tmp_path, capsys):
+    from splineviz import cli
+
+    (tmp_path / "v.raw").write_bytes(np.arange(24, dtype=">u2").tobytes())
+    assert cli.main(["info", str(tmp_path / "v.raw"), "--dims", "2", "3", "4", "--dtype",
+                     "uint16", "--byteorder", "big", "--json"]) == 0
+    import json
+
+    info = json.loads(capsys.readouterr().out)
+    assert info["dims"] == [2, 3, 4] and info["range"] == [0.0, 23.0]
+    assert cli.main(["info", str(tmp_path / "v.raw")]) == 2
+    assert "give its dims and dtype" in capsys.readouterr().err
