@@ -67,6 +67,8 @@ _table("ml", 2, 2, [(8, 223.618, 258.992, 55.6158, 77.3912), (16, 147.363, 314.7
                     (128, 13.8998, 118.557, 6.2608, 11.0415)])
 
 LAYERS = 3
+#: TOs per evaluation chunk (220 points each)
+TO_CHUNK = 20000
 
 
 def _sample_operators():
@@ -123,20 +125,22 @@ def error_tables(func_name: str, n: int, ks=(2, 3)):
     acc = {(k, r): [0.0, 0.0, 0.0] for k in ks for r in range(3)}  # max, sum, sum of squares
     count = 0
     for t in range(144):
-        pts_idx = centres[:, None, :] + (lam @ verts[t])[None]  # (M, 220, 3)
-        world = (pts_idx - LAYERS) * h - 0.5
-        ref = f.derivatives(world[..., 0], world[..., 1], world[..., 2], [[1.0, 0.0, 0.0]])
-        exact = (ref.v, ref.g[..., 0], ref.h[..., 0, 0])
-        count += world.shape[0] * world.shape[1]
-        for k in ks:
-            coeffs = tq.coefficients(data, base, np.full(len(base), t), k)  # (M, 10)
-            approx = (coeffs @ val.T, coeffs @ dx[t].T, coeffs @ dxx[t].T)
-            for r in range(3):
-                err = np.abs(exact[r] - approx[r] * scale[r])
-                a = acc[(k, r)]
-                a[0] = max(a[0], float(err.max()))
-                a[1] += float(err.sum())
-                a[2] += float(np.sum(err**2))
+        for start in range(0, len(centres), TO_CHUNK):  # bounds memory at 1/h = 128
+            chunk = slice(start, start + TO_CHUNK)
+            pts_idx = centres[chunk, None, :] + (lam @ verts[t])[None]  # (M, 220, 3)
+            world = (pts_idx - LAYERS) * h - 0.5
+            ref = f.derivatives(world[..., 0], world[..., 1], world[..., 2], [[1.0, 0.0, 0.0]])
+            exact = (ref.v, ref.g[..., 0], ref.h[..., 0, 0])
+            count += world.shape[0] * world.shape[1]
+            for k in ks:
+                coeffs = tq.coefficients(data, base[chunk], np.full(len(base[chunk]), t), k)
+                approx = (coeffs @ val.T, coeffs @ dx[t].T, coeffs @ dxx[t].T)
+                for r in range(3):
+                    err = np.abs(exact[r] - approx[r] * scale[r])
+                    a = acc[(k, r)]
+                    a[0] = max(a[0], float(err.max()))
+                    a[1] += float(err.sum())
+                    a[2] += float(np.sum(err**2))
     # err_data over the data points V inside the region the partition covers
     gp, gcentre = _covered_grid_points(centres, n)
     c, tet, glam = to.locate(gp + 1e-9 * (gcentre - gp))  # the piece of a partition TO
