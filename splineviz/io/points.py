@@ -119,8 +119,10 @@ def _read_ply(path: Path) -> PointData:
         raise CorruptFileError(f"{path.name} is not a valid PLY file: {exc}") from None
     except (ValueError, EOFError, UnicodeDecodeError, MemoryError, TypeError) as exc:
         raise CorruptFileError(f"{path.name} has a damaged PLY payload: {exc}") from None
-    fmt = ply.text and "ascii" or ("binary_big_endian" if ply.byte_order == ">" else
-                                  "binary_little_endian")
+    if ply.text:
+        fmt = "ascii"
+    else:
+        fmt = "binary_big_endian" if ply.byte_order == ">" else "binary_little_endian"
     return PointData(pts, normals, colors, "ply", {"encoding": fmt})
 
 

@@ -121,8 +121,7 @@ def _read_vti(path: Path) -> VolumeData:
 def _read_legacy_vtk(path: Path) -> VolumeData:
     from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader
 
-    head = path.read_bytes()[:1024] if path.stat().st_size < 1024 else _head(path, 1024)
-    if b"STRUCTURED_POINTS" not in head.upper():
+    if b"STRUCTURED_POINTS" not in _head(path, 1024).upper():
         raise FileFormatError(
             f"{path.name} is a legacy VTK file but not STRUCTURED_POINTS image data"
         )
@@ -370,7 +369,10 @@ def _read_nifti(path: Path) -> VolumeData:
     from nibabel.filebasedimages import ImageFileError
 
     try:
-        img = nib.load(str(path))
+        if path.name.lower().endswith((".nii", ".nii.gz")):
+            img = nib.load(str(path))
+        else:  # recognised by content under another name: nibabel goes by the suffix
+            img = _nifti_from_bytes(path)
     except (ImageFileError, nib.spatialimages.HeaderDataError, ValueError, OSError,
             EOFError, zlib.error) as exc:
         raise CorruptFileError(f"{path.name} is not a readable NIfTI file: {exc}") from None
@@ -388,6 +390,19 @@ def _read_nifti(path: Path) -> VolumeData:
     zooms = tuple(float(z) for z in img.header.get_zooms()[:3])
     origin = tuple(float(v) for v in img.affine[:3, 3])
     return VolumeData(data, zooms, origin, "nifti", {"affine": img.affine.tolist()})
+
+
+def _nifti_from_bytes(path: Path):
+    import gzip
+
+    import nibabel as nib
+
+    raw = path.read_bytes()
+    if raw[:2] == b"\x1f\x8b":
+        raw = gzip.decompress(raw)
+    cls = nib.Nifti2Image if 540 in (int.from_bytes(raw[:4], "little"),
+                                     int.from_bytes(raw[:4], "big")) else nib.Nifti1Image
+    return cls.from_bytes(raw)
 
 
 # ---------------------------------------------------------------------------- MRC
@@ -581,15 +596,19 @@ def _head(path: Path, n: int) -> bytes:
 
 
 def _sniff_nifti(head: bytes) -> bool:
+    """NIfTI-1: sizeof_hdr 348 and magic ``n+1``/``ni1`` at byte 344; NIfTI-2: sizeof_hdr 540
+    and magic ``n+2``/``ni2`` at byte 4 (either byte order; gzip streams are peeked into)."""
     if head[:2] == b"\x1f\x8b":
         try:
             head = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(head, 352)
         except zlib.error:
             return False
-    return len(head) >= 348 and head[344:347] in (b"n+1", b"ni1", b"n+2", b"ni2") or (
-        len(head) >= 4 and int.from_bytes(head[:4], "little") in (348, 540)
-        and head[344:347] in (b"n+1", b"n+2")
-    )
+    if len(head) < 8:
+        return False
+    size = {int.from_bytes(head[:4], "little"), int.from_bytes(head[:4], "big")}
+    if 540 in size and head[4:7] in (b"n+2", b"ni2"):
+        return True
+    return 348 in size and len(head) >= 348 and head[344:347] in (b"n+1", b"ni1")
 
 
 register_format("vti", (".vti",), _read_vti, _write_vti, kind="volume",

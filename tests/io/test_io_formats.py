@@ -21,8 +21,12 @@ def test_nifti_spacing_origin_and_orientation(tmp_path, field):
 
     affine = np.diag([0.5, 0.75, 2.0, 1.0])
     affine[:3, 3] = (10.0, -4.0, 3.0)
-    for name in ("a.nii", "a.nii.gz"):
-        nib.save(nib.Nifti1Image(field, affine), tmp_path / name)
+    for name, cls in (("a.nii", nib.Nifti1Image), ("a.nii.gz", nib.Nifti1Image),
+                      ("b.nii", nib.Nifti2Image), ("b.nii.gz", nib.Nifti2Image)):
+        nib.save(cls(field, affine), tmp_path / name)
+        renamed = tmp_path / (name + ".upload")  # unknown suffix: the content decides
+        renamed.write_bytes((tmp_path / name).read_bytes())
+        np.testing.assert_array_equal(sv.read_volume(renamed).data, field)
         vol = sv.read_volume(tmp_path / name)
         np.testing.assert_array_equal(vol.data, field)
         assert vol.spacing == (0.5, 0.75, 2.0)
