@@ -302,3 +302,25 @@ def test_info_on_a_raw_file_with_dims(tmp_path, capsys):
     assert info["dims"] == [2, 3, 4] and info["range"] == [0.0, 23.0]
     assert cli.main(["info", str(tmp_path / "v.raw")]) == 2
     assert "give its dims and dtype" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("kind", ["vti", "nrrd", "npy", "vtk", "mha", "nii", "mrc",
+                                  "ply-ascii", "ply-binary", "pcd", "off"])
+def test_every_signed_format_is_recognised_by_content(tmp_path, kind):
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    try:
+        from test_io_fuzz import _make
+    finally:
+        sys.path.pop(0)
+    path, reader = _make(kind, tmp_path)
+    upload = tmp_path / "upload.bin2"  # an unknown suffix
+    upload.write_bytes(path.read_bytes())
+    a, b = reader(path), reader(upload)
+    if isinstance(a, sv.Volume):
+        np.testing.assert_array_equal(a.data, b.data)
+        assert a.spacing == b.spacing and a.origin == b.origin
+    else:
+        np.testing.assert_array_equal(a.points, b.points)
