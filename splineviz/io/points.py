@@ -129,6 +129,8 @@ def _read_ply(path: Path) -> PointData:
 # ---------------------------------------------------------------------------- XYZ
 def _read_xyz(path: Path) -> PointData:
     """Whitespace- or comma-separated ``x y z`` or ``x y z nx ny nz`` rows; ``#`` comments."""
+    # the most rows the file can hold must fit in memory before it is parsed
+    _check_count(path.stat().st_size // MIN_ASCII_VERTEX_BYTES, path, MIN_ASCII_VERTEX_BYTES)
     text = path.read_bytes()
     if b"\x00" in text[:4096]:
         raise CorruptFileError(f"{path.name} is binary, not an XYZ text file")
