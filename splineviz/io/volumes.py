@@ -291,7 +291,9 @@ def _read_nrrd_multifile(path: Path, header, datafile: str, sizes) -> np.ndarray
         h = {key: val for key, val in header.items()
              if key in ("type", "encoding", "endian", "line skip", "byte skip", "lineskip",
                         "byteskip")}
-        h.update(dimension=2, sizes=np.asarray(sizes[:2]), **{"data file": str(slice_path)})
+        # absolute: pynrrd joins a relative data file with the header's folder once more
+        h.update(dimension=2, sizes=np.asarray(sizes[:2]),
+                 **{"data file": str(slice_path.absolute())})
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")

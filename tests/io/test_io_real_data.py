@@ -144,3 +144,15 @@ def test_cli_info_reports_dims_dtype_range_spacing(capsys):
     assert cli.main(["info", str(PTS / "kitten.xyz")]) == 0
     text = capsys.readouterr().out
     assert "points: 5210" in text and "normals: True" in text
+
+
+def test_relative_paths_work_for_detached_payloads(monkeypatch):
+    """Regression: slice files of a header given by a relative path were looked up twice
+    relative to its folder."""
+    import os
+
+    monkeypatch.chdir(VOL)
+    rel = os.path.join("headsq", "quarter.nhdr")
+    assert sv.read_volume(rel).shape == (64, 64, 93)
+    for name in ("HeadMRVolume.mhd", "frogtissue.mhd", "tooth.nrrd", "neghip.slc"):
+        assert sv.read_volume(name).shape == sv.read_volume(VOL / name).shape
