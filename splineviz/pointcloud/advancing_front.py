@@ -41,7 +41,9 @@ MAX_NORMAL_DEVIATION = np.deg2rad(60.0)
 #: input point, outside beyond OUTSIDE_SPACINGS, in between outside when the nearest
 #: BORDER_NEIGHBOURS points leave an angular gap wider than BORDER_GAP in the tangent plane
 INSIDE_SPACINGS = 0.75
-OUTSIDE_SPACINGS = 3.0
+OUTSIDE_SPACINGS = 1.5
+#: ... or OUTSIDE_VOID_FACTOR times the cloud's void ratio, if larger
+OUTSIDE_VOID_FACTOR = 1.25
 BORDER_NEIGHBOURS = 24
 BORDER_GAP = np.deg2rad(180.0)
 #: number of times an edge is postponed before the relaxed rules apply, and before giving up
@@ -167,6 +169,10 @@ class AdvancingFront:
         self.area_done = 0.0
         self.spacing = projector.scale
         self.median_spacing = float(np.median(projector.scale))
+        # irregular (e.g. random) samplings have wider empty gaps between samples: the hard
+        # border limit follows the cloud's own largest ordinary gaps
+        self.outside_spacings = max(OUTSIDE_SPACINGS,
+                                    OUTSIDE_VOID_FACTOR * projector.conn.void_ratio())
         # the total area estimate drives the progress fraction
         self.area_total = float(np.sum(np.pi * (0.5 * projector.scale) ** 2)) * 1.1
 
@@ -306,9 +312,14 @@ class AdvancingFront:
             if existing and not self._inside_wedge(v, _sub(xa, xv), n):
                 return False
         centre = np.array([(xa[i] + xb[i] + xv[i]) / 3.0 for i in range(3)])
-        # a triangle whose centre is outside the cloud spans a hole of the scan
+        # a triangle whose centre or new edges leave the cloud spans a hole of the scan
         if self._outside(centre, n):
             return False
+        for u, w in ((b, v), (v, a)):
+            if (u, w) not in front:
+                pu, pw = (xb, xv) if u == b else (xv, xa)
+                if self._outside(np.array([0.5 * (pu[i] + pw[i]) for i in range(3)]), n):
+                    return False
         radius = max(la, lb, lc) * 1.5
         near = self._front_vertices_near(centre, radius)
         if len(near) == 0:
@@ -355,14 +366,15 @@ class AdvancingFront:
         of the scan) they all lie to one side.  So ``x`` is outside when its nearest input point
         is farther than ``INSIDE_SPACINGS`` spacings and the directions to its
         ``BORDER_NEIGHBOURS`` nearest points, seen in the tangent plane, leave a gap wider than
-        ``BORDER_GAP``; or unconditionally beyond ``OUTSIDE_SPACINGS`` spacings.  Random
+        ``BORDER_GAP``; or unconditionally beyond ``OUTSIDE_SPACINGS`` spacings (more for
+        irregular samplings, see :meth:`Connectivity.void_ratio`).  Random
         sampling gaps are surrounded by points and do not count.
         """
         dist, idx = self.proj.conn.tree.query(x, k=BORDER_NEIGHBOURS)
         spacing = min(float(self.spacing[idx[0]]), self.median_spacing)
         if dist[0] <= INSIDE_SPACINGS * spacing:
             return False
-        if dist[0] > OUTSIDE_SPACINGS * spacing:
+        if dist[0] > self.outside_spacings * max(spacing, self.median_spacing):
             return True
         nv = np.asarray(n)
         rel = self.proj.points[idx] - x

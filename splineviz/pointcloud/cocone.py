@@ -57,6 +57,8 @@ class Connectivity:
         Local sample spacing: mean distance to the ``SPACING_NEIGHBOURS`` nearest points.
     tree : scipy.spatial.cKDTree
         k-d tree over ``points``.
+    triangles : (F, 3) int
+        The Cocone triangles (a rough surface triangulation; unoriented).
     """
 
     points: np.ndarray
@@ -65,6 +67,26 @@ class Connectivity:
     normals: np.ndarray
     spacing: np.ndarray
     tree: cKDTree
+    triangles: np.ndarray
+
+    def void_ratio(self, quantile: float = 0.99) -> float:
+        """How irregular the sampling is: a high quantile of the Cocone triangles' circumradii
+        (the radii of the empty circles between samples) over the local spacing.
+
+        About 0.7-1.0 for laser scans, about 1.8 for uniformly random samples; holes of the
+        scan are too rare to move the quantile.
+        """
+        f, p = self.triangles, self.points
+        if len(f) == 0:
+            return 1.0
+        a = np.linalg.norm(p[f[:, 1]] - p[f[:, 2]], axis=1)
+        b = np.linalg.norm(p[f[:, 2]] - p[f[:, 0]], axis=1)
+        c = np.linalg.norm(p[f[:, 0]] - p[f[:, 1]], axis=1)
+        area = 0.5 * np.linalg.norm(np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]),
+                                    axis=1)
+        radius = a * b * c / (4 * np.maximum(area, 1e-300))
+        spacing = np.minimum(self.spacing[f].min(axis=1), np.median(self.spacing))
+        return float(np.quantile(radius / spacing, quantile))
 
     def neighbours(self, i: int) -> np.ndarray:
         """Indices of the graph neighbours of point ``i``."""
@@ -327,5 +349,5 @@ def cocone_connectivity(cloud: PointCloud | np.ndarray,
         normals[i] = vt[-1]
     normals = orient_normals(normals, graph, points)
     spacing = local_spacing(tree, points)
-    return Connectivity(points, inverse, graph, normals, spacing, tree)
+    return Connectivity(points, inverse, graph, normals, spacing, tree, faces)
 

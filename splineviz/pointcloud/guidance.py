@@ -21,9 +21,9 @@ from scipy.sparse import csgraph
 from splineviz.core.errors import SplinevizError
 
 #: default angle (radians) subtended by one edge on the osculating circle
-DEFAULT_RHO = 0.35
+DEFAULT_RHO = 0.5
 #: default length bounds in multiples of the median sample spacing
-DEFAULT_MIN_SPACINGS = 1.2
+DEFAULT_MIN_SPACINGS = 1.5
 DEFAULT_MAX_SPACINGS = 5.0
 #: default growth of the edge length per unit distance
 DEFAULT_GRADATION = 0.25

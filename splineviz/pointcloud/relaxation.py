@@ -10,6 +10,8 @@ oriented manifold (no edge gains a third triangle, no triangle turns over).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import sparse
 
@@ -26,11 +28,31 @@ def _face_normals(v, f):
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
+def _sub(u, v):
+    return (u[0] - v[0], u[1] - v[1], u[2] - v[2])
+
+
+def _add(u, v):
+    return (u[0] + v[0], u[1] + v[1], u[2] + v[2])
+
+
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+def _cross(u, v):
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+def _norm(u):
+    return math.sqrt(_dot(u, u))
+
+
 def _ratio(pa, pb, pc):
-    """2 r_in / r_circ of one triangle from its corner tuples (see quality.radius_ratios)."""
-    a = np.linalg.norm(pb - pc)
-    b = np.linalg.norm(pc - pa)
-    c = np.linalg.norm(pa - pb)
+    """2 r_in / r_circ of one triangle from corner tuples (see quality.radius_ratios)."""
+    a = _norm(_sub(pb, pc))
+    b = _norm(_sub(pc, pa))
+    c = _norm(_sub(pa, pb))
     den = a * b * c
     if den <= 0:
         return 0.0
@@ -63,6 +85,8 @@ def flip_edges(vertices: np.ndarray, faces: np.ndarray, passes: int = 3) -> tupl
     """
     faces = faces.copy()
     nv = len(vertices)
+    P = [tuple(p) for p in vertices.tolist()]  # scalar math on tuples: no per-call overhead
+    cos_max = float(np.cos(FLIP_MAX_TURN))
     target = np.where(border_vertices(nv, faces), 4, 6)
     total = 0
     for _ in range(passes):
@@ -93,14 +117,14 @@ def flip_edges(vertices: np.ndarray, faces: np.ndarray, passes: int = 3) -> tupl
                      + (val[c] + 1 - target[c]) ** 2 + (val[d] + 1 - target[d]) ** 2)
             if after >= before:
                 continue
-            pa, pb, pc, pd = vertices[a], vertices[b], vertices[c], vertices[d]
-            n_old = np.cross(pb - pa, pc - pa) + np.cross(pa - pb, pd - pb)
-            n_old /= np.linalg.norm(n_old)
-            n1 = np.cross(pd - pa, pc - pa)
-            n2 = np.cross(pb - pd, pc - pd)
-            l1, l2 = np.linalg.norm(n1), np.linalg.norm(n2)
-            cos_max = np.cos(FLIP_MAX_TURN)
-            if l1 <= 0 or l2 <= 0 or n1 @ n_old < cos_max * l1 or n2 @ n_old < cos_max * l2:
+            pa, pb, pc, pd = P[a], P[b], P[c], P[d]
+            n_old = _add(_cross(_sub(pb, pa), _sub(pc, pa)), _cross(_sub(pa, pb), _sub(pd, pb)))
+            lo = _norm(n_old)
+            n1 = _cross(_sub(pd, pa), _sub(pc, pa))
+            n2 = _cross(_sub(pb, pd), _sub(pc, pd))
+            l1, l2 = _norm(n1), _norm(n2)
+            if l1 <= 0 or l2 <= 0 or _dot(n1, n_old) < cos_max * l1 * lo or \
+                    _dot(n2, n_old) < cos_max * l2 * lo:
                 continue
             q_old = min(_ratio(pa, pb, pc), _ratio(pb, pa, pd))
             q_new = min(_ratio(pa, pd, pc), _ratio(pd, pb, pc))
