@@ -301,22 +301,37 @@ class RayCaster:
         }
         if np.diff(start).max() > 32 * TO_WORDS:
             raise AssertionError("more pieces per cell than the bit set holds")  # a bug
-        # union of the data offsets read by each class, for the conservative cell bounds
+        # union of the data offsets read by each class (for the conservative cell bounds and
+        # the private data copy of the classification), and per entry the stencils as
+        # indices into that union
         tables = to_quadratic.stencils(spline.k)
         cls_offsets, cls_start = [], [0]
+        u_rows, u_cols, u_w = [0], [], []
         for c in range(8):
-            pts = set()
-            for e in range(start[c], start[c + 1]):
-                pts.update(map(tuple, tables[tet[e]][0] + base_off[e]))
-            cls_offsets.extend(np.array(sorted(pts)) @ strides)
+            pts = sorted({p for e in range(start[c], start[c + 1])
+                          for p in map(tuple, tables[tet[e]][0] + base_off[e])})
+            where = {p: n for n, p in enumerate(pts)}
+            cls_offsets.extend(np.array(pts) @ strides)
             cls_start.append(len(cls_offsets))
+            for e in range(start[c], start[c + 1]):
+                offsets, w = tables[tet[e]]
+                idx = [where[tuple(o)] for o in offsets + base_off[e]]
+                for i in range(w.shape[0]):
+                    nz = np.flatnonzero(w[i])
+                    u_cols.extend(idx[n] for n in nz)
+                    u_w.extend(w[i, nz])
+                    u_rows.append(len(u_cols))
+        self._nunion = int(np.diff(cls_start).max())
         self._cls_start = cla.to_device(q, np.array(cls_start, np.int32))
         self._cls_offsets = cla.to_device(q, np.array(cls_offsets, np.int32))
+        self._union_csr = [cla.to_device(q, np.array(u_rows, np.int32)),
+                           cla.to_device(q, np.array(u_cols, np.uint16)),
+                           cla.to_device(q, np.array(u_w, np.float32))]
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
         return {"MODEL_TO": 1, "NCOEF": 10, "GHOST": ghost, "NWORDS": TO_WORDS,
-                "SKIP_ACTIVE": SKIP_ACTIVE}
+                "NUNION": self._nunion, "SKIP_ACTIVE": SKIP_ACTIVE}
 
     def _type6_tables(self) -> dict:
         """Upload the padded samples and the constant tables of a type-6 model.
@@ -406,8 +421,9 @@ class RayCaster:
             e = self._ent
             k_to(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
                  np.int32(self._strides[1]), np.int32(cy), np.int32(cz),
-                 self._active_list.data, e["start"].data, e["base"].data, e["tet"].data,
-                 *(a.data for a in self._to_csr), np.float32(value), self._tetcode.data,
+                 self._active_list.data, self._cls_start.data, self._cls_offsets.data,
+                 e["start"].data, *(a.data for a in self._union_csr), np.float32(value),
+                 self._tetcode.data,
                  self._slots.data, self._bits.data, self._n_relevant.data)
             nrel = self._n_relevant[:candidates]
             relevant_tets = int(cla_sum(nrel, q))
