@@ -110,8 +110,8 @@ __kernel void stencil_bounds(__global const float *pdata, int PY, int PZ,
 // thesis §6.1.1).
 __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
-                        __constant const int *row_ptr, __constant const int *cols,
-                        __constant const float *weights, __constant const int *tet_points,
+                        __global const int *row_ptr, __global const int *cols,
+                        __global const float *weights, __constant const int *tet_points,
                         float iso, __global uint *tetcode, __global int *n_relevant)
 {
     const int a = get_global_id(0);
@@ -121,7 +121,8 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
     float vals[27];
     for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
     float coef[NPOINTS];
-    // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows
+    // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows, kept in
+    // global memory (cached) so that constant memory stays small on GPUs (64 KB, 8-9 args)
     for (int p = 0; p < NPOINTS; ++p) {
         float acc = 0.0f;
         for (int e = row_ptr[p]; e < row_ptr[p + 1]; ++e) acc += weights[e] * vals[cols[e]];

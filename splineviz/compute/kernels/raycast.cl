@@ -265,8 +265,8 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
 inline float type6_cube_root(__global const float *pdata, int base,
-                             __constant const int *stencil, __constant const int *row_ptr,
-                             __constant const int *cols, __constant const float *masks,
+                             __constant const int *stencil, __global const int *row_ptr,
+                             __global const int *cols, __global const float *masks,
                              __constant const float4 *bary, __constant const int *red,
                              uint code, float3 p0, float3 d, float len, float iso,
                              float3 *grad)
@@ -307,8 +307,8 @@ inline float type6_cube_root(__global const float *pdata, int base,
 inline float to_cell_root(__global const float *pdata, int corner, int cls, int slot,
                           __global const uint *bits, __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
-                          __constant const int *ent_tet, __constant const int *row_ptr,
-                          __constant const int *cols, __constant const float *weights,
+                          __constant const int *ent_tet, __global const int *row_ptr,
+                          __global const int *cols, __global const float *weights,
                           __constant const float4 *bary, __constant const int *red,
                           float3 p0, float3 d, float len, float iso, float3 *grad)
 {
@@ -352,16 +352,16 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __global const uchar *skip,
 #ifdef MODEL_TYPE6
                       __global const uint *tetcode,
-                      __constant const int *stencil, __constant const int *row_ptr,
-                      __constant const int *cols, __constant const float *masks,
+                      __constant const int *stencil, __global const int *row_ptr,
+                      __global const int *cols, __global const float *masks,
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
                       __global const uint *anycode, __global const int *slots,
                       __global const uint *bits, __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
-                      __constant const int *ent_tet, __constant const int *row_ptr,
-                      __constant const int *cols, __constant const float *weights,
+                      __constant const int *ent_tet, __global const int *row_ptr,
+                      __global const int *cols, __global const float *weights,
                       __constant const float4 *bary, __constant const int *red,
 #endif
                       float iso,
