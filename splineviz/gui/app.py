@@ -80,6 +80,9 @@ def headless_screenshot(args, size) -> int:
 def run_gui(args) -> int:
     """Open the main window (see module docstring); returns the exit code."""
     size = parse_size(args.size) if args.size else None
+    if args.file and not os.path.exists(args.file):
+        # a typo on the command line is an error, not a window with a message box
+        raise SplinevizError(f"file not found: {args.file}")
     if args.screenshot and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         return headless_screenshot(args, size or DEFAULT_SIZE)
     from PySide6.QtWidgets import QApplication

@@ -21,17 +21,6 @@ def test_default_isosurface_lies_on_the_spline_surface():
     assert np.all(np.einsum("nc,nc->n", g, n[:100]) < 0)
 
 
-def test_screenshot_of_default_data(tmp_path):
-    from PIL import Image
-
-    out = tmp_path / "default.png"
-    assert main(["--screenshot", str(out), "--size", "320x240"]) == 0
-    img = np.asarray(Image.open(out).convert("RGB"))
-    assert img.shape == (240, 320, 3)
-    surface = np.any(np.abs(img.astype(int) - 255) > 40, axis=2)
-    assert 0.1 < surface.mean() < 0.8  # the surface fills a good part of the view
-
-
 def test_missing_file_is_one_line_error(capsys):
     assert main(["/nonexistent/volume.vti"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
