@@ -689,6 +689,8 @@ class MainWindow(QMainWindow):
         if not self.scene.needs_refine():
             return
         view = self.scene.view_state()
+        if any(layer.needs_classification() for layer in self.scene.layers):
+            self.statusBar().showMessage("classifying cells and ray casting...")
         worker = create_worker(self.scene.refine, view, _start_thread=False, _ignore_errors=True)
         self._refine_worker = worker
         worker.returned.connect(self._refined)
@@ -702,6 +704,8 @@ class MainWindow(QMainWindow):
 
     def _refine_finished(self) -> None:
         self._refine_worker = None
+        if not self._closed and not self._workers:
+            self.statusBar().clearMessage()
         if self._refine_again:
             self._refine_again = False
             self._refine_timer.start()

@@ -262,8 +262,13 @@ class IsosurfaceLayer:
         """``"opencl"`` or ``"numpy"``: how exact frames of this layer are made."""
         return self._casters()[0].stats.get("path", "numpy")
 
+    def needs_classification(self) -> bool:
+        """Whether the next exact frame must classify cells first (a new isovalue/data)."""
+        rc = self._caster
+        return rc is None or rc.isovalue != self._isovalue
+
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
-                blocking: bool = True) -> RenderedFrame | None:
+                blocking: bool = True, classify: bool = True) -> RenderedFrame | None:
         """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
 
         Parameters
@@ -275,6 +280,9 @@ class IsosurfaceLayer:
             Use the fast trilinear OpenCL caster when this model has no kernel.
         blocking : bool
             If False, return None instead of waiting while another thread uses the caster.
+        classify : bool
+            If False, return None instead of classifying cells for a new isovalue (seconds
+            on big volumes with the smooth models: the GUI leaves that to a worker).
         """
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
@@ -288,6 +296,8 @@ class IsosurfaceLayer:
             if rc is not (self._preview if use_fast else self._caster):
                 return None  # the model changed meanwhile
             if rc.isovalue != self._isovalue:
+                if not classify:
+                    return None
                 rc.set_isovalue(self._isovalue)
             t = time.perf_counter()
             frame = rc.render(view.camera, size=(sw, sh), clip_planes=view.clip_planes)

@@ -37,6 +37,9 @@ from splineviz.render.quad import FrameQuad, view_normals
 PREVIEW_BUDGET_S = 0.06
 #: smallest preview resolution factor
 MIN_PREVIEW_SCALE = 1.0 / 16.0
+#: volumes up to this many samples are classified synchronously for a preview; bigger ones
+#: are classified by the refinement worker (the window shows the previous frame meanwhile)
+PREVIEW_CLASSIFY_LIMIT = 2_500_000
 
 
 class SceneError(SplinevizError, ValueError):
@@ -59,9 +62,8 @@ class PropRecord:
 class _LayerView:
     quad: FrameQuad
     shown: RenderedFrame | None = None
-    seconds_per_pixel: float | None = None
-    preview_seconds_per_pixel: float | None = None
     mean_depth: float = 1.0
+    preview_scale: float | None = None
     callback: object = None
     pending: dict = field(default_factory=dict)
 
@@ -199,11 +201,6 @@ class SplineScene:
         lv.quad.set_view_scale(t * w / h, t)
         lv.shown = rf
         lv.mean_depth = float(f.depth[f.hit].mean()) if f.hit.any() else 1.0
-        npx = f.hit.size
-        if rf.path == "preview" or rf.scale < 1.0:
-            lv.preview_seconds_per_pixel = rf.seconds / npx
-        if rf.path != "preview":
-            lv.seconds_per_pixel = rf.seconds / npx
         self._apply_appearance(layer, lv)
 
     def _is_current(self, layer, lv, view) -> bool:
@@ -211,15 +208,20 @@ class SplineScene:
                 and lv.shown.state == layer.state)
 
     def _preview_scale(self, layer, lv, view) -> tuple[float, bool]:
-        """(scale, use fast caster) of a preview that fits :data:`PREVIEW_BUDGET_S`."""
-        npx = view.size[0] * view.size[1]
-        spp = lv.preview_seconds_per_pixel
-        if spp is None:
-            spp = lv.seconds_per_pixel
-        if spp is None:
-            return 0.25, True
-        scale = float(np.sqrt(PREVIEW_BUDGET_S / max(spp * npx, 1e-12)))
-        return float(np.clip(scale, MIN_PREVIEW_SCALE, 1.0)), True
+        """(scale, use fast caster) of a preview that fits :data:`PREVIEW_BUDGET_S`.
+
+        The scale follows the time of the last preview (frames have fixed costs, so a
+        per-pixel estimate would overshoot): it grows or shrinks by the square root of the
+        budget ratio, at most by a factor two per frame.
+        """
+        last = lv.shown
+        if last is None or lv.preview_scale is None:
+            lv.preview_scale = 0.25
+        elif last.scale < 1.0 and last.seconds > 0:
+            ratio = float(np.sqrt(PREVIEW_BUDGET_S / last.seconds))
+            lv.preview_scale *= float(np.clip(ratio, 0.5, 2.0))
+        lv.preview_scale = float(np.clip(lv.preview_scale, MIN_PREVIEW_SCALE, 1.0))
+        return lv.preview_scale, True
 
     def _before_render(self, *_args) -> None:
         t0 = time.perf_counter()
@@ -237,7 +239,9 @@ class SplineScene:
                 self._show(layer, layer.compute(view))
             else:
                 scale, fast = self._preview_scale(layer, lv, view)
-                rf = layer.compute(view, scale=scale, preview=fast, blocking=False)
+                small = layer.volume.data.size <= PREVIEW_CLASSIFY_LIMIT
+                rf = layer.compute(view, scale=scale, preview=fast, blocking=False,
+                                   classify=small)
                 if rf is not None:  # else a worker holds the caster: keep the old frame
                     self._show(layer, rf)
                 stale.append(layer)

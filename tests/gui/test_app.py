@@ -180,6 +180,7 @@ def test_smoothing_panel_feeds_the_spline_and_keeps_original(window):
 
 
 def test_200_isovalue_changes_leave_memory_flat(window):
+    window.resize(400, 300)  # the view shrinks to its minimum size: a fast loop
     item = window.add_volume(sphere_volume(21), "sphere", iso=0.5, model="trilinear")
     spin = window.iso_panel.spin
 
