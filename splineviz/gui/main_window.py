@@ -638,10 +638,10 @@ class MainWindow(QMainWindow):
         self.cancel_button = QPushButton("Cancel")
         self.cancel_button.setVisible(False)
         self.cancel_button.clicked.connect(self.cancel_jobs)
-        for w in (self.fps_label, self.cells_label, self.device_label):
+        # permanent widgets: QStatusBar hides ordinary ones while a message shows
+        for w in (self.progress, self.cancel_button, self.fps_label, self.cells_label,
+                  self.device_label):
             sb.addPermanentWidget(w)
-        sb.addWidget(self.progress)
-        sb.addWidget(self.cancel_button)
 
     # -- frame timing and status ---------------------------------------------------------
 

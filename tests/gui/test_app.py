@@ -223,3 +223,30 @@ def test_cli_corrupt_file_is_one_line_error(qapp, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("splineviz: error:")
     assert not Path(tmp_path / "x.png").exists()
+
+
+def test_remesh_panel_runs_remesh_in_a_worker(window, shared_data):
+    window.open_path(shared_data / "points" / "kitten.xyz", block=True)
+    cloud = window.items[-1]
+    window.remesh_panel.mode.setCurrentIndex(0)
+    window.remesh_panel.rho.setValue(0.6)  # coarse: a quick run
+    window.remesh_panel.run()
+    assert window.busy() and window.cancel_button.isVisibleTo(window)
+    window.wait_idle(300)
+    assert window.last_error is None
+    mesh_item = window.items[-1]
+    assert mesh_item.kind == "mesh" and mesh_item.mesh.n_cells > 500
+    assert mesh_item.stats["boundary_edges"] == 0 and mesh_item.stats["radius_ratio_mean"] > 0.8
+    assert "radius ratio mean" in window.remesh_panel.stats.text()
+    assert cloud.name in mesh_item.name
+
+
+@pytest.mark.slow
+def test_bonsai_opens_in_a_worker_and_renders(window, shared_data):
+    window.open_path(shared_data / "volumes" / "bonsai.vti", iso=40.0)
+    assert window.busy()
+    window.wait_idle(300)
+    window.wait_for_refine(300)
+    layer = window.items[-1].layers[0]
+    f = shown(window, layer)
+    assert f.final and f.frame.hit.mean() > 0.05 and f.stats["active_cells"] > 100_000
