@@ -701,7 +701,17 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
                           offset=offset)
-    name = Path(os.fspath(path)).name
+    return to_volume(vd, Path(os.fspath(path)).name, spacing=spacing, origin=origin,
+                     nonfinite=nonfinite)
+
+
+def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
+              nonfinite="error") -> Volume:
+    """Validate a :class:`VolumeData` and convert it to a float32 :class:`~splineviz.Volume`
+    (the second half of :func:`read_volume`; use it to keep both the stored dtype and the
+    volume from one read)."""
+    if nonfinite not in ("error", "fill"):
+        raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     validate_volume_data(vd, name)
     data = np.asarray(vd.data, dtype=np.float32)
     bad = ~np.isfinite(data)

@@ -3,8 +3,8 @@
 The issue's scene (two isosurfaces, a clip plane, a point cloud) is opened by the app and
 saved as PNG; the session is loaded and saved into another folder (paths rewritten) and
 opened again: the two screenshots must be identical and show something; without the clip
-plane the picture must differ (so the plane really was restored). Skipped where the Qt app or
-Xvfb is not available.
+plane the picture must differ (so the plane really was restored; ``slow``). Skipped where the
+Qt app or Xvfb is not available.
 """
 
 import importlib.util
@@ -53,6 +53,14 @@ def test_session_round_trip_gives_the_same_screenshot(tmp_path):
     np.testing.assert_array_equal(before, after)
     background = np.all(before[..., :3] == before[0, 0, :3], axis=2)
     assert 0.02 < 1 - background.mean() < 0.9
+    # that the clip plane really is restored is checked without the GUI, faster, in
+    # test_session_render.py; this test is about the app's own picture
+
+
+@pytest.mark.slow
+def test_the_clip_plane_changes_the_app_picture(tmp_path):
+    src = _scene(tmp_path)
+    before = screenshot(src, tmp_path / "before.png")
     doc = json.loads(src.read_text())
     doc["objects"] = [o for o in doc["objects"] if o["type"] != "ClipPlane"]
     (tmp_path / "noclip.svs").write_text(json.dumps(doc))
