@@ -37,5 +37,6 @@ from splineviz.io.volumes import (  # noqa: F401
     VolumeData,
     load_volume_data,
     read_volume,
+    to_volume,
     write_volume,
 )
