@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtCore import QSettings, Qt, QThreadPool, QTimer
 from PySide6.QtGui import QAction, QKeySequence
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -540,6 +540,10 @@ class MainWindow(QMainWindow):
         from pyvistaqt import QtInteractor
 
         self.setWindowTitle("splineviz")
+        # workers run on Qt's global pool; its default size (the core count, 2 here) would
+        # let a long ray cast or remesh queue a load behind it
+        pool = QThreadPool.globalInstance()
+        pool.setMaxThreadCount(max(pool.maxThreadCount(), 6))
         self.setAcceptDrops(True)
         self.device = device
         self.items: list[DataItem] = []
@@ -810,12 +814,15 @@ class MainWindow(QMainWindow):
         from PySide6.QtWidgets import QApplication
 
         end = time.perf_counter() + timeout_s
-        while self._workers and time.perf_counter() < end:
+        while time.perf_counter() < end:
             QApplication.processEvents()
+            # idle: no job, and no pending live-smoothing timer that would start one
+            if not self._workers and not self.smooth_panel._timer.isActive():
+                return
             time.sleep(0.01)
-        QApplication.processEvents()
         if self._workers:
-            raise TimeoutError("background work did not finish in time")
+            raise TimeoutError(f"background work did not finish in {timeout_s:g} s: "
+                               f"{len(self._workers)} job(s) running")
 
     def show_error(self, message: str) -> None:
         """A non-blocking message box; the window stays usable."""
@@ -1287,13 +1294,13 @@ class MainWindow(QMainWindow):
         if self._closed:
             super().closeEvent(event)
             return
+        self._refine_timer.stop()
+        self.smooth_panel._timer.stop()
         self.cancel_jobs()
         try:
             self.wait_idle(timeout_s=10.0)
         except TimeoutError:
             pass  # a worker that ignores cancel: its result is dropped (window closed)
-        self._refine_timer.stop()
-        self.smooth_panel._timer.stop()
         if self._refine_worker is not None:
             self._refine_worker.finished.connect(lambda: None)
         self._closed = True

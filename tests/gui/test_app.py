@@ -250,3 +250,23 @@ def test_bonsai_opens_in_a_worker_and_renders(window, shared_data):
     layer = window.items[-1].layers[0]
     f = shown(window, layer)
     assert f.final and f.frame.hit.mean() > 0.05 and f.stats["active_cells"] > 100_000
+
+
+def test_export_mesh_of_an_isosurface_and_drop_to_open(window, tmp_path, qtbot):
+    from PySide6.QtCore import QMimeData, QPointF, Qt, QUrl
+    from PySide6.QtGui import QDropEvent
+
+    item = window.add_volume(sphere_volume(), "sphere", iso=0.64, model="cubic-c1")
+    out = tmp_path / "iso.ply"
+    window.export_mesh(out, item.layers[0])
+    mesh = sv.read_mesh(out)
+    r = np.linalg.norm(np.asarray(mesh.points), axis=1)
+    assert mesh.n_cells > 500 and np.abs(r - 0.8).max() < 0.02
+    # dropping the file onto the window opens it (as a point cloud of its vertices)
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(out))])
+    event = QDropEvent(QPointF(10, 10), Qt.DropAction.CopyAction, mime,
+                       Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+    window.dropEvent(event)
+    window.wait_idle()
+    assert window.items[-1].kind == "points" and window.items[-1].name == "iso.ply"
