@@ -618,6 +618,8 @@ class MainWindow(QMainWindow):
         self.recent_menu = m.addMenu("Open &Recent")
         self._fill_recent()
         act(m, "Open &default data", lambda: self.open_default())
+        self.sources_menu = m.addMenu("Open s&ynthetic source")
+        self.sources_menu.aboutToShow.connect(self._fill_sources)
         m.addSeparator()
         act(m, "&Load session...", self._open_session_dialog)
         act(m, "&Save session...", self._save_session_dialog, QKeySequence.StandardKey.Save)
@@ -841,6 +843,31 @@ class MainWindow(QMainWindow):
     def open_default(self) -> DataItem:
         vol, iso = default_data()
         return self.add_volume(vol, "Marschner-Lobb 41^3", iso=iso, source="marschner-lobb")
+
+    def open_source(self, name: str, shape=None) -> DataItem:
+        """Sample a synthetic source offered by a plugin (see :mod:`splineviz.plugins`)."""
+        from splineviz.plugins import sources
+
+        src = sources().get(name)
+        if src is None:
+            raise SplinevizError(f"no synthetic source named {name!r}; plugins offer "
+                                 f"{', '.join(sorted(sources())) or 'none'}")
+        vol = src.volume(shape)
+        return self.add_volume(vol, f"{src.title} {'x'.join(map(str, vol.shape))}",
+                               iso=src.isovalue, source=name)
+
+    def _fill_sources(self):
+        from splineviz.plugins import failures, sources
+
+        self.sources_menu.clear()
+        for name, src in sorted(sources().items()):
+            a = QAction(src.title or name, self)
+            a.triggered.connect(lambda _=False, n=name: self.open_source(n))
+            self.sources_menu.addAction(a)
+        for rec in failures():
+            a = QAction(f"plugin {rec.name} failed: {rec.error}", self)
+            a.setEnabled(False)
+            self.sources_menu.addAction(a)
 
     def open_path(self, path, block: bool = False, **iso_kwargs):
         """Open a volume, point cloud or session (in a worker unless ``block``)."""

@@ -270,3 +270,39 @@ def test_export_mesh_of_an_isosurface_and_drop_to_open(window, tmp_path, qtbot):
     window.dropEvent(event)
     window.wait_idle()
     assert window.items[-1].kind == "points" and window.items[-1].name == "iso.ply"
+
+
+def test_synthetic_sources_from_plugins_and_default_session(window, tmp_path):
+    from splineviz.plugins import sources
+
+    names = sorted(sources())
+    if not names:
+        pytest.skip("no source plugin installed")
+    window._fill_sources()
+    assert len(window.sources_menu.actions()) >= len(names)
+    item = window.open_source(names[0], shape=(12, 13, 14))
+    assert item.volume.shape == (12, 13, 14) and item.source == names[0]
+    path = tmp_path / "src.svs"
+    window.save_session(path)
+    window.clear()
+    window.open_path(path, block=True)
+    assert window.last_error is None and window.items[0].volume.shape == (12, 13, 14)
+
+
+def test_cli_screenshot_without_display_renders_offscreen(tmp_path):
+    import subprocess
+    import sys
+
+    from PIL import Image
+
+    out = tmp_path / "headless.png"
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
+    result = subprocess.run([sys.executable, "-m", "splineviz.cli", "--screenshot", str(out),
+                             "--size", "120x90", "--model", "trilinear"],
+                            env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    with Image.open(out) as im:
+        img = np.asarray(im.convert("RGB")).astype(int)
+    assert img.shape == (90, 120, 3)
+    assert 0.05 < np.any(np.abs(img - img[0, 0]) > 40, axis=2).mean() < 0.9
