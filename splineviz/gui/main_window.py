@@ -555,7 +555,9 @@ class MainWindow(QMainWindow):
         self._refine_worker = None
         self._refine_again = False
         self._closed = False
-        self.plotter = QtInteractor(self, auto_update=False)
+        # no multisampling: on software GL (llvmpipe) 4x MSAA cost ~80 ms of a 1024x768 frame
+        # (113 -> 33 ms measured); the ray-cast image is one sample per pixel anyway
+        self.plotter = QtInteractor(self, auto_update=False, multi_samples=0)
         self.plotter.set_background(BACKGROUND)
         self.plotter.enable_anti_aliasing = None
         self.setCentralWidget(self.plotter)
