@@ -196,6 +196,7 @@ def test_200_isovalue_changes_leave_memory_flat(window):
         spin.setValue(float(v))
     after = rss_mb()
     assert item.layers[0].isovalue == pytest.approx(values[-1])
+    print(f"RSS {before:.1f} -> {after:.1f} MiB over 200 isovalue changes")
     assert after - before < 25, f"RSS grew {after - before:.1f} MiB over 200 changes"
 
 
