@@ -212,3 +212,23 @@ def test_layer_rejects_bad_settings():
         layer.set_isovalue(float("nan"))
     with pytest.raises(LayerError):
         layer.set_color((2, 0, 0))
+
+
+def test_rerenders_on_window_size_and_data_change():
+    pl, scene, layer = make_scene()
+    try:
+        shot(pl)
+        assert scene.shown_frame(layer).frame.hit.shape == (H, W)
+        pl.window_size = (100, 80)
+        shot(pl)
+        assert scene.shown_frame(layer).frame.hit.shape == (80, 100)
+        # new data (as after smoothing): values halved, so the same isovalue lies further out
+        vol = layer.volume
+        layer.set_volume(sv.Volume(vol.data * 0.5, spacing=vol.spacing, origin=vol.origin))
+        shot(pl)
+        f = scene.shown_frame(layer)
+        assert f.state == layer.state
+        r = np.linalg.norm(f.frame.position[f.frame.hit], axis=1)
+        assert np.abs(r - np.sqrt(2) * R).max() < 0.05
+    finally:
+        pl.close()
