@@ -77,6 +77,26 @@ def headless_screenshot(args, size) -> int:
     return 0
 
 
+def _install_excepthook(window) -> None:
+    """Unexpected errors in Qt slots: traceback on stderr and a message in the window, which
+    stays usable (Qt would otherwise only print them, or abort on some platforms)."""
+    import traceback
+
+    previous = sys.excepthook
+
+    def hook(exc_type, exc, tb):
+        traceback.print_exception(exc_type, exc, tb)
+        if issubclass(exc_type, KeyboardInterrupt):
+            previous(exc_type, exc, tb)
+            return
+        try:
+            window.show_error(f"{exc_type.__name__}: {exc}")
+        except RuntimeError:  # the window is already gone
+            pass
+
+    sys.excepthook = hook
+
+
 def run_gui(args) -> int:
     """Open the main window (see module docstring); returns the exit code."""
     size = parse_size(args.size) if args.size else None
@@ -93,6 +113,8 @@ def run_gui(args) -> int:
     app.setApplicationName("splineviz")
     window = MainWindow(size=size or DEFAULT_SIZE)
     window.resize(*(s + 420 for s in (size or DEFAULT_SIZE)))
+    if not args.screenshot:
+        _install_excepthook(window)
     window.show()
     if args.file:
         window.open_path(args.file, block=True, **_iso_kwargs(args))

@@ -1222,8 +1222,9 @@ class MainWindow(QMainWindow):
         self.statusBar().showMessage(f"saved {path}", 5000)
         return img
 
-    def export_mesh(self, path, obj=None) -> None:
-        """Write a mesh item, or an isosurface layer meshed on a refined grid."""
+    def export_mesh(self, path, obj=None) -> str:
+        """Write a mesh item, or an isosurface layer meshed on a refined grid (no GUI calls:
+        the File menu runs it in a worker). Returns the path written."""
         import splineviz as sv
         from splineviz.render.extract import spline_isosurface
 
@@ -1235,8 +1236,7 @@ class MainWindow(QMainWindow):
             mesh = spline_isosurface(sv.build_spline(layer.volume, layer.model), layer.isovalue)
         else:
             raise SplinevizError("select a mesh or an isosurface to export")
-        sv.write_mesh(path, mesh)
-        self.statusBar().showMessage(f"saved {path}", 5000)
+        return str(sv.write_mesh(path, mesh))
 
     # -- dialogs, recent files, drag and drop --------------------------------------------
 
@@ -1277,10 +1277,8 @@ class MainWindow(QMainWindow):
         path, _ = QFileDialog.getSaveFileName(self, "Export mesh", "mesh.ply",
                                               "Meshes (*.ply *.stl *.vtp *.obj *.vtk)")
         if path:
-            try:
-                self.export_mesh(path)
-            except (SplinevizError, OSError) as exc:
-                self.show_error(str(exc))
+            self.run_job("Exporting mesh", self.export_mesh, path, self.data_panel.current(),
+                         on_done=lambda p: self.statusBar().showMessage(f"saved {p}", 5000))
 
     def _about(self):
         QMessageBox.about(self, "About splineviz",
