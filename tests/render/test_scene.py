@@ -232,3 +232,22 @@ def test_rerenders_on_window_size_and_data_change():
         assert np.abs(r - np.sqrt(2) * R).max() < 0.05
     finally:
         pl.close()
+
+
+def test_depth_buffer_holds_the_frames_depth_exactly():
+    import vtk
+    from vtk.util import numpy_support
+
+    pl, scene, layer = make_scene()
+    try:
+        shot(pl)
+        f = scene.shown_frame(layer).frame
+        z = vtk.vtkFloatArray()
+        pl.render_window.GetZbufferData(0, 0, W - 1, H - 1, z)
+        zbuf = numpy_support.vtk_to_numpy(z).reshape(H, W)[::-1]  # rows top-down
+        assert f.hit.sum() > 1000
+        # 24-bit packing: agreement to a few codes of 2^-24 (the depth buffer is 24 bits too)
+        assert np.abs(zbuf[f.hit] - f.depth[f.hit]).max() < 4.0 / 2**24
+        assert np.all(zbuf[~f.hit] == 1.0)
+    finally:
+        pl.close()
