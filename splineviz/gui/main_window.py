@@ -92,7 +92,8 @@ class DataItem:
 
 
 def load_path(path):
-    """Read a file for the GUI: ``("volume" | "points" | "session", object)``.
+    """Read a file for the GUI (runs in a worker): ``("volume", Volume)``, ``("points",
+    PointCloud)`` or ``("session", (Session, data))`` with the session's data read too.
 
     The kind comes from the format registry (a volume format claims the file, else a point
     format); session files by suffix.
@@ -106,7 +107,8 @@ def load_path(path):
     if p.suffix.lower() in SESSION_SUFFIXES:
         from splineviz.io.session import load_session
 
-        return "session", load_session(p)
+        session = load_session(p)
+        return "session", (session, session_data(session))
     try:
         find_format(p, "volume")
     except UnknownFormatError:
@@ -114,6 +116,17 @@ def load_path(path):
 
         return "points", read_points(p)
     return "volume", read_volume(p)
+
+
+def session_data(session) -> dict:
+    """Read the data of a session's volume and point objects (in a worker): id -> data."""
+    data = {}
+    for obj in session.objects:
+        if obj.type in ("VolumeFile", "Source"):
+            data[obj.id] = session.load_volume(obj.id)
+        elif obj.type == "PointsFile":
+            data[obj.id] = session.load_points(obj.id)
+    return data
 
 
 def default_model() -> str:
@@ -883,7 +896,7 @@ class MainWindow(QMainWindow):
             elif kind == "points":
                 self.add_points(obj, Path(path).name, path=path)
             else:
-                self.apply_session(obj)
+                self.apply_session(*obj)
 
         if block:
             try:
@@ -1173,13 +1186,16 @@ class MainWindow(QMainWindow):
         save_session(self.build_session(), path)
         self._add_recent(str(path))
 
-    def apply_session(self, session) -> None:
-        """Replace the scene by a loaded session."""
+    def apply_session(self, session, data=None) -> None:
+        """Replace the scene by a loaded session (``data``: :func:`session_data`, read in a
+        worker; read here when None)."""
+        if data is None:
+            data = session_data(session)
         self.clear()
         volumes = {}
         for obj in session.objects:
             if obj.type in ("VolumeFile", "Source"):
-                volumes[obj.id] = (session.load_volume(obj.id), obj)
+                volumes[obj.id] = (data[obj.id], obj)
         clip_planes = []
         for obj in session.objects:
             p = obj.properties
@@ -1200,8 +1216,7 @@ class MainWindow(QMainWindow):
                 layer.set_opacity(max(p.opacity, 0.05))
                 layer.set_visible(p.visible)
             elif obj.type == "PointsFile":
-                self.add_points(session.load_points(obj.id), obj.name or obj.id,
-                                path=p.path)
+                self.add_points(data[obj.id], obj.name or obj.id, path=p.path)
             elif obj.type == "ClipPlane" and p.enabled:
                 clip_planes.append((p.origin, p.normal))
         for origin, normal in clip_planes:
