@@ -904,7 +904,25 @@ class MainWindow(QMainWindow):
             except (SplinevizError, OSError, ValueError) as exc:
                 self.show_error(str(exc))
             return None
+        if Path(path).suffix.lower() in SESSION_SUFFIXES:
+            # the document is parsed here (fast) so missing data files can be re-pointed in
+            # a file dialog; the data are read in the worker
+            from splineviz.io.session import load_session
+
+            try:
+                session = load_session(path, repoint=self._ask_repoint)
+            except (SplinevizError, OSError) as exc:
+                self.show_error(str(exc))
+                return None
+            return self.run_job(f"Loading {Path(path).name}", session_data, session,
+                                on_done=lambda data: done(("session", (session, data))))
         return self.run_job(f"Loading {Path(path).name}", load_path, path, on_done=done)
+
+    def _ask_repoint(self, obj_id: str, missing: Path):
+        """File dialog for a session's missing data file; None gives up."""
+        found, _ = QFileDialog.getOpenFileName(
+            self, f"Where is {Path(missing).name}? (object {obj_id})", str(Path(missing).parent))
+        return found or None
 
     def add_volume(self, volume: Volume, name: str, path=None, iso=None, model=None,
                    source=None) -> DataItem:

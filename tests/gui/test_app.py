@@ -307,3 +307,25 @@ def test_cli_screenshot_without_display_renders_offscreen(tmp_path):
         img = np.asarray(im.convert("RGB")).astype(int)
     assert img.shape == (90, 120, 3)
     assert 0.05 < np.any(np.abs(img - img[0, 0]) > 40, axis=2).mean() < 0.9
+
+
+def test_session_with_a_moved_data_file_is_repointed(window, tmp_path, monkeypatch):
+    vol = tmp_path / "a.npy"
+    np.save(vol, sphere_volume().data)
+    window.open_path(vol, block=True, iso=0.5)
+    path = tmp_path / "s.svs"
+    window.save_session(path)
+    window.clear()
+    moved = tmp_path / "elsewhere.npy"
+    vol.rename(moved)
+    asked = []
+
+    def fake_dialog(obj_id, missing):
+        asked.append(Path(missing).name)
+        return str(moved)
+
+    monkeypatch.setattr(window, "_ask_repoint", fake_dialog)
+    window.open_path(path)   # parsed here, data read in a worker
+    window.wait_idle()
+    assert asked == ["a.npy"] and window.last_error is None
+    assert window.items[0].path == str(moved) and window.items[0].layers[0].isovalue == 0.5
