@@ -61,7 +61,7 @@ def project_to_isosurface(spline, points: np.ndarray, iso: float, steps: int = 6
     return x, normals
 
 
-#: most spline samples taken to mesh the isosurface (bounds the time of the viewer)
+#: most spline samples taken to mesh the isosurface (bounds the time of a mesh export)
 MAX_SAMPLES = 4_000_000
 
 
