@@ -40,7 +40,7 @@ def _build_parser() -> argparse.ArgumentParser:
 
 
 def _viewer_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="splineviz", description="Open the splineviz viewer.")
+    parser = argparse.ArgumentParser(prog="splineviz", description="Open the splineviz app.")
     parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
     parser.add_argument("--iso", type=float, default=None, help="isovalue")
     parser.add_argument("--model", default=None,
