@@ -43,7 +43,7 @@ MAX_NORMAL_DEVIATION = np.deg2rad(60.0)
 INSIDE_SPACINGS = 0.75
 OUTSIDE_SPACINGS = 1.5
 #: ... or OUTSIDE_VOID_FACTOR times the cloud's void ratio, if larger
-OUTSIDE_VOID_FACTOR = 1.25
+OUTSIDE_VOID_FACTOR = 1.5
 BORDER_NEIGHBOURS = 24
 BORDER_GAP = np.deg2rad(180.0)
 #: number of times an edge is postponed before the relaxed rules apply, and before giving up
@@ -232,7 +232,7 @@ class AdvancingFront:
         pa = self.P[a]
         self.area_done += 0.5 * _norm(_cross(_sub(self.P[b], pa), _sub(self.P[c], pa)))
 
-    def _front_vertices_near(self, x, radius):
+    def _front_vertices_near(self, x, radius, n=None):
         r = int(np.ceil(radius / self.cell))
         cx, cy, cz = self._cell(x)
         found = []
@@ -247,6 +247,9 @@ class AdvancingFront:
         found = np.fromiter(found, dtype=int, count=len(found))
         d = np.linalg.norm(self.V[found] - x, axis=1)
         keep = d <= radius
+        if n is not None:
+            # vertices facing the other way belong to the back of a thin sheet: not ours
+            keep &= self.N[found] @ np.asarray(n) > 0
         return found[keep][np.argsort(d[keep])]
 
     # -- geometry tests --------------------------------------------------------------------
@@ -321,7 +324,7 @@ class AdvancingFront:
                 if self._outside(np.array([0.5 * (pu[i] + pw[i]) for i in range(3)]), n):
                     return False
         radius = max(la, lb, lc) * 1.5
-        near = self._front_vertices_near(centre, radius)
+        near = self._front_vertices_near(centre, radius, n)
         if len(near) == 0:
             return True
         nv = np.asarray(n)
@@ -371,10 +374,15 @@ class AdvancingFront:
         sampling gaps are surrounded by points and do not count.
         """
         dist, idx = self.proj.conn.tree.query(x, k=BORDER_NEIGHBOURS)
-        spacing = min(float(self.spacing[idx[0]]), self.median_spacing)
+        same_side = self.proj.normals[idx] @ np.asarray(n) > 0  # not the back of a thin sheet
+        if same_side.any():
+            dist, idx = dist[same_side], idx[same_side]
+        # the spacing of a rim point alone is inflated (its neighbours lie on one side): the
+        # median over the neighbours is a steadier local estimate
+        spacing = float(np.median(self.spacing[idx]))
         if dist[0] <= INSIDE_SPACINGS * spacing:
             return False
-        if dist[0] > self.outside_spacings * max(spacing, self.median_spacing):
+        if dist[0] > self.outside_spacings * spacing:
             return True
         nv = np.asarray(n)
         rel = self.proj.points[idx] - x
@@ -436,7 +444,7 @@ class AdvancingFront:
         length = min(max(target, 0.55 * lab), 1.8 * lab)
         height = math.sqrt(max(length**2 - 0.25 * lab**2, 0.1 * lab**2))
         guess = np.array([0.5 * (xa[i] + xb[i]) + height * d[i] for i in range(3)])
-        pts, nrm = self.proj.project_with_normals(guess[None])
+        pts, nrm = self.proj.project_with_normals(guess[None], np.asarray(n)[None])
         xp, npn = pts[0], nrm[0]
         if self._outside(xp, npn):
             # 3. the point left the cloud: this edge is a border of an open scan
@@ -445,7 +453,7 @@ class AdvancingFront:
             return
         # 4. connect to a nearby front vertex (ear, split or merge)
         radius = (RELAXED_RADIUS if relaxed else CONNECT_RADIUS) * target
-        near = self._front_vertices_near(xp, radius)
+        near = self._front_vertices_near(xp, radius, n)
         for v in near:
             if v == a or v == b:
                 continue
@@ -454,7 +462,7 @@ class AdvancingFront:
                 st.connections += 1
                 return
         # 5. a new vertex, if nothing is too close to it
-        close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target)
+        close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target, n)
         close = close[(close != a) & (close != b)]
         xpt = (float(xp[0]), float(xp[1]), float(xp[2]))
         mid = (0.5 * (xa[0] + xb[0]), 0.5 * (xa[1] + xb[1]), 0.5 * (xa[2] + xb[2]))

@@ -85,7 +85,7 @@ class Connectivity:
         area = 0.5 * np.linalg.norm(np.cross(p[f[:, 1]] - p[f[:, 0]], p[f[:, 2]] - p[f[:, 0]]),
                                     axis=1)
         radius = a * b * c / (4 * np.maximum(area, 1e-300))
-        spacing = np.minimum(self.spacing[f].min(axis=1), np.median(self.spacing))
+        spacing = self.spacing[f].mean(axis=1)
         return float(np.quantile(radius / spacing, quantile))
 
     def neighbours(self, i: int) -> np.ndarray:

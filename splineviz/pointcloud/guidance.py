@@ -21,10 +21,12 @@ from scipy.sparse import csgraph
 from splineviz.core.errors import SplinevizError
 
 #: default angle (radians) subtended by one edge on the osculating circle
-DEFAULT_RHO = 0.5
+DEFAULT_RHO = 0.35
 #: default length bounds in multiples of the median sample spacing
 DEFAULT_MIN_SPACINGS = 1.5
 DEFAULT_MAX_SPACINGS = 5.0
+#: edges are never shorter than this many local spacings (no vertex blow-up on sparse parts)
+SAMPLING_FLOOR = 1.2
 #: default growth of the edge length per unit distance
 DEFAULT_GRADATION = 0.25
 
@@ -116,5 +118,8 @@ def guidance_field(projector, edge_length: float | None = None, rho: float | Non
     # a median over each point's nearest neighbours removes single noisy curvature estimates
     kappa = np.median(kappa[projector.median_sets], axis=1)
     ideal = 2.0 * np.sin(rho / 2.0) / np.maximum(kappa, 1e-300)
-    lengths = limit_gradation(np.clip(ideal, lo, hi), projector.conn.graph, gradation)
+    # never finer than the samples: where the cloud is sparse, the local spacing sets the floor
+    floor = SAMPLING_FLOOR * projector.scale
+    lengths = np.maximum(np.clip(ideal, lo, hi), floor)
+    lengths = np.maximum(limit_gradation(lengths, projector.conn.graph, gradation), floor)
     return GuidanceField(lengths, projector.conn.tree)

@@ -32,6 +32,8 @@ CUTOFF = 3.0
 MAX_TILT = np.deg2rad(10.0)
 #: at most this many bisection steps
 MAX_BISECTIONS = 6
+#: at most this many (closest) points per neighbourhood
+MAX_NEIGHBOURS = 96
 #: breadth-first search depth limit (levels of the neighbour graph)
 MAX_LEVELS = 16
 #: number of angular sectors used by the overlap (convex-hull) rule of Fig. 7.6
@@ -43,6 +45,8 @@ HULL_SHRINK = 0.5
 MEDIAN_NEIGHBOURS = 7
 #: queries that move farther than this many spacings are projected a second time
 FAR_SPACINGS = 2.0
+#: nearest input points searched for one whose normal agrees with a normal hint
+HINT_CANDIDATES = 8
 #: Gauss-Newton iterations of the orthogonal projection onto a polynomial graph
 PROJECTION_ITERATIONS = 3
 
@@ -176,17 +180,24 @@ def collect_neighbourhoods(points: np.ndarray, graph: sparse.csr_matrix,
         reached = reached + new
         level_of = level_of + new * (level + 1)
         frontier = new
-    level_of = level_of.tocsr()
-    level_of.sort_indices()
-    counts = np.diff(level_of.indptr)
-    k = int(counts.max())
-    rows = np.repeat(np.arange(n), counts)
-    cols = np.arange(len(rows)) - np.repeat(level_of.indptr[:-1], counts)
+    level_of = level_of.tocoo()
+    rows, ids, lev = level_of.row, level_of.col, np.rint(level_of.data).astype(int) - 1
+    # keep the MAX_NEIGHBOURS closest of each row (clouds of very uneven density would
+    # otherwise pad every row to the largest neighbourhood)
+    d = np.linalg.norm(points[ids] - points[rows], axis=1)
+    order = np.lexsort((d, rows))
+    rows, ids, lev = rows[order], ids[order], lev[order]
+    counts = np.bincount(rows, minlength=n)
+    start = np.r_[0, np.cumsum(counts)[:-1]]
+    cols = np.arange(len(rows)) - np.repeat(start, counts)
+    keep = cols < MAX_NEIGHBOURS
+    rows, ids, lev, cols = rows[keep], ids[keep], lev[keep], cols[keep]
+    k = int(cols.max()) + 1
     index = np.repeat(np.arange(n)[:, None], k, axis=1)
     level = np.zeros((n, k), dtype=int)
     valid = np.zeros((n, k), dtype=bool)
-    index[rows, cols] = level_of.indices
-    level[rows, cols] = np.rint(level_of.data).astype(int) - 1
+    index[rows, cols] = ids
+    level[rows, cols] = lev
     valid[rows, cols] = True
     return Neighbourhoods(index, level, valid)
 
@@ -447,12 +458,17 @@ class Projector:
         pos = self.points[ids] + np.einsum("pji,pj->pi", f, foot)
         return pos, np.einsum("pji,pj->pi", f, nloc)
 
-    def project_with_normals(self, points):
+    def project_with_normals(self, points, normal_hint=None):
         """Project points and return the surface normals there.
 
         Parameters
         ----------
         points : (M, 3) array_like
+
+        normal_hint : (M, 3) array_like, optional
+            Approximate normals at the queries: the nearest input point whose normal agrees
+            (positive dot product) is used, so that a query near a thin sheet is projected
+            onto its own side, not onto the back of the sheet.
 
         Returns
         -------
@@ -467,17 +483,25 @@ class Projector:
             raise ProjectionError("points to project contain NaN or infinite coordinates")
         if len(r) == 0:
             return np.empty((0, 3)), np.empty((0, 3))
-        pos, nrm, nearest = self._median_projection(r)
+        hint = None if normal_hint is None else np.asarray(normal_hint, dtype=np.float64)
+        pos, nrm, nearest = self._median_projection(r, hint)
         # the median of projections spread along a curved surface lies off it (by about
         # spread^2 / 8R); queries from far away, whose projections spread, are projected once
         # more from the median, where the polynomials agree
         far = np.linalg.norm(pos - r, axis=1) > FAR_SPACINGS * self.scale[nearest]
         if far.any():
-            pos[far], nrm[far], _ = self._median_projection(pos[far])
+            pos[far], nrm[far], _ = self._median_projection(
+                pos[far], None if hint is None else hint[far])
         return pos, nrm
 
-    def _median_projection(self, r):
-        _, nearest = self.conn.tree.query(r)
+    def _median_projection(self, r, hint=None):
+        if hint is None:
+            _, nearest = self.conn.tree.query(r)
+        else:
+            _, cand = self.conn.tree.query(r, k=min(HINT_CANDIDATES, len(self.points)))
+            agree = np.einsum("mkc,mc->mk", self.normals[cand], hint) > 0
+            first = np.where(agree.any(axis=1), np.argmax(agree, axis=1), 0)
+            nearest = cand[np.arange(len(r)), first]
         ids = self.median_sets[nearest]  # (M, k)
         m, k = ids.shape
         pos, nrm = self._project_on(ids.ravel(), np.repeat(r, k, axis=0))

@@ -1,0 +1,200 @@
+"""``splineviz bench remesh``: our advancing-front mesher against the meshers users pick today.
+
+For each cloud (bunny, kitten, the bunny with Gaussian noise of 0.2 % of the bounding-box
+diagonal, and an open scan: the bunny cut by a plane, so it has a long border) the table lists,
+for every method, vertex/face counts, mean and minimum radius ratio (2 r_in / r_circ),
+fraction of valence-6 interior vertices, two-sided Hausdorff and RMS distance to the input
+points (in % of the diagonal), border and non-manifold edges, and wall time.  Methods:
+
+* ``ours``: ``sv.remesh`` with default parameters (noisy cloud: ``smoothing=2.5``, the
+  thesis' user-scaled Gaussian width for noise);
+* ``ours-mls2``: ablation, the same pipeline with an MLS-style fixed degree-2 projection;
+* ``poisson8``: Open3D screened Poisson, depth 8, normals estimated and oriented by Open3D;
+* ``bpa``: Open3D ball pivoting with radii 1, 2, 4 times the mean neighbour distance;
+* ``poisson+remesh``: the Poisson mesh remeshed by pymeshlab's
+  ``meshing_isotropic_explicit_remeshing`` to our vertex count (the strongest peer).
+
+Peers run in a child process under a time limit (Poisson can hang).  The last column gives the
+Hausdorff ratio against ``poisson+remesh`` measured in the same run.
+
+Run: ``python benchmarks/bench_remesh.py [--data-dir DIR] [--timeout S] [--clouds a,b]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+DEFAULT_DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "points"
+CLOUDS = ("bunny", "kitten", "bunny-noisy", "bunny-open")
+NOISE = 0.002  # Gaussian sigma in units of the bounding-box diagonal
+
+
+def load_cloud(name: str, data_dir: Path) -> np.ndarray:
+    """``(N, 3)`` points of a named benchmark cloud."""
+    from splineviz.io.points import read_points
+
+    base = name.split("-")[0]
+    file = {"bunny": "bunny.ply", "kitten": "kitten.xyz", "lucy": "lucy.ply"}[base]
+    pts = read_points(data_dir / file).points
+    if name.endswith("-noisy"):
+        diag = np.linalg.norm(np.ptp(pts, axis=0))
+        pts = pts + np.random.default_rng(0).normal(scale=NOISE * diag, size=pts.shape)
+    if name.endswith("-open"):
+        # an open scan: keep the part of the bunny in front of a plane through its middle
+        centre = pts.mean(axis=0)
+        pts = pts[(pts - centre) @ np.array([0.3, 0.2, 1.0]) > 0]
+    return pts
+
+
+def _o3d_cloud(points):
+    import open3d as o3d
+
+    pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=30))
+    pcd.orient_normals_consistent_tangent_plane(30)
+    return pcd
+
+
+def _poisson(points, depth=8):
+    import open3d as o3d
+
+    pcd = _o3d_cloud(points)
+    mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(pcd, depth=depth)
+    return np.asarray(mesh.vertices), np.asarray(mesh.triangles)
+
+
+def _bpa(points):
+    import open3d as o3d
+    from scipy.spatial import cKDTree
+
+    pcd = _o3d_cloud(points)
+    d, _ = cKDTree(points).query(points, k=2)
+    r = float(np.mean(d[:, 1]))
+    radii = o3d.utility.DoubleVector([r, 2 * r, 4 * r])
+    mesh = o3d.geometry.TriangleMesh.create_from_point_cloud_ball_pivoting(pcd, radii)
+    return np.asarray(mesh.vertices), np.asarray(mesh.triangles)
+
+
+def _poisson_remeshed(points, n_vertices):
+    import pymeshlab
+
+    v, f = _poisson(points)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(v, f))
+    area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]),
+                                axis=1).sum()
+    # a regular triangulation has about 2 triangles of area sqrt(3)/4 L^2 per vertex
+    length = float(np.sqrt(area / (n_vertices * np.sqrt(3) / 2)))
+    ms.meshing_isotropic_explicit_remeshing(iterations=10, targetlen=pymeshlab.PureValue(length))
+    m = ms.current_mesh()
+    return m.vertex_matrix(), m.face_matrix()
+
+
+def _child(queue, fn, args):
+    try:
+        t = time.perf_counter()
+        v, f = fn(*args)
+        queue.put(("ok", np.asarray(v, float), np.asarray(f, np.int64), time.perf_counter() - t))
+    except Exception as exc:  # reported in the table, the benchmark goes on
+        queue.put(("error", f"{type(exc).__name__}: {exc}", None, None))
+
+
+def run_peer(fn, args, timeout):
+    """Run ``fn(*args) -> (V, F)`` in a child process; ``(V, F, seconds)`` or a message."""
+    ctx = mp.get_context("fork")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_child, args=(queue, fn, args))
+    proc.start()
+    try:
+        status, a, b, secs = queue.get(timeout=timeout)
+    except Exception:
+        proc.kill()
+        proc.join()
+        return f"timed out after {timeout:.0f} s"
+    proc.join()
+    return (a, b, secs) if status == "ok" else a
+
+
+def _row(cloud, method, points, diag, result):
+    from splineviz.pointcloud.quality import mesh_quality
+
+    if isinstance(result, str):
+        return {"cloud": cloud, "method": method, "error": result}
+    v, f, secs = result
+    q = mesh_quality((v, f), reference=points)
+    q.update(cloud=cloud, method=method, time_s=secs,
+             hausdorff_pct=100 * q["hausdorff"] / diag,
+             rms_pct=100 * q["rms_distance"] / diag)
+    return q
+
+
+def run_bench(data_dir=None, clouds=CLOUDS, timeout=180.0, peers=True, out=sys.stdout):
+    """Run the benchmark and print the table; returns the list of row dicts."""
+    from splineviz.pointcloud.remesh import RemeshReport, remesh
+
+    data_dir = Path(data_dir) if data_dir else DEFAULT_DATA
+    rows = []
+    for cloud in clouds:
+        pts = load_cloud(cloud, data_dir)
+        diag = float(np.linalg.norm(np.ptp(pts, axis=0)))
+        smoothing = 2.5 if cloud.endswith("-noisy") else 1.0
+        ours = {}
+        for method, kwargs in (("ours", {}), ("ours-mls2", {"fixed_degree": 2})):
+            rep = RemeshReport()
+            t = time.perf_counter()
+            mesh = remesh(pts, smoothing=smoothing, report=rep, **kwargs)
+            secs = time.perf_counter() - t
+            v = np.asarray(mesh.points)
+            f = np.asarray(mesh.faces).reshape(-1, 4)[:, 1:]
+            ours[method] = (v, f, secs)
+            rows.append(_row(cloud, method, pts, diag, (v, f, secs)))
+            print(f"  {cloud} {method}: {len(v)} vertices in {secs:.1f} s", file=sys.stderr)
+        if peers:
+            n_ours = len(ours["ours"][0])
+            for method, fn, args in (("poisson8", _poisson, (pts,)), ("bpa", _bpa, (pts,)),
+                                     ("poisson+remesh", _poisson_remeshed, (pts, n_ours))):
+                rows.append(_row(cloud, method, pts, diag, run_peer(fn, args, timeout)))
+                print(f"  {cloud} {method}: done", file=sys.stderr)
+    print_table(rows, out)
+    return rows
+
+
+def print_table(rows, out=sys.stdout):
+    """Markdown table; last column: Hausdorff / Hausdorff of poisson+remesh on that cloud."""
+    anchor = {r["cloud"]: r["hausdorff"] for r in rows
+              if r["method"] == "poisson+remesh" and "error" not in r}
+    head = ("| cloud | method | V | F | r/R mean | r/R min | val 6 | Hausdorff % | RMS % "
+            "| border e | non-mf e | time s | H / H(anchor) |")
+    print(head, file=out)
+    print("|" + "---|" * (head.count("|") - 1), file=out)
+    for r in rows:
+        if "error" in r:
+            print(f"| {r['cloud']} | {r['method']} | {r['error']} |" + " |" * 11, file=out)
+            continue
+        ratio = r["hausdorff"] / anchor[r["cloud"]] if r["cloud"] in anchor else float("nan")
+        print(f"| {r['cloud']} | {r['method']} | {r['n_vertices']} | {r['n_faces']} | "
+              f"{r['radius_ratio_mean']:.3f} | {r['radius_ratio_min']:.3f} | "
+              f"{100 * r['valence6_fraction']:.1f} % | {r['hausdorff_pct']:.3f} | "
+              f"{r['rms_pct']:.4f} | {r['boundary_edges']} | {r['non_manifold_edges']} | "
+              f"{r['time_s']:.1f} | {ratio:.2f} |", file=out)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--data-dir", default=None)
+    p.add_argument("--timeout", type=float, default=180.0)
+    p.add_argument("--clouds", default=",".join(CLOUDS))
+    p.add_argument("--no-peers", action="store_true")
+    args = p.parse_args(argv)
+    run_bench(args.data_dir, tuple(args.clouds.split(",")), args.timeout, not args.no_peers)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
