@@ -262,6 +262,12 @@ class IsosurfaceLayer:
         """``"opencl"`` or ``"numpy"``: how exact frames of this layer are made."""
         return self._casters()[0].stats.get("path", "numpy")
 
+    @property
+    def classify_seconds(self) -> float | None:
+        """Time of the exact caster's last classification (None before the first)."""
+        rc = self._caster
+        return None if rc is None else rc.stats.get("classify_s")
+
     def needs_classification(self) -> bool:
         """Whether the next exact frame must classify cells first (a new isovalue/data)."""
         rc = self._caster

@@ -37,9 +37,12 @@ from splineviz.render.quad import FrameQuad, view_normals
 PREVIEW_BUDGET_S = 0.06
 #: smallest preview resolution factor
 MIN_PREVIEW_SCALE = 1.0 / 16.0
-#: volumes up to this many samples are classified synchronously for a preview; bigger ones
-#: are classified by the refinement worker (the window shows the previous frame meanwhile)
-PREVIEW_CLASSIFY_LIMIT = 2_500_000
+#: a preview may classify cells for a new isovalue itself when the last classification took
+#: at most this long (or, before the first, when the volume has at most
+#: :data:`PREVIEW_CLASSIFY_SAMPLES` samples); else the refinement worker classifies and the
+#: window keeps the previous frame meanwhile
+PREVIEW_CLASSIFY_S = 0.05
+PREVIEW_CLASSIFY_SAMPLES = 300_000
 
 
 class SceneError(SplinevizError, ValueError):
@@ -239,9 +242,11 @@ class SplineScene:
                 self._show(layer, layer.compute(view))
             else:
                 scale, fast = self._preview_scale(layer, lv, view)
-                small = layer.volume.data.size <= PREVIEW_CLASSIFY_LIMIT
+                cs = layer.classify_seconds
+                quick = (layer.volume.data.size <= PREVIEW_CLASSIFY_SAMPLES if cs is None
+                         else cs <= PREVIEW_CLASSIFY_S)
                 rf = layer.compute(view, scale=scale, preview=fast, blocking=False,
-                                   classify=small)
+                                   classify=quick)
                 if rf is not None:  # else a worker holds the caster: keep the old frame
                     self._show(layer, rf)
                 stale.append(layer)
