@@ -57,6 +57,8 @@ RELAXED_EAR_ANGLE = np.deg2rad(110.0)
 SEED_DISTANCE = 3.0
 #: at most this many seeds (connected components)
 MAX_SEEDS = 64
+#: the front stops (stats.truncated) beyond this many vertices per input point
+VERTEX_BUDGET = 2
 #: front loops left with at most this many edges are closed by ear clipping at the end
 SMALL_LOOP_EDGES = 8
 #: smallest triangle angle accepted when closing a small loop
@@ -82,6 +84,7 @@ class FrontStats:
     given_up: int = 0
     seeds: int = 0
     steps: int = 0
+    truncated: bool = False
     events: dict = field(default_factory=dict)
 
 
@@ -517,6 +520,8 @@ class AdvancingFront:
         kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
         tried = 0
         for _ in range(MAX_SEEDS):
+            if self.stats.truncated:
+                break
             if self.nv:
                 from scipy.spatial import cKDTree
 
@@ -588,7 +593,13 @@ class AdvancingFront:
 
     def _advance(self):
         steps = 0
+        # runaway guard: with edges never shorter than ~the sample spacing, a valid mesh has
+        # fewer vertices than the cloud has points; far more means the front overlaps itself
+        budget = VERTEX_BUDGET * len(self.proj.points) + 1000
         while self.heap:
+            if self.nv > budget:
+                self.stats.truncated = True
+                return
             _delay, _c, a, b = heapq.heappop(self.heap)
             if (a, b) not in self.front or (a, b) in self.border:
                 continue

@@ -63,6 +63,9 @@ def run(args) -> int:
                       report=report)
     finally:
         bar.close()
+    if report.front.get("truncated"):
+        print("splineviz: warning: the advancing front overlapped itself and was stopped; "
+              "the mesh is incomplete", file=sys.stderr)
     out = write_mesh(args.output, mesh)
     quality = mesh_quality(mesh, reference=cloud)
     summary = {

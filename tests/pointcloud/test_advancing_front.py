@@ -124,3 +124,16 @@ def test_bad_input():
         sv.remesh(S.sphere(500), rho=4.0)
     with pytest.raises(sv.SplinevizError):
         sv.remesh(np.zeros((10, 2)))
+
+
+def test_runaway_guard_stops_the_front(monkeypatch):
+    """A front that produces far more vertices than the cloud has points is stopped and
+    flagged instead of running on."""
+    from splineviz.pointcloud import advancing_front
+
+    monkeypatch.setattr(advancing_front, "VERTEX_BUDGET", 0)
+    pts = S.sphere(3000, seed=8)
+    report = RemeshReport()
+    mesh = sv.remesh(pts, edge_length=0.03, report=report, optimize_mesh=False)
+    assert report.front["truncated"] is True
+    assert 1000 < mesh.n_points <= 1000 + 3
