@@ -10,7 +10,7 @@ cd "$(dirname "$0")"
 APT_PACKAGES=(python3-venv binutils xvfb xauth libgl1 libegl1 libegl-mesa0 libgl1-mesa-dri
               libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
               libxcb-render-util0 libxcb-shape0 libxcb-xinerama0 libxcb-randr0 libdbus-1-3
-              libfontconfig1)
+              libfontconfig1 libusb-1.0-0 libgomp1)
 
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then
