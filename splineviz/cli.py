@@ -21,7 +21,7 @@ from splineviz.core.errors import SplinevizError
 SUBCOMMANDS: dict[str, str] = {
     "info": "splineviz.io.info:register",
     "render": "splineviz.compute.cli_render:register",
-    "bench": "splineviz.compute.bench:register",
+    "bench": "splineviz.bench:register",
     "remesh": "splineviz.pointcloud.cli_remesh:register",
 }
 

@@ -126,28 +126,3 @@ def _print_table(rows, size, out):
         tris = ", ".join(f"{r['data']} {r['vtk_triangles']}" for r in rows
                          if r["model"] == "trilinear")
         out(f"device: {rows[0]['device']}; VTK triangles: {tris}")
-
-
-def _run(args) -> int:
-    if args.which != "raycast":
-        from splineviz.core.errors import SplinevizError
-
-        raise SplinevizError(f"unknown benchmark {args.which!r}; choose 'raycast'")
-    data = args.data_dir or str(Path.cwd() / ".." / "shared" / "data" / "volumes")
-    w, h = (int(v) for v in args.size.lower().split("x"))
-    run_bench(data, size=(w, h), repeats=args.repeats, device=args.device)
-    return 0
-
-
-def register(subparsers) -> None:
-    """Add ``bench`` (currently: ``bench raycast``)."""
-    p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
-    p.add_argument("which", choices=["raycast"], help="benchmark to run")
-    p.add_argument("--data-dir", default=None,
-                   help="folder with bonsai.vti and engine.vti (default ../shared/data/volumes)")
-    p.add_argument("--size", default="512x512")
-    p.add_argument("--repeats", type=int, default=3)
-    p.add_argument("--device", default=None)
-    p.set_defaults(func=_run)
-
-

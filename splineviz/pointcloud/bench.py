@@ -17,7 +17,8 @@ points (in % of the diagonal), border and non-manifold edges, and wall time.  Me
 Peers run in a child process under a time limit (Poisson can hang).  The last column gives the
 Hausdorff ratio against ``poisson+remesh`` measured in the same run.
 
-Run: ``python benchmarks/bench_remesh.py [--data-dir DIR] [--timeout S] [--clouds a,b]``.
+Run: ``splineviz bench remesh [--data-dir DIR] [--timeout S] [--clouds a,b]`` (or this module
+as a script).
 """
 
 from __future__ import annotations
@@ -30,7 +31,6 @@ from pathlib import Path
 
 import numpy as np
 
-DEFAULT_DATA = Path(__file__).resolve().parent.parent.parent / "shared" / "data" / "points"
 CLOUDS = ("bunny", "kitten", "bunny-noisy", "bunny-open")
 NOISE = 0.002  # Gaussian sigma in units of the bounding-box diagonal
 
@@ -138,7 +138,8 @@ def run_bench(data_dir=None, clouds=CLOUDS, timeout=180.0, peers=True, out=sys.s
     """Run the benchmark and print the table; returns the list of row dicts."""
     from splineviz.pointcloud.remesh import RemeshReport, remesh
 
-    data_dir = Path(data_dir) if data_dir else DEFAULT_DATA
+    # default: the shared test clouds beside the repository (run from its root)
+    data_dir = Path(data_dir) if data_dir else Path.cwd() / ".." / "shared" / "data" / "points"
     rows = []
     for cloud in clouds:
         pts = load_cloud(cloud, data_dir)
