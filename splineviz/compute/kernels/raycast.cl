@@ -325,7 +325,7 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, int 
         float4 l, av;
         if (!tet_interval(r0, r1, r2, r3, pc, d, &lo, &hi, &l, &av)) continue;
         const int base = corner + ent_base[e];
-        // same CSR gather as type6_cell_root, but from __global data: OpenCL C 1.2 has no
+        // same CSR gather as type6_cube_root, but from __global data: OpenCL C 1.2 has no
         // generic address space, so one helper cannot serve both (private vs global values)
         float c[NCOEF];
         for (int i = 0; i < NCOEF; ++i) {
