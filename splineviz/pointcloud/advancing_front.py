@@ -59,10 +59,22 @@ SEED_DISTANCE = 3.0
 MAX_SEEDS = 64
 #: the front stops (stats.truncated) beyond this many vertices per input point
 VERTEX_BUDGET = 2
-#: front loops left with at most this many edges are closed by ear clipping at the end
-SMALL_LOOP_EDGES = 8
-#: smallest triangle angle accepted when closing a small loop
-MIN_ANGLE_CLOSE = np.deg2rad(3.0)
+#: given-up edges are retried this many times, each time with REFINE_FACTOR shorter edges
+REFINE_PASSES = 2
+REFINE_FACTOR = 0.6
+#: front loops left with at most this many edges are filled at the end (unless they are
+#: borders of the scan); the optimal triangulation costs O(edges^3)
+MAX_HOLE_EDGES = 150
+#: the corner angles of the triangles at one vertex may add up to at most 2 pi plus this:
+#: saddles of coarse meshes exceed 2 pi by up to ~0.55 rad (measured on the kitten), while a
+#: front that wraps around a vertex where the tangent plane misleads the wedge test (normals
+#: of neighbours ~90 degrees apart on coarsely sampled creases) keeps adding full triangles
+FAN_SLACK = 0.7
+#: a candidate triangle is laid over the mesh when its centroid or a new edge's midpoint
+#: projects strictly inside an existing triangle (all barycentric coordinates above
+#: COVER_MARGIN) less than COVER_HEIGHT of the candidate's longest side away from it
+COVER_MARGIN = 0.02
+COVER_HEIGHT = 0.3
 
 
 class FrontError(SplinevizError, RuntimeError):
@@ -82,6 +94,7 @@ class FrontStats:
     connections: int = 0
     borders: int = 0
     given_up: int = 0
+    holes_filled: int = 0
     seeds: int = 0
     steps: int = 0
     truncated: bool = False
@@ -116,6 +129,15 @@ def _angle_ccw(d1, d2, n):
     """
     ang = math.atan2(_dot(_cross(d1, d2), n), _dot(d1, d2))
     return ang if ang >= 0 else ang + 2 * math.pi
+
+
+def _corner_angles(pa, pb, pc):
+    """The three interior angles (radians) of the 3-D triangle ``pa pb pc`` at its corners."""
+    out = []
+    for o, p, q in ((pa, pb, pc), (pb, pc, pa), (pc, pa, pb)):
+        d1, d2 = _sub(p, o), _sub(q, o)
+        out.append(math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2)))
+    return out
 
 
 def _segments_cross(p, q, r, s):
@@ -164,7 +186,12 @@ class AdvancingFront:
         self.out_nb: list[set] = []
         self.in_nb: list[set] = []
         self.edge_faces: dict[tuple[int, int], int] = {}
-        self.border: set[tuple[int, int]] = set()
+        self.length_factor = 1.0  # lowered by the refinement passes (see _retry_given_up)
+        self.fan: list[float] = []  # sum of the corner angles of each vertex's triangles
+        self.face_corners: list[tuple] = []  # corner positions of each triangle, for _covered
+        self.face_grid: dict[tuple[int, int, int], list[int]] = {}  # cell of centroid -> faces
+        self.border: set[tuple[int, int]] = set()  # front edges no longer advanced
+        self.scan_border: set[tuple[int, int]] = set()  # ... because the cloud ends there
         self.heap: list = []
         self.counter = 0
         self.cell = float(np.max(guidance.lengths))
@@ -192,10 +219,11 @@ class AdvancingFront:
         i = self.nv
         self.V[i], self.N[i] = x, n
         self.P.append(tuple(float(c) for c in x))
-        self.L[i] = float(self.guide(x[None])[0])
+        self.L[i] = self.length_factor * float(self.guide(x[None])[0])
         self.nv += 1
         self.out_nb.append(set())
         self.in_nb.append(set())
+        self.fan.append(0.0)
         return i
 
     def _front_add(self, a, b):
@@ -211,6 +239,7 @@ class AdvancingFront:
     def _front_remove(self, a, b):
         del self.front[(a, b)]
         self.border.discard((a, b))
+        self.scan_border.discard((a, b))
         self.out_nb[a].discard(b)
         self.in_nb[b].discard(a)
         for v in (a, b):
@@ -232,8 +261,13 @@ class AdvancingFront:
                 self._front_remove(u, w)
             else:
                 self._front_add(w, u)
-        pa = self.P[a]
-        self.area_done += 0.5 * _norm(_cross(_sub(self.P[b], pa), _sub(self.P[c], pa)))
+        pa, pb, pc = self.P[a], self.P[b], self.P[c]
+        centroid = [(pa[i] + pb[i] + pc[i]) / 3.0 for i in range(3)]
+        self.face_grid.setdefault(self._cell(centroid), []).append(len(self.face_corners))
+        self.face_corners.append((pa, pb, pc))
+        self.area_done += 0.5 * _norm(_cross(_sub(pb, pa), _sub(pc, pa)))
+        for o, angle in zip((a, b, c), _corner_angles(pa, pb, pc), strict=True):
+            self.fan[o] += angle
 
     def _front_vertices_near(self, x, radius, n=None):
         r = int(np.ceil(radius / self.cell))
@@ -288,7 +322,8 @@ class AdvancingFront:
     def _triangle_ok(self, a, b, v, xv, n, min_angle, existing):
         """Validity of triangle ``(a, b, v)`` with apex at ``xv`` (a tuple; ``v = -1`` for a
         new vertex): orientation, shape, manifold edges, unmeshed wedges, no front vertex
-        inside, no front edge crossed, and not spanning a hole of the cloud."""
+        inside, no front edge crossed, no existing triangle covered, and not spanning a hole
+        of the cloud."""
         xa, xb = self.P[a], self.P[b]
         e0, e1, e2 = _sub(xb, xa), _sub(xv, xb), _sub(xa, xv)
         tn = _cross(e0, _sub(xv, xa))
@@ -299,6 +334,13 @@ class AdvancingFront:
         # the smallest angle is opposite the shortest side: sin = 2 area / (other two sides)
         sides = sorted((la, lb, lc))
         if tl / (sides[1] * sides[2]) < math.sin(min_angle):
+            return False
+        # no vertex may be surrounded by more than a full turn of triangles
+        fan = self.fan
+        limit = 2 * math.pi + FAN_SLACK
+        ang_a, ang_b, ang_v = _corner_angles(xa, xb, xv)
+        if fan[a] + ang_a > limit or fan[b] + ang_b > limit or \
+                (existing and fan[v] + ang_v > limit):
             return False
         front = self.front
         if existing:
@@ -326,6 +368,13 @@ class AdvancingFront:
                 pu, pw = (xb, xv) if u == b else (xv, xa)
                 if self._outside(np.array([0.5 * (pu[i] + pw[i]) for i in range(3)]), n):
                     return False
+        probes = [centre]
+        for u, w in ((b, v), (v, a)):
+            if (u, w) not in front:
+                pu, pw = (xb, xv) if u == b else (xv, xa)
+                probes.append([0.5 * (pu[i] + pw[i]) for i in range(3)])
+        if self._covered(np.array(probes), centre, max(la, lb, lc)):
+            return False
         radius = max(la, lb, lc) * 1.5
         near = self._front_vertices_near(centre, radius, n)
         if len(near) == 0:
@@ -364,6 +413,41 @@ class AdvancingFront:
             if (_segments_cross(pu, pv, r, s) & ~shared).any():
                 return False
         return True
+
+    def _covered(self, probes, centre, length):
+        """Whether any of ``probes (K, 3)`` lies on an existing triangle (see COVER_HEIGHT).
+
+        The front's own tests only see front vertices and edges; where the wedge or the
+        tangent plane mislead it (strongly curved, coarsely sampled regions), a front can
+        advance over the already meshed surface, which no front element marks.
+        """
+        cx, cy, cz = self._cell(centre)
+        ids = []
+        for i in (cx - 1, cx, cx + 1):
+            for j in (cy - 1, cy, cy + 1):
+                for k in (cz - 1, cz, cz + 1):
+                    cell = self.face_grid.get((i, j, k))
+                    if cell:
+                        ids.extend(cell)
+        if not ids:
+            return False
+        tri = np.array([self.face_corners[f] for f in ids])  # (T, 3, 3)
+        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+        nrm = np.cross(e1, e2)
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        rel = probes[:, None, :] - tri[None, :, 0]  # (K, T, 3)
+        height = np.abs(np.einsum("ktc,tc->kt", rel, nrm))
+        # barycentric coordinates of the probes' projections onto each triangle's plane
+        d00 = np.einsum("tc,tc->t", e1, e1)
+        d01 = np.einsum("tc,tc->t", e1, e2)
+        d11 = np.einsum("tc,tc->t", e2, e2)
+        d20 = np.einsum("ktc,tc->kt", rel, e1)
+        d21 = np.einsum("ktc,tc->kt", rel, e2)
+        denom = d00 * d11 - d01 * d01
+        s = (d11 * d20 - d01 * d21) / denom
+        t = (d00 * d21 - d01 * d20) / denom
+        inside = (s > COVER_MARGIN) & (t > COVER_MARGIN) & (1.0 - s - t > COVER_MARGIN)
+        return bool((inside & (height < COVER_HEIGHT * length)).any())
 
     def _outside(self, x, n):
         """Whether surface point ``x`` (normal ``n``) lies beyond a border of the cloud.
@@ -452,6 +536,7 @@ class AdvancingFront:
         if self._outside(xp, npn):
             # 3. the point left the cloud: this edge is a border of an open scan
             self.border.add((a, b))
+            self.scan_border.add((a, b))
             st.borders += 1
             return
         # 4. connect to a nearby front vertex (ear, split or merge)
@@ -542,13 +627,19 @@ class AdvancingFront:
             self._advance()
         if self.nv == 0:
             raise FrontError("no seed triangle could be placed on the point cloud")
-        self._close_small_loops()
+        for _ in range(REFINE_PASSES):
+            if self.stats.truncated or not self._retry_given_up():
+                break
+            self._advance()
+        self._fill_holes()
         return self.V[: self.nv].copy(), np.array(self.faces, dtype=np.int64).reshape(-1, 3)
 
     def front_loops(self):
-        """The front as closed vertex loops (each loop lists ``a`` for its edges ``a -> b``).
+        """The front as closed vertex loops, each listing ``a`` for its edges ``a -> b``.
 
-        Loops through a vertex with several outgoing front edges are not traced.
+        At a vertex with several outgoing front edges the loop turns into the unmeshed wedge
+        it arrived in (the same choice as a front step), so every front edge lies on exactly
+        one loop.
         """
         seen, loops = set(), []
         for start in list(self.front):
@@ -558,38 +649,115 @@ class AdvancingFront:
             while (a, b) not in seen:
                 seen.add((a, b))
                 loop.append(a)
-                if len(self.out_nb[b]) != 1:
-                    loop = None
+                a, b = b, self._neighbour(b, a, False, tuple(self.N[b]))
+                if b is None:
                     break
-                a, b = b, next(iter(self.out_nb[b]))
-            if loop is not None and (a, b) == start:
+            if (a, b) == start:
                 loops.append(loop)
         return loops
 
-    def _close_small_loops(self):
-        """Close front loops of at most ``SMALL_LOOP_EDGES`` edges by ear clipping (smallest
-        front angle first), unless they are borders of the scan."""
-        for loop in self.front_loops():
-            if len(loop) > SMALL_LOOP_EDGES:
-                continue
-            while len(loop) >= 3:
+    def _retry_given_up(self):
+        """Reopen the given-up front edges with REFINE_FACTOR times shorter target lengths.
+
+        A front gives up where its triangles are too large for the surface (thin parts and
+        sharp folds of coarsely sampled scans, where neighbouring normals differ by ~90
+        degrees); smaller triangles resolve them.  Returns whether any edge was reopened.
+        """
+        stuck = [e for e in self.border if e not in self.scan_border]
+        if not stuck:
+            return False
+        self.length_factor *= REFINE_FACTOR
+        for a, b in stuck:
+            for v in (a, b):
+                self.L[v] = min(self.L[v], self.length_factor * float(self.guide(self.V[v])[0]))
+            self.border.discard((a, b))
+            self.front[(a, b)] = 0
+            self._push(a, b)
+        return True
+
+    def _fill_holes(self):
+        """Fill front loops left by given-up edges (not borders of the scan) of at most
+        ``MAX_HOLE_EDGES`` edges with the best-shaped triangulation of the loop (dynamic
+        programming over its diagonals, as in hole filling [Lie03]); the relaxation after
+        the front evens out the new triangles."""
+        # filling one loop can change how loops through its vertices are traced: repeat
+        failed: set[tuple[int, int]] = set()
+        while True:
+            filled = False
+            for loop in self.front_loops():
                 k = len(loop)
-                n = np.sum(self.N[loop], axis=0)
-                n = _unit(tuple(float(c) for c in n / np.linalg.norm(n)))
-                best = None
-                for i in range(k):
-                    a, b, c = loop[i], loop[(i + 1) % k], loop[(i + 2) % k]
-                    ang = _angle_ccw(_sub(self.P[c], self.P[b]), _sub(self.P[a], self.P[b]), n)
-                    if (best is None or ang < best[0]) and \
-                            self._triangle_ok(a, b, c, self.P[c], n, MIN_ANGLE_CLOSE, True):
-                        best = (ang, i)
-                if best is None:
-                    break
-                i = best[1]
-                a, b, c = loop[i], loop[(i + 1) % k], loop[(i + 2) % k]
-                self._add_triangle(a, b, c)
-                self.stats.ears += 1
-                del loop[(i + 1) % k]
+                edges = [(loop[i], loop[(i + 1) % k]) for i in range(k)]
+                if k < 3 or k > MAX_HOLE_EDGES or edges[0] in failed or \
+                        2 * sum(e in self.scan_border for e in edges) > k:
+                    continue
+                tris = self._best_triangulation(loop)
+                if not tris:
+                    failed.update(edges)
+                    continue
+                for tri in tris:
+                    self._add_triangle(*tri)
+                self.stats.holes_filled += 1
+                filled = True
+            if not filled:
+                return
+
+    def _best_triangulation(self, loop):
+        """Triangles ``(i, k, j)`` of the polygon ``loop`` minimising the summed shape cost
+        ``(sum of squared sides) / (4 sqrt 3 area)`` (1 for equilateral triangles), with every
+        triangle facing along the loop's normal and no diagonal that is already a mesh edge.
+        Returns ``[]`` when no such triangulation exists."""
+        k = len(loop)
+        pts = self.V[loop]
+        # the loop's own (Newell) normal
+        normal = np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0)
+        nrm = self.N[loop]
+
+        def edge_free(i, j):
+            u, w = loop[i], loop[j]
+            if u == w:
+                return False
+            if j == i + 1 or (i == 0 and j == k - 1):
+                return True
+            return ((u, w) if u < w else (w, u)) not in self.edge_faces
+
+        def cost(i, m, j):
+            p, q, r = pts[i], pts[m], pts[j]
+            tn = np.cross(q - p, r - p)
+            area2 = float(np.linalg.norm(tn))
+            # a loop twisted by a sharp fold has no single facing direction: a triangle may
+            # face along the loop's normal or along its own corners' normals
+            if area2 <= 0 or (float(tn @ normal) <= 0 and
+                              float(tn @ (nrm[i] + nrm[m] + nrm[j])) <= 0):
+                return math.inf
+            sides = float(np.sum((q - p) ** 2) + np.sum((r - q) ** 2) + np.sum((p - r) ** 2))
+            return sides / (2 * math.sqrt(3) * area2)
+
+        best = np.full((k, k), math.inf)
+        split = np.full((k, k), -1, dtype=int)
+        for i in range(k - 1):
+            best[i, i + 1] = 0.0
+        for span in range(2, k):
+            for i in range(k - span):
+                j = i + span
+                if not edge_free(i, j):
+                    continue
+                for m in range(i + 1, j):
+                    c = best[i, m] + best[m, j]
+                    if c < best[i, j]:
+                        c += cost(i, m, j)
+                        if c < best[i, j]:
+                            best[i, j], split[i, j] = c, m
+        if not math.isfinite(best[0, k - 1]):
+            return []
+        tris, stack = [], [(0, k - 1)]
+        while stack:
+            i, j = stack.pop()
+            m = split[i, j]
+            if m < 0:
+                continue
+            tris.append((loop[i], loop[m], loop[j]))
+            stack += [(i, m), (m, j)]
+        return tris
 
     def _advance(self):
         steps = 0

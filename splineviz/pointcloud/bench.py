@@ -130,6 +130,7 @@ def _row(cloud, method, points, diag, result):
     q = mesh_quality((v, f), reference=points)
     q.update(cloud=cloud, method=method, time_s=secs,
              hausdorff_pct=100 * q["hausdorff"] / diag,
+             points_to_mesh_pct=100 * q["hausdorff_points_to_mesh"] / diag,
              rms_pct=100 * q["rms_distance"] / diag)
     return q
 
@@ -170,18 +171,20 @@ def print_table(rows, out=sys.stdout):
     """Markdown table; last column: Hausdorff / Hausdorff of poisson+remesh on that cloud."""
     anchor = {r["cloud"]: r["hausdorff"] for r in rows
               if r["method"] == "poisson+remesh" and "error" not in r}
-    head = ("| cloud | method | V | F | r/R mean | r/R min | val 6 | Hausdorff % | RMS % "
+    head = ("| cloud | method | V | F | r/R mean | r/R min | val 6 | Hausdorff % "
+            "| points->mesh % | RMS % "
             "| border e | non-mf e | time s | H / H(anchor) |")
     print(head, file=out)
     print("|" + "---|" * (head.count("|") - 1), file=out)
     for r in rows:
         if "error" in r:
-            print(f"| {r['cloud']} | {r['method']} | {r['error']} |" + " |" * 11, file=out)
+            print(f"| {r['cloud']} | {r['method']} | {r['error']} |" + " |" * 12, file=out)
             continue
         ratio = r["hausdorff"] / anchor[r["cloud"]] if r["cloud"] in anchor else float("nan")
         print(f"| {r['cloud']} | {r['method']} | {r['n_vertices']} | {r['n_faces']} | "
               f"{r['radius_ratio_mean']:.3f} | {r['radius_ratio_min']:.3f} | "
               f"{100 * r['valence6_fraction']:.1f} % | {r['hausdorff_pct']:.3f} | "
+              f"{r['points_to_mesh_pct']:.3f} | "
               f"{r['rms_pct']:.4f} | {r['boundary_edges']} | {r['non_manifold_edges']} | "
               f"{r['time_s']:.1f} | {ratio:.2f} |", file=out)
 

@@ -138,14 +138,18 @@ def mesh_quality(mesh, reference=None) -> dict:
     ----------
     mesh : pyvista.PolyData or tuple (vertices (V, 3), faces (F, 3))
     reference : PointCloud or (N, 3) array_like, optional
-        Input points for ``hausdorff`` (two-sided: points to mesh and mesh samples to points)
-        and ``rms_distance`` (root mean square distance of the points to the mesh).
+        Input points for ``hausdorff`` (two-sided: the larger of ``hausdorff_points_to_mesh``,
+        the farthest input point from the mesh, and ``hausdorff_mesh_to_points``, the farthest
+        mesh sample from the points, which no mesh of the surface can bring below the
+        largest gap of the sampling) and ``rms_distance`` (root mean square distance of the
+        points to the mesh).
 
     Returns
     -------
     dict with ``radius_ratio_mean``, ``radius_ratio_min`` (2 r_in / r_circ),
     ``valence6_fraction`` (over interior vertices), ``valence_histogram`` (dict valence ->
-    count, interior vertices), ``hausdorff``, ``rms_distance`` (NaN without reference),
+    count, interior vertices), ``hausdorff``, ``hausdorff_points_to_mesh``,
+    ``hausdorff_mesh_to_points``, ``rms_distance`` (NaN without reference),
     ``boundary_edges``, ``non_manifold_edges``, ``n_vertices``, ``n_faces``.
     """
     vertices, faces = _as_arrays(mesh)
@@ -164,6 +168,8 @@ def mesh_quality(mesh, reference=None) -> dict:
         "valence6_fraction": float(np.mean(val[interior] == 6)) if interior.any() else 0.0,
         "valence_histogram": {int(v): int(c) for v, c in zip(hist_v, hist_c, strict=True)},
         "hausdorff": float("nan"),
+        "hausdorff_points_to_mesh": float("nan"),
+        "hausdorff_mesh_to_points": float("nan"),
         "rms_distance": float("nan"),
         "boundary_edges": int(np.sum(counts == 1)),
         "non_manifold_edges": int(np.sum(counts > 2)),
@@ -175,7 +181,9 @@ def mesh_quality(mesh, reference=None) -> dict:
             PointCloud(reference).points
         d_pm = distance_to_mesh(pts, vertices, faces)
         d_mp, _ = cKDTree(pts).query(surface_samples(vertices, faces))
-        out["hausdorff"] = float(max(d_pm.max(), d_mp.max()))
+        out["hausdorff_points_to_mesh"] = float(d_pm.max())
+        out["hausdorff_mesh_to_points"] = float(d_mp.max())
+        out["hausdorff"] = max(out["hausdorff_points_to_mesh"], out["hausdorff_mesh_to_points"])
         out["rms_distance"] = float(np.sqrt(np.mean(d_pm**2)))
     return out
 

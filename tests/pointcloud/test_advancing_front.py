@@ -137,3 +137,58 @@ def test_runaway_guard_stops_the_front(monkeypatch):
     mesh = sv.remesh(pts, edge_length=0.03, report=report, optimize_mesh=False)
     assert report.front["truncated"] is True
     assert 1000 < mesh.n_points <= 1000 + 3
+
+
+def _plane_front():
+    from splineviz.pointcloud.advancing_front import AdvancingFront
+    from splineviz.pointcloud.guidance import guidance_field
+    from splineviz.pointcloud.projection import Projector
+
+    rng = np.random.default_rng(9)
+    pts = np.c_[rng.uniform(-2, 2, (1500, 2)), np.zeros(1500)]
+    proj = Projector(pts)
+    return AdvancingFront(proj, guidance_field(proj, edge_length=0.2))
+
+
+def test_hole_triangulation_fills_a_non_convex_loop():
+    front = _plane_front()
+    # an L-shaped loop, counter-clockwise seen from +z (the cloud's normals face +z or -z)
+    corners = [(0, 0), (1, 0), (1, 0.4), (0.4, 0.4), (0.4, 1), (0, 1)]
+    up = np.array([0.0, 0.0, 1.0])
+    loop = [front._add_vertex(np.array([x, y, 0.0]), up) for x, y in corners]
+    tris = front._best_triangulation(loop)
+    assert len(tris) == len(loop) - 2
+    p = front.V[np.array(tris)]
+    normals = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    assert np.all(normals[:, 2] > 0)  # all counter-clockwise: no triangle outside the L
+    assert 0.5 * normals[:, 2].sum() == pytest.approx(1 - 0.6 * 0.6)
+    # a diagonal that already is a mesh edge is never used
+    front.edge_faces[(loop[0], loop[3])] = 2
+    assert all({loop[0], loop[3]} - set(t) for t in front._best_triangulation(loop))
+
+
+def test_laid_over_triangles_are_detected():
+    front = _plane_front()
+    up = np.array([0.0, 0.0, 1.0])
+    ids = [front._add_vertex(np.array(x), up) for x in ([0, 0, 0], [0.2, 0, 0], [0.1, 0.17, 0])]
+    front._add_triangle(*ids)
+    centre = front.V[ids].mean(axis=0)
+    assert front._covered(centre[None] + [0, 0, 0.01], centre, 0.2)
+    assert not front._covered(centre[None] + [0, 0, 0.1], centre, 0.2)  # another sheet
+    assert not front._covered(np.array([[0.3, 0.1, 0.0]]), centre, 0.2)  # beside it
+
+
+def test_given_up_edges_are_retried_and_holes_filled(monkeypatch):
+    """Edges that fail are retried with shorter edges and what is left is filled: the sphere
+    still comes out closed."""
+    from splineviz.pointcloud import advancing_front
+
+    monkeypatch.setattr(advancing_front, "GIVE_UP", 1)
+    monkeypatch.setattr(advancing_front, "MIN_ANGLE_NEW", np.deg2rad(52.0))
+    report = RemeshReport()
+    mesh = sv.remesh(S.sphere(4000, seed=10), edge_length=0.15, report=report)
+    v, f = _arrays(mesh)
+    assert report.front["given_up"] > 0
+    q = sv.mesh_quality(mesh)
+    assert q["boundary_edges"] == 0 and q["non_manifold_edges"] == 0
+    assert _euler(v, f) == 2

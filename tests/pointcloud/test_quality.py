@@ -78,6 +78,8 @@ def test_hausdorff_and_rms_of_offset_points():
     assert q["rms_distance"] == pytest.approx(0.05)
     # the mesh (radius 4) reaches far beyond the points: Hausdorff is mesh-to-points
     assert q["hausdorff"] > 2.0
+    assert q["hausdorff"] == q["hausdorff_mesh_to_points"]
+    assert q["hausdorff_points_to_mesh"] == pytest.approx(0.05)
     assert distance_to_mesh(pts, v, f).max() == pytest.approx(0.05)
 
 
