@@ -54,7 +54,9 @@ RELAXED_RADIUS = 1.3
 #: ear angle limit after RETRIES failures
 RELAXED_EAR_ANGLE = np.deg2rad(110.0)
 #: new seeds are placed at input points farther than this many target lengths from the mesh
-SEED_DISTANCE = 3.0
+SEED_DISTANCE = 1.5
+#: ... when at least this many input points are that far (a region the fronts did not reach)
+SEED_MIN_POINTS = 10
 #: at most this many seeds (connected components)
 MAX_SEEDS = 64
 #: the front stops (stats.truncated) beyond this many vertices per input point
@@ -64,7 +66,7 @@ REFINE_PASSES = 2
 REFINE_FACTOR = 0.6
 #: front loops left with at most this many edges are filled at the end (unless they are
 #: borders of the scan); the optimal triangulation costs O(edges^3)
-MAX_HOLE_EDGES = 150
+MAX_HOLE_EDGES = 40
 #: the corner angles of the triangles at one vertex may add up to at most 2 pi plus this:
 #: saddles of coarse meshes exceed 2 pi by up to ~0.55 rad (measured on the kitten), while a
 #: front that wraps around a vertex where the tangent plane misleads the wedge test (normals
@@ -140,6 +142,28 @@ def _corner_angles(pa, pb, pc):
     return out
 
 
+def _simple_loops(loop):
+    """Split a closed vertex loop at its repeated vertices into loops without repeats.
+
+    A front loop pinched at a vertex (two of its wedges meet there) would otherwise give the
+    two halves' triangulations a shared edge twice.
+    """
+    first: dict[int, int] = {}
+    out, stack = [], []
+    for v in loop:
+        if v in first:
+            i = first[v]
+            out.append(stack[i:])
+            for w in stack[i + 1:]:
+                del first[w]
+            del stack[i + 1:]
+        else:
+            first[v] = len(stack)
+            stack.append(v)
+    out.append(stack)
+    return [part for part in out if len(part) >= 3]
+
+
 def _segments_cross(p, q, r, s):
     """Whether 2-D segments pq and rs cross properly (shared endpoints excluded by caller).
 
@@ -188,7 +212,9 @@ class AdvancingFront:
         self.edge_faces: dict[tuple[int, int], int] = {}
         self.length_factor = 1.0  # lowered by the refinement passes (see _retry_given_up)
         self.fan: list[float] = []  # sum of the corner angles of each vertex's triangles
-        self.face_corners: list[tuple] = []  # corner positions of each triangle, for _covered
+        # per triangle, for _covered: first corner, two edge vectors, unit normal, and the
+        # Gram matrix entries of the edges, (F, 15)
+        self.face_geometry = np.empty((1024, 15))
         self.face_grid: dict[tuple[int, int, int], list[int]] = {}  # cell of centroid -> faces
         self.border: set[tuple[int, int]] = set()  # front edges no longer advanced
         self.scan_border: set[tuple[int, int]] = set()  # ... because the cloud ends there
@@ -263,8 +289,16 @@ class AdvancingFront:
                 self._front_add(w, u)
         pa, pb, pc = self.P[a], self.P[b], self.P[c]
         centroid = [(pa[i] + pb[i] + pc[i]) / 3.0 for i in range(3)]
-        self.face_grid.setdefault(self._cell(centroid), []).append(len(self.face_corners))
-        self.face_corners.append((pa, pb, pc))
+        nf = len(self.faces) - 1
+        self.face_grid.setdefault(self._cell(centroid), []).append(nf)
+        if nf == len(self.face_geometry):
+            self.face_geometry = np.concatenate([self.face_geometry,
+                                                 np.empty_like(self.face_geometry)])
+        e1, e2 = _sub(pb, pa), _sub(pc, pa)
+        normal = _cross(e1, e2)
+        length = _norm(normal) or 1.0
+        self.face_geometry[nf] = (*pa, *e1, *e2, normal[0] / length, normal[1] / length,
+                                  normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2))
         self.area_done += 0.5 * _norm(_cross(_sub(pb, pa), _sub(pc, pa)))
         for o, angle in zip((a, b, c), _corner_angles(pa, pb, pc), strict=True):
             self.fan[o] += angle
@@ -431,16 +465,12 @@ class AdvancingFront:
                         ids.extend(cell)
         if not ids:
             return False
-        tri = np.array([self.face_corners[f] for f in ids])  # (T, 3, 3)
-        e1, e2 = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-        nrm = np.cross(e1, e2)
-        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-        rel = probes[:, None, :] - tri[None, :, 0]  # (K, T, 3)
+        g = self.face_geometry[ids]
+        e1, e2, nrm = g[:, 3:6], g[:, 6:9], g[:, 9:12]
+        d00, d01, d11 = g[:, 12], g[:, 13], g[:, 14]
+        rel = probes[:, None, :] - g[None, :, 0:3]  # (K, T, 3)
         height = np.abs(np.einsum("ktc,tc->kt", rel, nrm))
         # barycentric coordinates of the probes' projections onto each triangle's plane
-        d00 = np.einsum("tc,tc->t", e1, e1)
-        d01 = np.einsum("tc,tc->t", e1, e2)
-        d11 = np.einsum("tc,tc->t", e2, e2)
         d20 = np.einsum("ktc,tc->kt", rel, e1)
         d21 = np.einsum("ktc,tc->kt", rel, e2)
         denom = d00 * d11 - d01 * d01
@@ -613,7 +643,7 @@ class AdvancingFront:
                 tree = cKDTree(self.V[: self.nv])
                 dist, _ = tree.query(proj.points[kappa_order])
                 far = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
-                if len(far) < max(10, 0.002 * len(proj.points)):
+                if len(far) < SEED_MIN_POINTS:
                     break
                 start = far[0]
             else:
@@ -684,7 +714,7 @@ class AdvancingFront:
         failed: set[tuple[int, int]] = set()
         while True:
             filled = False
-            for loop in self.front_loops():
+            for loop in (part for whole in self.front_loops() for part in _simple_loops(whole)):
                 k = len(loop)
                 edges = [(loop[i], loop[(i + 1) % k]) for i in range(k)]
                 if k < 3 or k > MAX_HOLE_EDGES or edges[0] in failed or \

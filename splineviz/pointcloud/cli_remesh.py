@@ -104,7 +104,7 @@ def register(subparsers) -> None:
     size.add_argument("--rho", type=_positive, default=None,
                       help="curvature adaptation angle in radians (default 0.35)")
     p.add_argument("--min-length", type=_positive, default=None,
-                   help="smallest adaptive edge length (default 1.2 x median spacing)")
+                   help="smallest adaptive edge length (default 1.5 x median spacing)")
     p.add_argument("--max-length", type=_positive, default=None,
                    help="largest adaptive edge length (default 5 x median spacing)")
     p.add_argument("--smoothing", type=_positive, default=1.0,

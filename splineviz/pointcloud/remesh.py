@@ -63,7 +63,7 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
         ``progress(fraction, message)``; return ``False`` to cancel (raises
         :class:`~splineviz.pointcloud.advancing_front.Cancelled`).
     min_length, max_length : float, optional
-        Bounds of the adaptive edge length (defaults 1.2 and 5 times the median spacing).
+        Bounds of the adaptive edge length (defaults 1.5 and 5 times the median spacing).
     smoothing : float
         Gaussian width of the local fits in units of the local spacing (raise for noise).
     optimize_mesh : bool
