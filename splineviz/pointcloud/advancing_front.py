@@ -12,8 +12,15 @@ front neighbour closes an *ear*; connecting to another vertex of the same front 
 it, to a vertex of another loop *merges* the two (Hartmann's operations [Har98]).  Every
 candidate triangle must keep the mesh an oriented manifold: it must face along the surface
 normal, stay inside the unmeshed wedges at its corners, cross no front edge, contain no front
-vertex, and use no edge that already has two triangles.  Where the predicted point leaves the
-point cloud, the edge becomes part of a border and stays open.
+vertex, and use no edge that already has two triangles.  Two tests do not rely on the tangent
+plane, which misleads where neighbouring normals differ by ~90 degrees (thin parts and sharp
+folds of coarse scans): no triangle may lie over one already built, and the triangles at a
+vertex may not add up to more than a full turn.  Where the predicted point leaves the point
+cloud, the edge becomes part of a border and stays open.
+
+Edges that fail repeatedly are given up; regions no front reached get a new seed; given-up
+edges are retried with shorter target lengths; what is still open and not a border of the
+scan is filled, hole by hole, with the best-shaped triangulation of its loop.
 """
 
 from __future__ import annotations
