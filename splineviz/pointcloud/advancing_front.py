@@ -401,20 +401,14 @@ class AdvancingFront:
             if existing and not self._inside_wedge(v, _sub(xa, xv), n):
                 return False
         centre = np.array([(xa[i] + xb[i] + xv[i]) / 3.0 for i in range(3)])
+        probes = np.array([centre] + [
+            [0.5 * (pu[i] + pw[i]) for i in range(3)]
+            for (u, w), (pu, pw) in (((b, v), (xb, xv)), ((v, a), (xv, xa)))
+            if (u, w) not in front])  # the centre and the new edges' midpoints
         # a triangle whose centre or new edges leave the cloud spans a hole of the scan
-        if self._outside(centre, n):
+        if any(self._outside(x, n) for x in probes):
             return False
-        for u, w in ((b, v), (v, a)):
-            if (u, w) not in front:
-                pu, pw = (xb, xv) if u == b else (xv, xa)
-                if self._outside(np.array([0.5 * (pu[i] + pw[i]) for i in range(3)]), n):
-                    return False
-        probes = [centre]
-        for u, w in ((b, v), (v, a)):
-            if (u, w) not in front:
-                pu, pw = (xb, xv) if u == b else (xv, xa)
-                probes.append([0.5 * (pu[i] + pw[i]) for i in range(3)])
-        if self._covered(np.array(probes), centre, max(la, lb, lc)):
+        if self._covered(probes, centre, max(la, lb, lc)):
             return False
         radius = max(la, lb, lc) * 1.5
         near = self._front_vertices_near(centre, radius, n)
@@ -715,7 +709,7 @@ class AdvancingFront:
     def _fill_holes(self):
         """Fill front loops left by given-up edges (not borders of the scan) of at most
         ``MAX_HOLE_EDGES`` edges with the best-shaped triangulation of the loop (dynamic
-        programming over its diagonals, as in hole filling [Lie03]); the relaxation after
+        programming over its diagonals, as in Liepa's hole filling, 2003); the relaxation after
         the front evens out the new triangles."""
         # filling one loop can change how loops through its vertices are traced: repeat
         failed: set[tuple[int, int]] = set()
@@ -739,13 +733,13 @@ class AdvancingFront:
                 return
 
     def _best_triangulation(self, loop):
-        """Triangles ``(i, k, j)`` of the polygon ``loop`` minimising the summed shape cost
-        ``(sum of squared sides) / (4 sqrt 3 area)`` (1 for equilateral triangles), with every
-        triangle facing along the loop's normal and no diagonal that is already a mesh edge.
-        Returns ``[]`` when no such triangulation exists."""
+        """Triangles ``(loop[i], loop[m], loop[j])`` of the polygon ``loop`` minimising the
+        summed shape cost ``(sum of squared sides) / (4 sqrt 3 area)`` (1 for equilateral
+        triangles), with every triangle facing along the loop's (Newell) normal or its own
+        corners' normals and no diagonal that is already a mesh edge.  Returns ``[]`` when no
+        such triangulation exists."""
         k = len(loop)
         pts = self.V[loop]
-        # the loop's own (Newell) normal
         normal = np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0)
         nrm = self.N[loop]
 
