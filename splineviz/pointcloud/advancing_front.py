@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from splineviz.core.errors import SplinevizError
+from splineviz.pointcloud.projection import small_median
 
 #: a front angle below this (radians) is an ear: close it before growing
 EAR_ANGLE = np.deg2rad(75.0)
@@ -231,7 +232,6 @@ class AdvancingFront:
         self.grid: dict[tuple[int, int, int], set] = {}
         self.area_done = 0.0
         self.spacing = projector.scale
-        self.median_spacing = float(np.median(projector.scale))
         # irregular (e.g. random) samplings have wider empty gaps between samples: the hard
         # border limit follows the cloud's own largest ordinary gaps
         self.outside_spacings = max(OUTSIDE_SPACINGS,
@@ -497,7 +497,7 @@ class AdvancingFront:
             dist, idx = dist[same_side], idx[same_side]
         # the spacing of a rim point alone is inflated (its neighbours lie on one side): the
         # median over the neighbours is a steadier local estimate
-        spacing = float(np.median(self.spacing[idx]))
+        spacing = float(small_median(self.spacing[idx]))
         if dist[0] <= INSIDE_SPACINGS * spacing:
             return False
         if dist[0] > self.outside_spacings * spacing:

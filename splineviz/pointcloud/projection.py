@@ -66,6 +66,15 @@ def monomial_exponents(q: int) -> np.ndarray:
     return np.array([(t - b, b) for t in range(q + 1) for b in range(t + 1)], dtype=int)
 
 
+def small_median(a: np.ndarray, axis: int = -1) -> np.ndarray:
+    """``np.median(a, axis)`` by sorting: for the handful of values per query of the front and
+    the projection about ten times faster than ``np.median``, with the same result."""
+    s = np.sort(a, axis=axis)
+    k = s.shape[axis]
+    upper = np.take(s, k // 2, axis=axis)
+    return upper if k % 2 else 0.5 * (np.take(s, k // 2 - 1, axis=axis) + upper)
+
+
 def basis_size(q: int) -> int:
     """Dimension ``(q + 1)(q + 2) / 2`` of bivariate polynomials of degree ``q``."""
     return (q + 1) * (q + 2) // 2
@@ -505,8 +514,8 @@ class Projector:
         ids = self.median_sets[nearest]  # (M, k)
         m, k = ids.shape
         pos, nrm = self._project_on(ids.ravel(), np.repeat(r, k, axis=0))
-        pos = np.median(pos.reshape(m, k, 3), axis=1)
-        nrm = np.median(nrm.reshape(m, k, 3), axis=1)
+        pos = small_median(pos.reshape(m, k, 3), axis=1)
+        nrm = small_median(nrm.reshape(m, k, 3), axis=1)
         nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
         return pos, nrm, nearest
 
