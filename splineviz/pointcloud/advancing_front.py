@@ -54,6 +54,10 @@ OUTSIDE_SPACINGS = 1.5
 OUTSIDE_VOID_FACTOR = 1.5
 BORDER_NEIGHBOURS = 24
 BORDER_GAP = np.deg2rad(180.0)
+#: where the predicted point leaves the cloud, an edge at least RIM_MIN_EDGE target lengths
+#: long tries a triangle of RIM_HEIGHT times the height before it becomes a border
+RIM_MIN_EDGE = 0.7
+RIM_HEIGHT = 0.5
 #: number of times an edge is postponed before the relaxed rules apply, and before giving up
 RETRIES = 2
 GIVE_UP = 4
@@ -480,8 +484,9 @@ class AdvancingFront:
         inside = (s > COVER_MARGIN) & (t > COVER_MARGIN) & (1.0 - s - t > COVER_MARGIN)
         return bool((inside & (height < COVER_HEIGHT * length)).any())
 
-    def _outside(self, x, n):
-        """Whether surface point ``x`` (normal ``n``) lies beyond a border of the cloud.
+    def _outside(self, x, n, strict=False):
+        """Whether surface point ``x`` (normal ``n``) lies beyond a border of the cloud;
+        ``strict``: whether it lies farther than ``INSIDE_SPACINGS`` spacings from the samples.
 
         Inside the cloud the nearest input points surround ``x``; past a border (or in a hole
         of the scan) they all lie to one side.  So ``x`` is outside when its nearest input point
@@ -500,7 +505,7 @@ class AdvancingFront:
         spacing = float(small_median(self.spacing[idx]))
         if dist[0] <= INSIDE_SPACINGS * spacing:
             return False
-        if dist[0] > self.outside_spacings * spacing:
+        if strict or dist[0] > self.outside_spacings * spacing:
             return True
         nv = np.asarray(n)
         rel = self.proj.points[idx] - x
@@ -565,7 +570,17 @@ class AdvancingFront:
         pts, nrm = self.proj.project_with_normals(guess[None], np.asarray(n)[None])
         xp, npn = pts[0], nrm[0]
         if self._outside(xp, npn):
-            # 3. the point left the cloud: this edge is a border of an open scan
+            # 3. the point left the cloud: this edge is a border of an open scan.  A flatter
+            # triangle may still fit before the rim and bring the border up to the last samples
+            if lab >= RIM_MIN_EDGE * target:
+                guess = np.array([0.5 * (xa[i] + xb[i]) + RIM_HEIGHT * height * d[i]
+                                  for i in range(3)])
+                pts, nrm = self.proj.project_with_normals(guess[None], np.asarray(n)[None])
+                # close to the samples, not just surrounded by them: in a small hole of the
+                # scan the samples all around would let the triangle reach into the hole
+                if not self._outside(pts[0], nrm[0], strict=True) and \
+                        self._new_vertex(a, b, pts[0], nrm[0], n, d, target):
+                    return
             self.border.add((a, b))
             self.scan_border.add((a, b))
             st.borders += 1
@@ -581,15 +596,7 @@ class AdvancingFront:
                 st.connections += 1
                 return
         # 5. a new vertex, if nothing is too close to it
-        close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target, n)
-        close = close[(close != a) & (close != b)]
-        xpt = (float(xp[0]), float(xp[1]), float(xp[2]))
-        mid = (0.5 * (xa[0] + xb[0]), 0.5 * (xa[1] + xb[1]), 0.5 * (xa[2] + xb[2]))
-        if len(close) == 0 and _dot(_sub(xpt, mid), d) > 0.2 * lab and \
-                self._triangle_ok(a, b, -1, xpt, n, MIN_ANGLE_NEW, False):
-            v = self._add_vertex(xp, npn)
-            self._add_triangle(a, b, v)
-            st.new_vertices += 1
+        if self._new_vertex(a, b, xp, npn, n, d, target):
             return
         # 6. postpone; after GIVE_UP attempts leave the edge as an unresolved border
         if attempts + 1 >= GIVE_UP:
@@ -598,6 +605,25 @@ class AdvancingFront:
             return
         self.front[(a, b)] = attempts + 1
         self._push(a, b, delay=attempts + 1)
+
+    def _new_vertex(self, a, b, xp, npn, n, d, target):
+        """Add the triangle ``(a, b, new vertex at xp)`` (normal ``npn``) if no front vertex
+        is too close to ``xp``, it lies ahead of the edge (direction ``d``) and the triangle is
+        valid; returns whether it was added."""
+        close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target, n)
+        close = close[(close != a) & (close != b)]
+        if len(close):
+            return False
+        xa, xb = self.P[a], self.P[b]
+        xpt = (float(xp[0]), float(xp[1]), float(xp[2]))
+        mid = (0.5 * (xa[0] + xb[0]), 0.5 * (xa[1] + xb[1]), 0.5 * (xa[2] + xb[2]))
+        if _dot(_sub(xpt, mid), d) <= 0.2 * _norm(_sub(xb, xa)) or \
+                not self._triangle_ok(a, b, -1, xpt, n, MIN_ANGLE_NEW, False):
+            return False
+        v = self._add_vertex(xp, npn)
+        self._add_triangle(a, b, v)
+        self.stats.new_vertices += 1
+        return True
 
     # -- seeding and the main loop ---------------------------------------------------------
     def _seed(self, i):
