@@ -160,13 +160,16 @@ class PluginAPI:
         self._staged.append((f"source {name}", do, undo))
 
     # -- spline models
-    def add_model(self, name, target):
-        """Add a spline model to :data:`splineviz.core.splines.MODELS`.
+    def add_model(self, name, target, *, label=None, degree=None, smoothness="",
+                  ghost_layers=0, options=None):
+        """Add a spline model to the registry :data:`splineviz.core.splines.MODELS`.
 
         ``target`` is ``"module:Class"`` or the class itself (a
-        :class:`~splineviz.core.splines.base.Spline` subclass taking the volume).
+        :class:`~splineviz.core.splines.base.Spline` subclass taking the volume). The other
+        arguments describe it to front ends (the GUI's model list shows ``label``); plugin
+        models render through the NumPy reference ray caster (no OpenCL kernel family).
         """
-        from splineviz.core.splines import MODELS
+        from splineviz.core.splines import MODELS, ModelSpec
 
         if name in MODELS:
             raise PluginError(f"plugin {self.plugin!r} redefines the spline model {name!r}")
@@ -174,9 +177,11 @@ class PluginAPI:
             target = f"{target.__module__}:{target.__qualname__}"
         if not isinstance(target, str) or ":" not in target:
             raise PluginError(f"model {name!r} must be given as 'module:Class' or a class")
+        spec = ModelSpec(name, target, label or name, degree, smoothness, None,
+                         int(ghost_layers), dict(options or {}), self.plugin)
 
         def do():
-            MODELS[name] = target
+            MODELS[name] = spec
 
         def undo():
             MODELS.pop(name, None)

@@ -4,19 +4,22 @@ Document layout (schema :data:`SCHEMA_VERSION`)::
 
     {
       "format": "splineviz-session",
-      "schema_version": 2,
+      "schema_version": 3,
       "app_version": "0.1.0",
       "objects": [                          # pipeline, inputs before outputs
         {"id": "vol1", "type": "VolumeFile", "name": "bonsai",
          "properties": {"path": "data/bonsai.vti"}},
         {"id": "iso1", "type": "Isosurface", "inputs": ["vol1"],
          "properties": {"isovalue": 40.0, "model": "cubic-c1", "color": [0.8, 0.6, 0.3]}},
-        {"id": "clip1", "type": "ClipPlane", "inputs": ["iso1"],
+        {"id": "clip1", "type": "ClipPlane", "inputs": ["vol1"],
          "properties": {"origin": [128, 128, 128], "normal": [1, 0, 0]}}
       ],
       "views": [{"id": "view1", "camera": {...}, "background": [...], "lights": [...],
                  "layout": {...}}]
     }
+
+A clip plane cuts the isosurfaces of the volumes it takes as input, the isosurfaces it
+takes as input, or, with no input, every isosurface of the scene.
 
 Only properties that differ from their defaults are written (the napari ``_get_state`` habit).
 Data paths are stored relative to the session file and resolved against its folder on load;
@@ -58,7 +61,7 @@ from splineviz.io._util import atomic_output
 from splineviz.io.errors import SessionError, SessionPathError, SessionVersionError
 
 FORMAT = "splineviz-session"
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: largest session file read, in bytes (a scene description, not data)
 MAX_SESSION_BYTES = 16 * 2**20
 #: largest coordinate or value magnitude accepted (beyond it float32 rendering breaks down)
@@ -78,6 +81,7 @@ Vec3 = tuple[Finite, Finite, Finite]
 RGB = tuple[Unit, Unit, Unit]
 Text = Annotated[str, Field(max_length=MAX_TEXT)]
 Size = Annotated[int, Field(ge=2, le=4096)]
+Sigma = Annotated[float, Field(ge=0, le=64, allow_inf_nan=False)]
 
 
 class _Model(BaseModel):
@@ -104,6 +108,9 @@ class VolumeFileProps(_Model):
     spacing: tuple[Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)],
                    ...] | None = None
     origin: Vec3 | None = None
+    sigma: Sigma = 0.0  # Gaussian smoothing (voxels) applied before the spline is built
+    show_outline: bool = True
+    visible: bool = True
 
     _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
 
@@ -113,6 +120,9 @@ class SourceProps(_Model):
 
     source: Annotated[str, Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$")]
     shape: tuple[Size, Size, Size] = (64, 64, 64)
+    sigma: Sigma = 0.0
+    show_outline: bool = True
+    visible: bool = True
 
 
 class PointsFileProps(_Model):
@@ -127,11 +137,15 @@ class PointsFileProps(_Model):
 
 
 class MeshFileProps(_Model):
+    """A triangle mesh file; with a PointsFile input, the remeshing that made it."""
+
     path: Text
     color: RGB = (0.8, 0.8, 0.8)
     opacity: Unit = 1.0
     show_edges: bool = False
     visible: bool = True
+    edge_length: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None = None
+    rho: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False)] | None = None
 
     _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
 
@@ -145,6 +159,7 @@ class IsosurfaceProps(_Model):
     color: RGB = (0.9, 0.9, 0.9)
     opacity: Unit = 1.0
     visible: bool = True
+    material: Literal["default", "matte", "shiny", "metal"] = "default"
 
 
 class RemeshProps(_Model):
@@ -164,6 +179,7 @@ class ClipPlaneProps(_Model):
     origin: Vec3 = (0.0, 0.0, 0.0)
     normal: Vec3 = (1.0, 0.0, 0.0)
     enabled: bool = True
+    show_widget: bool = True
 
     @field_validator("normal")
     @classmethod
@@ -225,10 +241,11 @@ INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
     "VolumeFile": ((0, 0), ()),
     "Source": ((0, 0), ()),
     "PointsFile": ((0, 0), ()),
-    "MeshFile": ((0, 0), ()),
+    "MeshFile": ((0, 1), ("PointsFile",)),
     "Isosurface": ((1, 1), ("VolumeFile", "Source")),
     "Remesh": ((1, 1), ("PointsFile",)),
-    "ClipPlane": ((1, 64), ("Isosurface", "PointsFile", "MeshFile", "Remesh")),
+    "ClipPlane": ((0, 64), ("VolumeFile", "Source", "Isosurface", "PointsFile", "MeshFile",
+                            "Remesh")),
 }
 
 #: type name -> model class (for :meth:`Session.add`)
@@ -301,6 +318,8 @@ class View(_Model):
     size: tuple[Annotated[int, Field(ge=1, le=16384)],
                 Annotated[int, Field(ge=1, le=16384)]] | None = None
     hidden: Annotated[list[Annotated[str, Field(pattern=_ID)]], Field(max_length=MAX_OBJECTS)] = []
+    show_axes: bool = True
+    show_scale: bool = True
 
 
 class Session(_Model):
@@ -311,7 +330,7 @@ class Session(_Model):
     """
 
     format: Literal["splineviz-session"] = FORMAT
-    schema_version: Literal[2] = SCHEMA_VERSION
+    schema_version: Literal[3] = SCHEMA_VERSION
     app_version: Annotated[str, Field(max_length=64)] = ""
     objects: Annotated[list[PipelineObject], Field(max_length=MAX_OBJECTS)] = []
     views: Annotated[list[View], Field(max_length=MAX_VIEWS)] = Field(
@@ -401,10 +420,16 @@ class Session(_Model):
         return [self.object(i) for i in self.object(obj_id).inputs]
 
     def clip_planes_for(self, obj_id: str) -> list[tuple[tuple, tuple]]:
-        """``(origin, normal)`` of every enabled clip plane that takes ``obj_id`` as input,
-        in the form :meth:`splineviz.RayCaster.render` expects."""
+        """``(origin, normal)`` of every enabled clip plane that cuts ``obj_id``: planes that
+        take it, or (for an isosurface) its volume, as input, and planes with no input, in
+        the form :meth:`splineviz.RayCaster.render` expects."""
+        targets = {obj_id}
+        obj = self.object(obj_id)
+        if obj.type == "Isosurface":
+            targets.update(obj.inputs)
         return [(o.properties.origin, o.properties.normal) for o in self.objects
-                if o.type == "ClipPlane" and o.properties.enabled and obj_id in o.inputs]
+                if o.type == "ClipPlane" and o.properties.enabled
+                and (not o.inputs or targets.intersection(o.inputs))]
 
     def visible(self, view_id: str | None = None) -> list:
         """Displayable objects (isosurfaces, point clouds, meshes) shown in a view."""
@@ -528,8 +553,15 @@ def _v1_to_v2(doc: dict) -> dict:
     return out
 
 
+def _v2_to_v3(doc: dict) -> dict:
+    """Schema 3 only adds properties (smoothing, material, outline, widget and view flags,
+    remeshing provenance on meshes) and lets clip planes take volumes or nothing as input;
+    a schema-2 document means the same under schema 3."""
+    return {**doc, "schema_version": 3}
+
+
 #: schema version -> function lifting a document of that version to the next one
-MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2}
+MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2, 2: _v2_to_v3}
 
 
 def migrate(doc: dict) -> dict:

@@ -96,7 +96,7 @@ def test_failures_are_reported_and_skipped(fake_plugins, caplog):
     assert records["notcallable"].state == "failed"
     assert {r.name for r in plugins.failures()} >= {"broken", "half", "dup", "notcallable"}
     assert "plugtest-half" not in plugins.SOURCES  # rolled back: nothing half-registered
-    assert MODELS["trilinear"] != "somewhere:Else"
+    assert MODELS["trilinear"].target != "somewhere:Else"
     assert "failed and was skipped" in caplog.text
 
 

@@ -1,18 +1,14 @@
-"""Spline models over volumes; :func:`build_spline` picks one by name."""
+"""Spline models over volumes; :func:`build_spline` picks one by name from the registry
+(:mod:`splineviz.core.splines.registry`)."""
 
 from __future__ import annotations
 
 from importlib import import_module
 
+from splineviz.core.splines.registry import MODELS, ModelSpec, UnknownModelError, model_spec
 from splineviz.core.volume import Volume
 
-# model name -> "module:class"; modules import lazily
-MODELS = {
-    "trilinear": "splineviz.core.splines.trilinear:TrilinearSpline",
-    "to-quadratic": "splineviz.core.splines.to_quadratic:TOQuadraticSpline",
-    "cubic-c1": "splineviz.core.splines.cubic_c1:CubicC1Spline",
-    "super-quadratic": "splineviz.core.splines.super_quadratic:SuperQuadraticSpline",
-}
+__all__ = ["MODELS", "ModelSpec", "UnknownModelError", "build_spline", "model_spec"]
 
 
 def build_spline(volume, model: str = "to-quadratic", **kwargs):
@@ -22,18 +18,22 @@ def build_spline(volume, model: str = "to-quadratic", **kwargs):
     ----------
     volume : Volume or (nx, ny, nz) array
     model : str
-        One of :data:`MODELS` (``"trilinear"``, ``"super-quadratic"``, ``"cubic-c1"``,
-        ``"to-quadratic"``).
+        A key of :data:`MODELS` (``"trilinear"``, ``"super-quadratic"``, ``"cubic-c1"``,
+        ``"to-quadratic"`` and plugin models).
     **kwargs
         Model options, e.g. ``k`` for ``"to-quadratic"`` (thesis Q_k, default 2).
 
     Returns
     -------
     Spline
+
+    Raises
+    ------
+    UnknownModelError
+        ``model`` is not registered.
     """
-    if model not in MODELS:
-        raise ValueError(f"unknown spline model {model!r}; choose one of {sorted(MODELS)}")
+    spec = model_spec(model)
     if not isinstance(volume, Volume):
         volume = Volume(volume)
-    module_name, _, cls = MODELS[model].partition(":")
+    module_name, _, cls = spec.target.partition(":")
     return getattr(import_module(module_name), cls)(volume, **kwargs)

@@ -1,0 +1,248 @@
+"""The objects of a scene as evented nodes (no Qt, no VTK).
+
+Each node is a :class:`psygnal.EventedModel` (pydantic fields with one signal per field, the
+napari habit): setting ``node.isovalue = 40.0`` validates the value and emits
+``node.events.isovalue``; views (the VTK scene of :mod:`splineviz.render`, the Qt panels of
+:mod:`splineviz.gui`) subscribe to those signals and never hold state of their own.
+
+Heavy data (the samples of a volume, a point cloud, a mesh's arrays) live in fields that are
+never written to sessions (``exclude=True``); everything else is a plain property whose
+non-default values :meth:`Node.state` returns for session files.
+
+Conventions: colours are RGB in [0, 1]; points and vectors are world coordinates; meshes
+are ``(V, 3)`` float vertex and ``(F, 3)`` int triangle arrays (DESIGN.md: pyvista objects
+only at the render/io boundary).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import numpy as np
+from psygnal import EventedModel
+from pydantic import ConfigDict, Field, ValidationError, field_validator
+
+from splineviz.core.errors import SplinevizError
+from splineviz.core.points import PointCloud
+from splineviz.core.volume import Volume
+
+Unit = Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)]
+RGB = tuple[Unit, Unit, Unit]
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+Vec3 = tuple[Finite, Finite, Finite]
+
+#: default colours of successive isosurfaces of one volume (qualitative: tell them apart)
+PALETTE = ((0.93, 0.78, 0.55), (0.55, 0.80, 0.55), (0.90, 0.50, 0.45), (0.60, 0.65, 0.95))
+#: named Phong materials: (ambient, diffuse, specular, shininess)
+MATERIALS = {
+    "default": (0.15, 0.75, 0.35, 24.0),
+    "matte": (0.2, 0.8, 0.0, 1.0),
+    "shiny": (0.1, 0.7, 0.7, 60.0),
+    "metal": (0.25, 0.55, 0.9, 12.0),
+}
+#: the widest range of smoothing sigmas offered (voxels)
+MAX_SIGMA = 8.0
+
+
+class ModelError(SplinevizError, ValueError):
+    """A scene property set to a value it cannot take (one sentence, no traceback)."""
+
+
+def _describe(exc: ValidationError) -> str:
+    e = exc.errors()[0]
+    loc = ".".join(str(p) for p in e.get("loc", ()))
+    return f"{loc}: {e.get('msg', 'invalid value').rstrip('.')}"
+
+
+class Node(EventedModel):
+    """Base of all scene nodes: an id, a display name and visibility.
+
+    Assigning a bad value raises :class:`ModelError` and leaves the node unchanged.
+    """
+
+    model_config = ConfigDict(arbitrary_types_allowed=True, validate_assignment=True,
+                              extra="forbid")
+
+    id: str = ""
+    name: str = ""
+    visible: bool = True
+
+    #: session object type written for this node (set by subclasses)
+    kind: str = Field(default="", exclude=True, frozen=True)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        try:
+            super().__setattr__(name, value)
+        except ValidationError as exc:
+            raise ModelError(f"{type(self).__name__} {self.name or self.id}: "
+                             f"{_describe(exc)}") from None
+
+    def update(self, values: dict | None = None, **kwargs) -> None:
+        """Set several properties, each validated and emitting its own event."""
+        for key, value in {**(values or {}), **kwargs}.items():
+            setattr(self, key, value)
+
+    def state(self) -> dict:
+        """The properties that differ from their defaults (for session files)."""
+        return self.model_dump(mode="json", exclude_defaults=True,
+                               exclude={"id", "name", "kind"})
+
+
+class VolumeNode(Node):
+    """A volume: where it came from, its samples and the Gaussian smoothing applied to them.
+
+    ``data`` is the original (never replaced by smoothing); ``smoothed`` is the data the
+    isosurfaces use when ``sigma > 0``. ``path`` and the read options, or ``source`` (a
+    synthetic source of a plugin) say how to load it again; a volume with neither is written
+    beside the session when one is saved.
+    """
+
+    kind: str = Field(default="volume", exclude=True, frozen=True)
+    path: str | None = None
+    read_options: dict = Field(default_factory=dict)
+    source: str | None = None
+    sigma: Annotated[float, Field(ge=0.0, le=MAX_SIGMA, allow_inf_nan=False)] = 0.0
+    show_outline: bool = True
+    data: Volume | None = Field(default=None, exclude=True)
+    smoothed: Volume | None = Field(default=None, exclude=True)
+
+    @property
+    def active(self) -> Volume:
+        """The samples the isosurfaces use (smoothed when ``sigma > 0`` and ready)."""
+        if self.sigma > 0 and self.smoothed is not None:
+            return self.smoothed
+        return self.data
+
+    @property
+    def bounds(self) -> tuple:
+        return self.data.bounds
+
+
+class IsosurfaceNode(Node):
+    """One spline isosurface of a volume (thesis ch. 6)."""
+
+    kind: str = Field(default="isosurface", exclude=True, frozen=True)
+    volume_id: str = ""
+    model: str = "cubic-c1"
+    k: Annotated[int, Field(ge=1, le=16)] = 2
+    isovalue: Finite = 0.0
+    color: RGB = PALETTE[0]
+    opacity: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False)] = 1.0
+    material: str = "default"
+
+    @field_validator("model")
+    @classmethod
+    def _known_model(cls, v: str) -> str:
+        from splineviz.core.splines import MODELS
+
+        if v not in MODELS:
+            raise ValueError(f"unknown spline model {v!r}; choose one of {', '.join(MODELS)}")
+        return v
+
+    @field_validator("material")
+    @classmethod
+    def _known_material(cls, v: str) -> str:
+        if v not in MATERIALS:
+            raise ValueError(f"unknown material {v!r}; choose one of {', '.join(MATERIALS)}")
+        return v
+
+
+class PointsNode(Node):
+    """A point cloud shown as points."""
+
+    kind: str = Field(default="points", exclude=True, frozen=True)
+    path: str | None = None
+    color: RGB = (0.85, 0.85, 0.9)
+    point_size: Annotated[float, Field(gt=0.0, le=100.0, allow_inf_nan=False)] = 3.0
+    opacity: Unit = 1.0
+    data: PointCloud | None = Field(default=None, exclude=True)
+
+
+class MeshNode(Node):
+    """A triangle mesh: read from a file or made by remeshing a point cloud (thesis ch. 7).
+
+    ``points_id``, ``edge_length`` and ``rho`` record how a remeshed mesh was made; ``stats``
+    is its :func:`splineviz.mesh_quality` report.
+    """
+
+    kind: str = Field(default="mesh", exclude=True, frozen=True)
+    path: str | None = None
+    points_id: str | None = None
+    edge_length: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
+    rho: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
+    color: RGB = (0.75, 0.85, 0.95)
+    opacity: Unit = 1.0
+    show_edges: bool = True
+    vertices: np.ndarray | None = Field(default=None, exclude=True)
+    faces: np.ndarray | None = Field(default=None, exclude=True)
+    normals: np.ndarray | None = Field(default=None, exclude=True)
+    stats: dict = Field(default_factory=dict, exclude=True)
+
+
+class ClipPlaneNode(Node):
+    """A clip plane keeping the side its normal points to (DESIGN.md ``clip_planes``).
+
+    ``volume_id`` names the volume whose isosurfaces it cuts; None cuts every isosurface.
+    """
+
+    kind: str = Field(default="clip_plane", exclude=True, frozen=True)
+    volume_id: str | None = None
+    origin: Vec3 = (0.0, 0.0, 0.0)
+    normal: Vec3 = (1.0, 0.0, 0.0)
+    enabled: bool = True
+    show_widget: bool = True
+
+    @field_validator("normal")
+    @classmethod
+    def _nonzero(cls, v):
+        if sum(c * c for c in v) == 0.0:
+            raise ValueError("a clip plane normal must not be zero")
+        return v
+
+    def as_pair(self) -> tuple[tuple, tuple]:
+        """``(origin, normal)`` as :meth:`splineviz.RayCaster.render` takes it."""
+        return tuple(self.origin), tuple(self.normal)
+
+
+class CameraNode(Node):
+    """The view's camera, VTK conventions (like :class:`splineviz.core.camera.Camera`)."""
+
+    kind: str = Field(default="camera", exclude=True, frozen=True)
+    position: Vec3 = (0.0, 0.0, 1.0)
+    focal_point: Vec3 = (0.0, 0.0, 0.0)
+    view_up: Vec3 = (0.0, 1.0, 0.0)
+    view_angle: Annotated[float, Field(gt=0.0, lt=180.0, allow_inf_nan=False)] = 30.0
+    parallel_projection: bool = False
+    parallel_scale: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] = 1.0
+
+    def pose(self) -> dict:
+        """The fields that place the camera (one dict, to compare or copy)."""
+        return {k: getattr(self, k) for k in ("position", "focal_point", "view_up",
+                                              "view_angle", "parallel_projection",
+                                              "parallel_scale")}
+
+
+class ViewNode(Node):
+    """What the view shows around the objects: background, axes, scale bar."""
+
+    kind: str = Field(default="view", exclude=True, frozen=True)
+    background: RGB = (0.10, 0.10, 0.14)
+    show_axes: bool = True
+    show_scale: bool = True
+
+
+#: session object type -> node class (the one table the session conversion reads)
+NODE_TYPES = {cls.model_fields["kind"].default: cls
+              for cls in (VolumeNode, IsosurfaceNode, PointsNode, MeshNode, ClipPlaneNode)}
+
+
+def mesh_arrays(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(V, 3)`` float64 vertices and ``(F, 3)`` int64 triangles of a triangle mesh given
+    as a pair of arrays or anything with ``points`` and VTK-style ``faces`` (pyvista)."""
+    if isinstance(mesh, tuple):
+        v, f = mesh
+        return np.asarray(v, dtype=np.float64), np.asarray(f, dtype=np.int64).reshape(-1, 3)
+    faces = np.asarray(mesh.faces).reshape(-1, 4)
+    if len(faces) and not np.all(faces[:, 0] == 3):
+        raise ModelError("only triangle meshes can be shown")
+    return np.asarray(mesh.points, dtype=np.float64), faces[:, 1:].astype(np.int64)

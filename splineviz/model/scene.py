@@ -1,0 +1,298 @@
+"""The scene: every object the user has loaded or made, with ids, events and a camera.
+
+:class:`Scene` is the one source of truth behind the GUI, the command line and session files
+(napari's layer list, ParaView's pipeline). It owns nodes (:mod:`splineviz.model.nodes`),
+gives each a unique id (objects are never matched by name), keeps dependent objects
+consistent (removing a volume removes its isosurfaces and clip planes) and reports every
+change through :class:`psygnal.Signal`\\ s:
+
+* ``inserted(node)`` / ``removed(node)``: the list of objects changed;
+* ``selection(node or None)``: the current object of the panels;
+* ``changed()``: anything changed (unsaved-changes flag, autosave).
+
+Nothing here imports Qt or VTK; views subscribe.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+from psygnal import Signal
+
+from splineviz.core.volume import Volume
+from splineviz.model.nodes import (
+    PALETTE,
+    CameraNode,
+    ClipPlaneNode,
+    IsosurfaceNode,
+    MeshNode,
+    ModelError,
+    Node,
+    PointsNode,
+    ViewNode,
+    VolumeNode,
+)
+
+#: standard view directions: name -> (direction from the focal point to the eye, view up)
+STANDARD_VIEWS = {
+    "+X": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "-X": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "+Y": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    "-Y": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
+    "+Z": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
+    "-Z": ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),
+    "isometric": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
+}
+
+
+def default_model() -> str:
+    """The model new isosurfaces start with: cubic C1 (smooth, with an OpenCL kernel)."""
+    from splineviz.core.splines import MODELS
+
+    return "cubic-c1" if "cubic-c1" in MODELS else next(iter(MODELS))
+
+
+class Scene:
+    """Objects of one scene, in insertion order (inputs before the objects that use them).
+
+    Examples
+    --------
+    >>> import splineviz as sv
+    >>> from splineviz.core import testfunctions as tf
+    >>> scene = Scene()
+    >>> vol = scene.add_volume(sv.Volume.from_function(tf.ml, (9, 9, 9), tf.ml.domain),
+    ...                        name="ML")
+    >>> iso = scene.add_isosurface(vol, isovalue=0.5)
+    >>> [n.id for n in scene], iso.volume_id
+    (['volume1', 'isosurface1'], 'volume1')
+    """
+
+    inserted = Signal(object)
+    removed = Signal(object)
+    selection = Signal(object)
+    changed = Signal()
+
+    def __init__(self):
+        self._nodes: dict[str, Node] = {}
+        self.camera = CameraNode(id="camera")
+        self.view = ViewNode(id="view")
+        self.selected: Node | None = None
+        #: True after any change since :meth:`mark_saved`
+        self.modified = False
+        for fixed in (self.camera, self.view):
+            fixed.events.connect(self._node_changed)
+
+    # -- access --------------------------------------------------------------------------
+
+    def __iter__(self) -> Iterator[Node]:
+        return iter(list(self._nodes.values()))
+
+    def __len__(self) -> int:
+        return len(self._nodes)
+
+    def __contains__(self, node) -> bool:
+        key = node.id if isinstance(node, Node) else node
+        return key in self._nodes
+
+    def get(self, node_id: str) -> Node:
+        try:
+            return self._nodes[node_id]
+        except KeyError:
+            raise ModelError(f"the scene has no object {node_id!r}") from None
+
+    def of_kind(self, cls) -> list:
+        return [n for n in self._nodes.values() if isinstance(n, cls)]
+
+    @property
+    def volumes(self) -> list[VolumeNode]:
+        return self.of_kind(VolumeNode)
+
+    @property
+    def isosurfaces(self) -> list[IsosurfaceNode]:
+        return self.of_kind(IsosurfaceNode)
+
+    @property
+    def clip_planes(self) -> list[ClipPlaneNode]:
+        return self.of_kind(ClipPlaneNode)
+
+    def isosurfaces_of(self, volume: VolumeNode | str) -> list[IsosurfaceNode]:
+        vid = volume.id if isinstance(volume, Node) else volume
+        return [n for n in self.isosurfaces if n.volume_id == vid]
+
+    def volume_of(self, iso: IsosurfaceNode) -> VolumeNode:
+        return self.get(iso.volume_id)
+
+    def planes_for(self, volume: VolumeNode | str) -> list[tuple[tuple, tuple]]:
+        """``(origin, normal)`` of the enabled clip planes that cut ``volume``'s isosurfaces
+        (its own and the scene-wide ones)."""
+        vid = volume.id if isinstance(volume, Node) else volume
+        return [p.as_pair() for p in self.clip_planes
+                if p.enabled and p.volume_id in (None, vid)]
+
+    def bounds(self) -> tuple | None:
+        """``((xmin, xmax), (ymin, ymax), (zmin, zmax))`` of all data, or None when empty."""
+        boxes = []
+        for n in self._nodes.values():
+            if isinstance(n, VolumeNode) and n.data is not None:
+                boxes.append(np.asarray(n.data.bounds, dtype=float))
+            elif isinstance(n, PointsNode) and n.data is not None and len(n.data):
+                boxes.append(np.asarray(n.data.bounds, dtype=float))
+            elif isinstance(n, MeshNode) and n.vertices is not None and len(n.vertices):
+                v = n.vertices
+                boxes.append(np.stack([v.min(axis=0), v.max(axis=0)], axis=1))
+        if not boxes:
+            return None
+        b = np.stack(boxes)
+        return tuple((float(b[:, a, 0].min()), float(b[:, a, 1].max())) for a in range(3))
+
+    # -- editing -------------------------------------------------------------------------
+
+    def new_id(self, prefix: str) -> str:
+        n = 1
+        while f"{prefix}{n}" in self._nodes:
+            n += 1
+        return f"{prefix}{n}"
+
+    def add(self, node: Node) -> Node:
+        """Insert ``node`` (an id is given when it has none); returns it."""
+        if not node.id:
+            node.id = self.new_id(node.kind.replace("_", ""))
+        if node.id in self._nodes or node.id in ("camera", "view"):
+            raise ModelError(f"the scene already has an object {node.id!r}")
+        for ref in ("volume_id",):
+            target = getattr(node, ref, None)
+            if target is not None and not isinstance(self._nodes.get(target), VolumeNode):
+                raise ModelError(f"{node.kind} {node.id!r} refers to the volume {target!r}, "
+                                 "which is not in the scene")
+        if not node.name:
+            node.name = node.id
+        self._nodes[node.id] = node
+        node.events.connect(self._node_changed)
+        self.inserted.emit(node)
+        self._node_changed()
+        return node
+
+    def remove(self, node: Node | str) -> None:
+        """Remove an object and what depends on it (a volume's isosurfaces and planes)."""
+        node = self.get(node) if isinstance(node, str) else node
+        if node.id not in self._nodes:
+            return
+        if isinstance(node, VolumeNode):
+            for dep in [n for n in self._nodes.values()
+                        if getattr(n, "volume_id", None) == node.id]:
+                self.remove(dep)
+        if isinstance(node, PointsNode):
+            for mesh in self.of_kind(MeshNode):
+                if mesh.points_id == node.id:
+                    mesh.points_id = None
+        del self._nodes[node.id]
+        node.events.disconnect(self._node_changed)
+        if self.selected is node:
+            self.select(None)
+        self.removed.emit(node)
+        self._node_changed()
+
+    def clear(self) -> None:
+        """Remove every object (camera and view settings stay)."""
+        for node in reversed(list(self._nodes.values())):
+            if node.id in self._nodes:
+                self.remove(node)
+        self.modified = False
+
+    def select(self, node: Node | str | None) -> None:
+        node = self.get(node) if isinstance(node, str) else node
+        if node is self.selected:
+            return
+        self.selected = node
+        self.selection.emit(node)
+
+    def _node_changed(self, *_args) -> None:
+        self.modified = True
+        self.changed.emit()
+
+    def mark_saved(self) -> None:
+        self.modified = False
+
+    # -- convenience constructors (what "open" and "add isosurface" do) -------------------
+
+    def add_volume(self, volume: Volume, name: str = "", *, path=None, source=None,
+                   read_options=None, isovalue=None, model=None, sigma: float = 0.0,
+                   isosurface: bool = True) -> VolumeNode:
+        """Add a volume and, unless ``isosurface=False``, its first isosurface."""
+        node = self.add(VolumeNode(name=name, path=None if path is None else str(path),
+                                   source=source, read_options=dict(read_options or {}),
+                                   sigma=sigma, data=volume))
+        if isosurface:
+            self.add_isosurface(node, isovalue=isovalue, model=model)
+        return node
+
+    def add_isosurface(self, volume: VolumeNode, isovalue=None, model=None,
+                       **props) -> IsosurfaceNode:
+        """A new isosurface of ``volume``: by default the middle of the data range for the
+        first, spread over the range (golden ratio) for the next, in the next palette colour
+        and the model of the volume's last isosurface."""
+        others = self.isosurfaces_of(volume)
+        n = len(others)
+        if isovalue is None:
+            lo, hi = volume.active.finite_range
+            frac = 0.5 if n == 0 else 0.3 + 0.4 * ((n * 0.618) % 1.0)
+            isovalue = lo + (hi - lo) * frac
+        if model is None:
+            model = others[-1].model if others else default_model()
+        props.setdefault("color", PALETTE[n % len(PALETTE)])
+        props.setdefault("name", f"isosurface {n + 1}" if n else "isosurface")
+        return self.add(IsosurfaceNode(volume_id=volume.id, model=model,
+                                       isovalue=float(isovalue), **props))
+
+    def add_points(self, cloud, name: str = "", *, path=None, **props) -> PointsNode:
+        return self.add(PointsNode(name=name, path=None if path is None else str(path),
+                                   data=cloud, **props))
+
+    def add_mesh(self, vertices, faces, name: str = "", *, normals=None, **props) -> MeshNode:
+        return self.add(MeshNode(name=name, vertices=np.asarray(vertices, dtype=np.float64),
+                                 faces=np.asarray(faces, dtype=np.int64), normals=normals,
+                                 **props))
+
+    def add_clip_plane(self, origin=None, normal=(1.0, 0.0, 0.0),
+                       volume: VolumeNode | None = None, **props) -> ClipPlaneNode:
+        """A clip plane through ``origin`` (default: the centre of the volume or scene)."""
+        if origin is None:
+            b = volume.bounds if volume is not None else (self.bounds() or ((0, 0),) * 3)
+            origin = tuple(0.5 * (lo + hi) for lo, hi in b)
+        return self.add(ClipPlaneNode(origin=tuple(map(float, origin)),
+                                      normal=tuple(map(float, normal)),
+                                      volume_id=None if volume is None else volume.id,
+                                      **props))
+
+    # -- camera --------------------------------------------------------------------------
+
+    def frame(self, bounds=None, view: str | None = None) -> None:
+        """Point the camera at ``bounds`` (default: all data) so that all of it is in view.
+
+        ``view`` is a key of :data:`STANDARD_VIEWS`; None keeps the current direction.
+        """
+        bounds = self.bounds() if bounds is None else bounds
+        if bounds is None:
+            return
+        b = np.asarray(bounds, dtype=float)
+        centre = b.mean(axis=1)
+        radius = 0.5 * float(np.linalg.norm(b[:, 1] - b[:, 0])) or 1.0
+        cam = self.camera
+        if view is not None:
+            direction, up = (np.asarray(v, dtype=float) for v in STANDARD_VIEWS[view])
+        else:
+            direction = np.subtract(cam.position, cam.focal_point)
+            up = np.asarray(cam.view_up, dtype=float)
+        direction = direction / (np.linalg.norm(direction) or 1.0)
+        # the bounding sphere fits the narrower of the two view angles (the window may be
+        # wider than high, never assumed narrower), with a 5 % margin
+        half = np.radians(cam.view_angle) / 2.0
+        distance = 1.05 * radius / np.sin(half)
+        up = up - np.dot(up, direction) * direction
+        if np.linalg.norm(up) < 1e-9:
+            up = np.array([0.0, 1.0, 0.0]) if abs(direction[1]) < 0.9 else np.array([1, 0, 0.0])
+        cam.update(position=tuple(map(float, centre + distance * direction)),
+                   focal_point=tuple(map(float, centre)),
+                   view_up=tuple(map(float, up / np.linalg.norm(up))),
+                   parallel_scale=radius)

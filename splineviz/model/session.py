@@ -1,0 +1,226 @@
+"""Sessions are the scene model written down: :func:`to_session` / :func:`apply_session`.
+
+Every property of every node goes through here (nothing is read from widgets), objects keep
+their ids, and references (an isosurface's volume, a plane's volume, a mesh's point cloud)
+are ids, never names, so two ``ct.nrrd`` from different folders stay two volumes.
+
+Data without a file (a volume made in Python, a remeshed mesh) cannot be described by a path
+alone: :func:`save_scene` writes it into ``<session stem>_data/`` beside the session (VTI for
+volumes, PLY for meshes and point clouds) and records those paths, so the session is
+complete. Loading is two steps so that a GUI can read data in a worker:
+:func:`read_session_data` (slow: files, sources) and :func:`apply_session` (fast: nodes).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from splineviz.io.errors import SessionError
+from splineviz.io.session import CameraState, Session, load_session, save_session
+from splineviz.model.nodes import (
+    ClipPlaneNode,
+    IsosurfaceNode,
+    MeshNode,
+    PointsNode,
+    VolumeNode,
+    mesh_arrays,
+)
+from splineviz.model.scene import Scene
+
+SESSION_SUFFIX = ".svs"
+
+
+def session_path(path) -> Path:
+    """``path`` with the ``.svs`` suffix added when it has none (what users expect of a
+    "Save as" that they typed without the suffix)."""
+    p = Path(os.fspath(path)).expanduser()
+    return p if p.suffix.lower() == SESSION_SUFFIX else p.with_name(p.name + SESSION_SUFFIX)
+
+
+def _props(node, *names) -> dict:
+    return {n: getattr(node, n) for n in names}
+
+
+def to_session(scene: Scene) -> Session:
+    """The :class:`~splineviz.io.session.Session` of ``scene``.
+
+    Raises
+    ------
+    SessionError
+        An object holds data without a file or source (use :func:`save_scene`, which
+        writes such data first).
+    """
+    s = Session()
+    for node in scene:
+        common = {"name": node.name, "id": node.id}
+        if isinstance(node, VolumeNode):
+            extra = _props(node, "sigma", "show_outline", "visible")
+            if node.source is not None:
+                s.add("Source", {"source": node.source, "shape": list(node.data.shape),
+                                 **extra}, **common)
+            elif node.path is not None:
+                s.add("VolumeFile", {"path": node.path, **node.read_options, **extra}, **common)
+            else:
+                raise SessionError(f"volume {node.name!r} has no file; save the session with "
+                                   "save_scene, which writes it")
+        elif isinstance(node, IsosurfaceNode):
+            s.add("Isosurface", {**_props(node, "isovalue", "model", "k", "opacity", "visible",
+                                          "material"), "color": list(node.color)},
+                  inputs=[node.volume_id], **common)
+        elif isinstance(node, PointsNode):
+            if node.path is None:
+                raise SessionError(f"point cloud {node.name!r} has no file")
+            s.add("PointsFile", {"path": node.path, "color": list(node.color),
+                                 **_props(node, "point_size", "opacity", "visible")}, **common)
+        elif isinstance(node, MeshNode):
+            if node.path is None:
+                raise SessionError(f"mesh {node.name!r} has no file")
+            provenance = {k: v for k, v in _props(node, "edge_length", "rho").items()
+                          if v is not None}
+            inputs = [node.points_id] if node.points_id in scene else []
+            s.add("MeshFile", {"path": node.path, "color": list(node.color),
+                               **_props(node, "opacity", "show_edges", "visible"),
+                               **provenance}, inputs=inputs, **common)
+        elif isinstance(node, ClipPlaneNode):
+            s.add("ClipPlane", {"origin": list(node.origin), "normal": list(node.normal),
+                                **_props(node, "enabled", "show_widget")},
+                  inputs=[] if node.volume_id is None else [node.volume_id], **common)
+    view = s.views[0]
+    cam = scene.camera
+    view.camera = CameraState(position=cam.position, focal_point=cam.focal_point,
+                              view_up=cam.view_up, view_angle=cam.view_angle,
+                              parallel_projection=cam.parallel_projection,
+                              parallel_scale=cam.parallel_scale)
+    view.background = scene.view.background
+    view.show_axes = scene.view.show_axes
+    view.show_scale = scene.view.show_scale
+    return s
+
+
+def save_scene(scene: Scene, path) -> Path:
+    """Write ``scene`` as a session file (``.svs`` appended when missing), data without a
+    file written into ``<stem>_data/`` beside it first; returns the session's path.
+
+    Nodes whose data were written point at the new files afterwards, so saving again does
+    not write them again.
+    """
+    from splineviz.io.meshes import write_mesh
+    from splineviz.io.volumes import write_volume
+
+    p = session_path(path)
+    folder = p.parent / f"{p.stem}_data"
+    for node in scene:
+        if isinstance(node, VolumeNode) and node.path is None and node.source is None:
+            folder.mkdir(exist_ok=True)
+            node.path = str(write_volume(folder / f"{node.id}.vti", node.data))
+        elif isinstance(node, MeshNode) and node.path is None:
+            folder.mkdir(exist_ok=True)
+            node.path = str(write_mesh(folder / f"{node.id}.ply", _polydata(node)))
+        elif isinstance(node, PointsNode) and node.path is None:
+            folder.mkdir(exist_ok=True)
+            pts = np.asarray(node.data.points, dtype=np.float64)
+            node.path = str(write_mesh(folder / f"{node.id}.ply",
+                                       (pts, np.zeros((0, 3), dtype=np.int64))))
+    save_session(to_session(scene), p)
+    scene.mark_saved()
+    return p
+
+
+def _polydata(node: MeshNode):
+    """The mesh with its normals (PLY ``nx ny nz``) as the writers take it."""
+    from splineviz.io.meshes import as_polydata
+
+    poly = as_polydata((node.vertices, node.faces))
+    if node.normals is not None and len(node.normals) == len(node.vertices):
+        poly.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
+        poly.point_data.active_normals_name = "Normals"
+    return poly
+
+
+def read_session_data(session: Session) -> dict:
+    """Read the data of every object of ``session`` that has some (slow; a worker may run
+    it): object id -> Volume, PointCloud or ``(vertices, faces, normals or None)``."""
+    from splineviz.io.meshes import read_mesh
+
+    data = {}
+    for obj in session.objects:
+        if obj.type in ("VolumeFile", "Source"):
+            data[obj.id] = session.load_volume(obj.id)
+        elif obj.type == "PointsFile":
+            data[obj.id] = session.load_points(obj.id)
+        elif obj.type == "MeshFile":
+            mesh = read_mesh(obj.properties.path)
+            v, f = mesh_arrays(mesh)
+            normals = mesh.point_data.get("Normals") if hasattr(mesh, "point_data") else None
+            data[obj.id] = (v, f, None if normals is None else np.asarray(normals))
+    return data
+
+
+def _plane_volume(session: Session, obj) -> str | None:
+    """The volume a clip plane cuts: its volume input, the single volume of its isosurface
+    inputs, or None (every isosurface) when it names several or none."""
+    vols = set()
+    for i in obj.inputs:
+        src = session.object(i)
+        if src.type in ("VolumeFile", "Source"):
+            vols.add(src.id)
+        elif src.type == "Isosurface":
+            vols.add(src.inputs[0])
+    return vols.pop() if len(vols) == 1 else None
+
+
+def apply_session(scene: Scene, session: Session, data: dict | None = None) -> Scene:
+    """Replace the contents of ``scene`` by ``session`` (``data`` from
+    :func:`read_session_data`; read here when None). Ids and every property are kept."""
+    from splineviz.plugins import ensure_loaded
+
+    data = read_session_data(session) if data is None else data
+    ensure_loaded()  # plugin models named by isosurfaces
+    scene.clear()
+    for obj in session.objects:
+        p = obj.properties
+        common = {"id": obj.id, "name": obj.name or obj.id}
+        if obj.type in ("VolumeFile", "Source"):
+            is_file = obj.type == "VolumeFile"
+            read = ({k: v for k, v in p.model_dump(exclude_defaults=True).items()
+                     if k in ("format", "dims", "dtype", "byteorder", "offset", "spacing",
+                              "origin")} if is_file else {})
+            scene.add(VolumeNode(path=p.path if is_file else None,
+                                 source=None if is_file else p.source, read_options=read,
+                                 sigma=p.sigma, show_outline=p.show_outline, visible=p.visible,
+                                 data=data[obj.id], **common))
+        elif obj.type == "Isosurface":
+            scene.add(IsosurfaceNode(volume_id=obj.inputs[0], model=p.model, k=p.k,
+                                     isovalue=p.isovalue, color=p.color, opacity=p.opacity,
+                                     visible=p.visible, material=p.material, **common))
+        elif obj.type == "PointsFile":
+            scene.add(PointsNode(path=p.path, color=p.color, point_size=p.point_size,
+                                 opacity=p.opacity, visible=p.visible, data=data[obj.id],
+                                 **common))
+        elif obj.type == "MeshFile":
+            v, f, n = data[obj.id]
+            scene.add(MeshNode(path=p.path, points_id=obj.inputs[0] if obj.inputs else None,
+                               edge_length=p.edge_length, rho=p.rho, color=p.color,
+                               opacity=p.opacity, show_edges=p.show_edges, visible=p.visible,
+                               vertices=v, faces=f, normals=n, **common))
+        elif obj.type == "ClipPlane":
+            scene.add(ClipPlaneNode(volume_id=_plane_volume(session, obj), origin=p.origin,
+                                    normal=p.normal, enabled=p.enabled,
+                                    show_widget=p.show_widget, **common))
+    view = session.views[0]
+    c = view.camera
+    scene.camera.update(position=c.position, focal_point=c.focal_point, view_up=c.view_up,
+                        view_angle=c.view_angle, parallel_projection=c.parallel_projection,
+                        parallel_scale=c.parallel_scale)
+    scene.view.update(background=view.background, show_axes=view.show_axes,
+                      show_scale=view.show_scale)
+    scene.mark_saved()
+    return scene
+
+
+def load_scene(path, *, repoint=None, scene: Scene | None = None) -> Scene:
+    """Read a session file and its data into ``scene`` (a new one when None)."""
+    return apply_session(scene or Scene(), load_session(path, repoint=repoint))
