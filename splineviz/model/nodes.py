@@ -105,13 +105,28 @@ class VolumeNode(Node):
     show_outline: bool = True
     data: Volume | None = Field(default=None, exclude=True)
     smoothed: Volume | None = Field(default=None, exclude=True)
+    #: the sigma ``smoothed`` was made with
+    smoothed_sigma: float = Field(default=0.0, exclude=True)
 
     @property
     def active(self) -> Volume:
-        """The samples the isosurfaces use (smoothed when ``sigma > 0`` and ready)."""
+        """The samples the isosurfaces use: the smoothed data when ``sigma > 0`` (the last
+        smoothing made, while a new one is computed), else the original."""
         if self.sigma > 0 and self.smoothed is not None:
             return self.smoothed
         return self.data
+
+    @property
+    def smoothing_pending(self) -> bool:
+        """Whether ``sigma`` asks for smoothed data that has not been made yet."""
+        return self.sigma > 0 and (self.smoothed is None or self.smoothed_sigma != self.sigma)
+
+    def set_smoothed(self, volume: Volume, sigma: float) -> None:
+        """Store the data smoothed with ``sigma`` (ignored if ``sigma`` is outdated)."""
+        if sigma != self.sigma:
+            return
+        self.smoothed_sigma = float(sigma)
+        self.smoothed = volume
 
     @property
     def bounds(self) -> tuple:

@@ -286,9 +286,9 @@ class Scene:
             up = np.asarray(cam.view_up, dtype=float)
         direction = direction / (np.linalg.norm(direction) or 1.0)
         # the bounding sphere fits the narrower of the two view angles (the window may be
-        # wider than high, never assumed narrower), with a 5 % margin
+        # wider than high, never assumed narrower), with a 10 % margin
         half = np.radians(cam.view_angle) / 2.0
-        distance = 1.05 * radius / np.sin(half)
+        distance = 1.1 * radius / np.sin(half)
         up = up - np.dot(up, direction) * direction
         if np.linalg.norm(up) < 1e-9:
             up = np.array([0.0, 1.0, 0.0]) if abs(direction[1]) < 0.9 else np.array([1, 0, 0.0])

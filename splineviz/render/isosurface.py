@@ -28,16 +28,11 @@ from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import Frame
 from splineviz.core.volume import Volume
 
-#: the spline models a layer offers, with the names users see (thesis ch. 4-5)
-MODEL_LABELS = {
-    "trilinear": "Trilinear (C0)",
-    "super-quadratic": "Quadratic super spline (type-6)",
-    "cubic-c1": "Cubic C1 (type-6)",
-    "to-quadratic": "Quadratic C1 (truncated octahedra)",
-}
+from splineviz.core.splines import MODELS
+from splineviz.model import nodes
 
 #: default front colours of successive layers (a qualitative palette: tell surfaces apart)
-PALETTE = ((0.93, 0.78, 0.55), (0.55, 0.80, 0.55), (0.90, 0.50, 0.45), (0.60, 0.65, 0.95))
+PALETTE = nodes.PALETTE
 
 
 class LayerError(SplinevizError, ValueError):
@@ -86,13 +81,8 @@ class Material:
     shininess: float = 24.0
 
 
-#: named materials offered in the GUI
-MATERIALS = {
-    "default": Material(),
-    "matte": Material(0.2, 0.8, 0.0, 1.0),
-    "shiny": Material(0.1, 0.7, 0.7, 60.0),
-    "metal": Material(0.25, 0.55, 0.9, 12.0),
-}
+#: named materials offered in the GUI (the model's table)
+MATERIALS = {name: Material(*consts) for name, consts in nodes.MATERIALS.items()}
 
 
 class IsosurfaceLayer:
@@ -102,7 +92,7 @@ class IsosurfaceLayer:
     ----------
     volume : Volume
     model : str
-        One of :data:`MODEL_LABELS`.
+        A key of the model registry :data:`splineviz.core.splines.MODELS`.
     isovalue : float or None
         ``None``: the middle of the data range.
     color : (3,) float in [0, 1]
@@ -114,9 +104,8 @@ class IsosurfaceLayer:
 
     def __init__(self, volume: Volume, model: str = "trilinear", isovalue=None,
                  color=PALETTE[0], opacity: float = 1.0, name: str = "isosurface",
-                 device: str | None = None, material: str = "default"):
-        if model not in MODEL_LABELS:
-            raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODEL_LABELS)}")
+                 device: str | None = None, material: str = "default", model_options=None):
+        self._check_model(model)
         self.name = name
         self.visible = True
         self._device = device
@@ -127,6 +116,9 @@ class IsosurfaceLayer:
         self._listeners = []
         self._volume = volume
         self._model = model
+        self._model_options = dict(model_options or {})
+        #: clip planes of this layer alone, added to the view's (see :meth:`set_clip_planes`)
+        self.clip_planes: tuple = ()
         self._version = 0
         self._caster = None
         self._preview = None
@@ -184,15 +176,33 @@ class IsosurfaceLayer:
                     rc.set_volume(volume)
         self._emit("frame")
 
-    def set_model(self, model: str) -> None:
-        if model not in MODEL_LABELS:
-            raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODEL_LABELS)}")
-        if model == self._model:
+    @staticmethod
+    def _check_model(model: str) -> None:
+        if model not in MODELS:
+            raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODELS)}")
+
+    def set_model(self, model: str, options: dict | None = None) -> None:
+        """Switch the spline model (``options``: its keyword arguments, e.g. ``k``)."""
+        self._check_model(model)
+        options = dict(options or {})
+        if model == self._model and options == self._model_options:
             return
         with self._lock, self._preview_lock:
             self._model = model
+            self._model_options = options
             self._caster = None
             self._preview = None
+        self._emit("frame")
+
+    def set_clip_planes(self, planes) -> None:
+        """Clip planes of this layer only (e.g. of its volume), as ``(origin, normal)``
+        pairs; frames use them together with the view's planes."""
+        from splineviz.core.raycast_reference import normalize_clip_planes
+
+        planes = tuple(tuple(map(tuple, p)) for p in normalize_clip_planes(planes))
+        if planes == self.clip_planes:
+            return
+        self.clip_planes = planes
         self._emit("frame")
 
     def set_isovalue(self, value) -> None:
@@ -232,19 +242,6 @@ class IsosurfaceLayer:
         self.visible = bool(visible)
         self._emit("appearance")
 
-    def _get_state(self) -> dict:
-        """Properties that differ from the defaults (for session files)."""
-        state = {"name": self.name, "model": self._model, "isovalue": self._isovalue}
-        if self.color != PALETTE[0]:
-            state["color"] = list(self.color)
-        if self.opacity != 1.0:
-            state["opacity"] = self.opacity
-        if self.material_name != "default":
-            state["material"] = self.material_name
-        if not self.visible:
-            state["visible"] = False
-        return state
-
     # -- frames --------------------------------------------------------------------------
 
     def _casters(self):
@@ -252,7 +249,8 @@ class IsosurfaceLayer:
 
         with self._lock:
             if self._caster is None:
-                self._caster = RayCaster(self._volume, model=self._model, device=self._device)
+                self._caster = RayCaster(self._volume, model=self._model, device=self._device,
+                                         **self._model_options)
             if self._caster.stats.get("path") != "opencl" and self._preview is None:
                 self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
             return self._caster, self._preview
@@ -306,7 +304,8 @@ class IsosurfaceLayer:
                     return None
                 rc.set_isovalue(self._isovalue)
             t = time.perf_counter()
-            frame = rc.render(view.camera, size=(sw, sh), clip_planes=view.clip_planes)
+            frame = rc.render(view.camera, size=(sw, sh),
+                              clip_planes=tuple(view.clip_planes) + self.clip_planes)
             seconds = time.perf_counter() - t
             stats = dict(rc.stats)
         finally:

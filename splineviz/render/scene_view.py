@@ -1,0 +1,317 @@
+"""The one path from a scene model to a picture: :class:`SceneView` and :func:`render_scene`.
+
+A :class:`SceneView` shows a :class:`splineviz.model.Scene` in a pyvista plotter (the GUI's
+``QtInteractor`` or an off-screen ``pyvista.Plotter``). It subscribes to the scene's events
+and keeps a :class:`~splineviz.render.scene.SplineScene` in step: an
+:class:`~splineviz.render.isosurface.IsosurfaceLayer` per isosurface node, an outline per
+volume, points and meshes as VTK props, clip planes per volume or scene-wide, the camera and
+the view settings (background, axes grid with world units). It holds no state of its own
+that a session would need.
+
+The window, ``splineviz FILE --screenshot``, ``splineviz render`` and session rendering all
+draw through this class, so a session renders the same headless as in the window.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from splineviz.model import (
+    ClipPlaneNode,
+    IsosurfaceNode,
+    MeshNode,
+    Node,
+    PointsNode,
+    Scene,
+    VolumeNode,
+)
+from splineviz.render.isosurface import IsosurfaceLayer
+from splineviz.render.scene import SplineScene
+
+#: colour of volume outlines and of the axes grid labels
+OUTLINE_COLOR = (0.6, 0.6, 0.65)
+#: camera fields copied between the model and VTK
+_CAMERA_FIELDS = ("position", "focal_point", "view_up", "view_angle")
+
+
+class SceneView:
+    """Show ``scene`` in ``plotter`` and follow its changes (see module docstring).
+
+    Parameters
+    ----------
+    scene : splineviz.model.Scene
+    plotter : pyvista.Plotter or pyvistaqt.QtInteractor
+    progressive : bool
+        Previews while the camera moves, exact frames by :attr:`SplineScene.request_refine`
+        (the GUI); False renders exact frames synchronously (scripts, screenshots).
+    device : str or None
+        OpenCL device preference of the ray casters.
+    """
+
+    def __init__(self, scene: Scene, plotter, progressive: bool = False, device=None):
+        self.scene = scene
+        self.plotter = plotter
+        self.device = device
+        self.spline_scene = SplineScene(plotter, progressive=progressive)
+        self.layers: dict[str, IsosurfaceLayer] = {}
+        self._props: dict[str, str] = {}  # node id -> prop name in the SplineScene
+        self._handlers: dict[str, object] = {}
+        self._grid = None
+        self._camera_lock = False
+        scene.inserted.connect(self._inserted)
+        scene.removed.connect(self._removed)
+        scene.camera.events.connect(self._camera_changed)
+        scene.view.events.connect(self._view_changed)
+        for node in scene:
+            self._inserted(node)
+        self._view_changed()
+        self.camera_to_vtk()
+
+    # -- nodes ---------------------------------------------------------------------------
+
+    def _inserted(self, node: Node) -> None:
+        if isinstance(node, VolumeNode):
+            self._show_outline(node)
+        elif isinstance(node, IsosurfaceNode):
+            self._add_layer(node)
+        elif isinstance(node, PointsNode | MeshNode):
+            self._show_prop(node)
+        elif isinstance(node, ClipPlaneNode):
+            self._update_planes()
+
+        def changed(info, node=node):
+            self._node_changed(node, info.signal.name)
+
+        self._handlers[node.id] = changed
+        node.events.connect(changed)
+
+    def _removed(self, node: Node) -> None:
+        handler = self._handlers.pop(node.id, None)
+        if handler is not None:
+            node.events.disconnect(handler)
+        layer = self.layers.pop(node.id, None)
+        if layer is not None:
+            self.spline_scene.remove_layer(layer)
+        name = self._props.pop(node.id, None)
+        if name is not None and name in self.spline_scene.props:
+            self.spline_scene.remove_prop(name)
+        if isinstance(node, ClipPlaneNode):
+            self._update_planes()
+        self._update_grid()
+
+    def _node_changed(self, node: Node, what: str) -> None:
+        if isinstance(node, VolumeNode):
+            if what in ("data", "smoothed", "sigma"):
+                for iso in self.scene.isosurfaces_of(node):
+                    self.layers[iso.id].set_volume(node.active)
+                if what == "data":
+                    self._show_outline(node)
+            elif what in ("visible", "show_outline"):
+                self._show_outline(node)
+                for iso in self.scene.isosurfaces_of(node):
+                    self.layers[iso.id].set_visible(iso.visible and node.visible)
+        elif isinstance(node, IsosurfaceNode):
+            self._update_layer(node, what)
+        elif isinstance(node, PointsNode | MeshNode):
+            self._show_prop(node)
+        elif isinstance(node, ClipPlaneNode):
+            self._update_planes()
+
+    def _show_outline(self, node: VolumeNode) -> None:
+        import pyvista as pv
+
+        name = f"outline:{node.id}"
+        self._props[node.id] = name
+        if node.data is None:
+            return
+        outline = pv.Box(bounds=np.ravel(node.data.bounds)).outline()
+        self.spline_scene.add_mesh(name, outline, kind="outline", color=OUTLINE_COLOR,
+                                   pickable=False)
+        self.spline_scene.set_prop_visible(name, node.visible and node.show_outline)
+        self._update_grid()
+
+    def _show_prop(self, node: PointsNode | MeshNode) -> None:
+        """(Re)create the VTK prop of a point cloud or mesh with the node's display options."""
+        import pyvista as pv
+
+        name = f"{node.kind}:{node.id}"
+        self._props[node.id] = name
+        if isinstance(node, PointsNode):
+            if node.data is None:
+                return
+            data = pv.PolyData(np.asarray(node.data.points, dtype=np.float64))
+            opts = dict(color=node.color, point_size=node.point_size, opacity=node.opacity,
+                        render_points_as_spheres=False, style="points")
+        else:
+            if node.vertices is None:
+                return
+            cells = np.hstack([np.full((len(node.faces), 1), 3), node.faces]).ravel()
+            data = pv.PolyData(node.vertices, cells)
+            smooth = node.normals is not None and len(node.normals) == len(node.vertices)
+            if smooth:
+                data.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
+                data.point_data.active_normals_name = "Normals"
+            opts = dict(color=node.color, opacity=node.opacity, show_edges=node.show_edges,
+                        edge_color=(0.2, 0.25, 0.35), smooth_shading=smooth)
+        self.spline_scene.add_mesh(name, data, kind=node.kind, **opts)
+        self.spline_scene.set_prop_visible(name, node.visible)
+        self._update_grid()
+
+    def _add_layer(self, node: IsosurfaceNode) -> None:
+        vol = self.scene.volume_of(node)
+        layer = IsosurfaceLayer(vol.active, model=node.model, isovalue=node.isovalue,
+                                color=node.color, opacity=node.opacity, name=node.name,
+                                device=self.device, material=node.material,
+                                model_options=self._model_options(node))
+        layer.set_visible(node.visible and vol.visible)
+        layer.set_clip_planes(self._volume_planes(vol.id))
+        self.layers[node.id] = layer
+        self.spline_scene.add_layer(layer)
+
+    @staticmethod
+    def _model_options(node: IsosurfaceNode) -> dict:
+        from splineviz.core.splines import model_spec
+
+        return {"k": node.k} if "k" in model_spec(node.model).options else {}
+
+    def _update_layer(self, node: IsosurfaceNode, what: str) -> None:
+        layer = self.layers[node.id]
+        if what in ("model", "k"):
+            layer.set_model(node.model, self._model_options(node))
+        elif what == "isovalue":
+            layer.set_isovalue(node.isovalue)
+        elif what == "color":
+            layer.set_color(node.color)
+        elif what == "opacity":
+            layer.set_opacity(node.opacity)
+        elif what == "material":
+            layer.set_material(node.material)
+        elif what == "visible":
+            layer.set_visible(node.visible and self.scene.volume_of(node).visible)
+        elif what == "name":
+            layer.name = node.name
+
+    # -- clip planes ---------------------------------------------------------------------
+
+    def _volume_planes(self, volume_id: str) -> list:
+        return [p.as_pair() for p in self.scene.clip_planes
+                if p.enabled and p.volume_id == volume_id]
+
+    def _update_planes(self) -> None:
+        """Scene-wide planes go to the view, a volume's planes to its layers."""
+        self.spline_scene.set_clip_planes([p.as_pair() for p in self.scene.clip_planes
+                                           if p.enabled and p.volume_id is None])
+        for iso in self.scene.isosurfaces:
+            self.layers[iso.id].set_clip_planes(self._volume_planes(iso.volume_id))
+
+    # -- camera and view -----------------------------------------------------------------
+
+    def _camera_changed(self, *_args) -> None:
+        if not self._camera_lock:
+            self.camera_to_vtk()
+
+    def camera_to_vtk(self) -> None:
+        """Place VTK's camera where the model's camera is."""
+        cam = self.scene.camera
+        vcam = self.plotter.renderer.GetActiveCamera()
+        vcam.SetPosition(cam.position)
+        vcam.SetFocalPoint(cam.focal_point)
+        vcam.SetViewUp(cam.view_up)
+        vcam.SetViewAngle(cam.view_angle)
+        vcam.SetParallelScale(cam.parallel_scale)
+        # the ray caster is perspective only (see render.scene.view_state_of)
+        vcam.ParallelProjectionOff()
+        self.plotter.camera_set = True  # else pyvista resets the camera on the first render
+
+    def camera_from_vtk(self) -> None:
+        """Copy VTK's camera (moved by the mouse) into the model, without echo."""
+        vcam = self.plotter.renderer.GetActiveCamera()
+        values = {"position": vcam.GetPosition(), "focal_point": vcam.GetFocalPoint(),
+                  "view_up": vcam.GetViewUp(), "view_angle": vcam.GetViewAngle()}
+        cam = self.scene.camera
+        changed = {k: tuple(map(float, v)) if isinstance(v, tuple) else float(v)
+                   for k, v in values.items()}
+        changed = {k: v for k, v in changed.items() if getattr(cam, k) != v}
+        if not changed:
+            return
+        self._camera_lock = True
+        try:
+            cam.update(changed)
+        finally:
+            self._camera_lock = False
+
+    def _view_changed(self, *_args) -> None:
+        self.plotter.set_background(self.scene.view.background)
+        self._update_grid()
+
+    def _update_grid(self) -> None:
+        """An axes grid with world-unit labels around all data (the scale of the scene)."""
+        if self._grid is not None:
+            self.plotter.remove_actor(self._grid, reset_camera=False, render=False)
+            self._grid = None
+        bounds = self.scene.bounds()
+        if not self.scene.view.show_scale or bounds is None:
+            return
+        self._grid = self.plotter.show_bounds(bounds=np.ravel(bounds), color=OUTLINE_COLOR,
+                                              grid=False, location="outer", ticks="outside",
+                                              font_size=10, minor_ticks=False,
+                                              use_3d_text=False, render=False)
+
+    # -- pictures ------------------------------------------------------------------------
+
+    def render_exact(self) -> None:
+        """One synchronous render with exact frames."""
+        self.spline_scene.render_exact()
+
+    def close(self) -> None:
+        self.scene.inserted.disconnect(self._inserted)
+        self.scene.removed.disconnect(self._removed)
+        self.scene.camera.events.disconnect(self._camera_changed)
+        self.scene.view.events.disconnect(self._view_changed)
+        for node in self.scene:
+            handler = self._handlers.pop(node.id, None)
+            if handler is not None:
+                node.events.disconnect(handler)
+        self.spline_scene.close()
+
+
+def smooth_pending(scene: Scene, device=None) -> None:
+    """Make the smoothed data of every volume whose ``sigma`` asks for it (synchronously;
+    the GUI does the same in a worker)."""
+    from splineviz.compute.smoothing import gaussian_smooth
+
+    for vol in scene.volumes:
+        if vol.smoothing_pending:
+            vol.set_smoothed(gaussian_smooth(vol.data, vol.sigma, device=device), vol.sigma)
+
+
+def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
+                 transparent_background: bool = False, device=None) -> np.ndarray:
+    """Render ``scene`` off-screen at ``size`` with exact frames; optionally write a PNG.
+
+    Returns
+    -------
+    (H, W, 3) or (H, W, 4) uint8 image
+    """
+    import pyvista as pv
+
+    from splineviz.render.scene import SceneError
+
+    w, h = int(size[0]), int(size[1])
+    if w < 1 or h < 1 or w > 16384 or h > 16384:
+        raise SceneError(f"a picture must be 1..16384 pixels per side, got {w}x{h}")
+    smooth_pending(scene, device)
+    pl = pv.Plotter(off_screen=True, window_size=(w, h))
+    view = SceneView(scene, pl, progressive=False, device=device)
+    try:
+        view.render_exact()
+        img = pl.screenshot(None, transparent_background=transparent_background,
+                            return_img=True)
+    finally:
+        view.close()
+        pl.close()
+    if filename is not None:
+        from splineviz.io.meshes import write_screenshot
+
+        write_screenshot(filename, img)
+    return img
