@@ -168,12 +168,16 @@ class IsosurfaceLayer:
         return (self._version, self._model, self._isovalue)
 
     def set_volume(self, volume: Volume) -> None:
-        """New data (e.g. smoothed); keeps model and isovalue."""
-        with self._lock, self._preview_lock:
-            self._volume = volume
-            for rc in (self._caster, self._preview):
-                if rc is not None:
-                    rc.set_volume(volume)
+        """New data (e.g. smoothed); keeps model and isovalue.
+
+        The casters are dropped, not updated: uploading the data and classifying belong in
+        the thread that makes the next exact frame, and a frame a worker is still making
+        from the old casters is discarded when it arrives (:meth:`compute` checks). Nothing
+        here waits for a lock, so the GUI thread never waits for a ray cast.
+        """
+        self._volume = volume
+        self._caster = None
+        self._preview = None
         self._emit("frame")
 
     @staticmethod
@@ -187,11 +191,11 @@ class IsosurfaceLayer:
         options = dict(options or {})
         if model == self._model and options == self._model_options:
             return
-        with self._lock, self._preview_lock:
-            self._model = model
-            self._model_options = options
-            self._caster = None
-            self._preview = None
+        # as in set_volume: drop the casters without waiting for a worker that uses them
+        self._model = model
+        self._model_options = options
+        self._caster = None
+        self._preview = None
         self._emit("frame")
 
     def set_clip_planes(self, planes) -> None:
@@ -244,9 +248,13 @@ class IsosurfaceLayer:
 
     # -- frames --------------------------------------------------------------------------
 
-    def _casters(self):
+    def _casters(self, build: bool = True):
+        """(exact caster, trilinear preview caster or None); (None, None) when they do not
+        exist yet and ``build`` is False (building uploads the data: not in the GUI thread)."""
         from splineviz.compute.raycast import RayCaster
 
+        if not build and self._caster is None:
+            return None, None
         with self._lock:
             if self._caster is None:
                 self._caster = RayCaster(self._volume, model=self._model, device=self._device,
@@ -283,14 +291,17 @@ class IsosurfaceLayer:
         preview : bool
             Use the fast trilinear OpenCL caster when this model has no kernel.
         blocking : bool
-            If False, return None instead of waiting while another thread uses the caster.
+            If False, return None instead of waiting while another thread uses the caster
+            or instead of building the casters (the GUI thread's previews).
         classify : bool
             If False, return None instead of classifying cells for a new isovalue (seconds
             on big volumes with the smooth models: the GUI leaves that to a worker).
         """
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
-        exact, fast = self._casters()
+        exact, fast = self._casters(build=blocking)
+        if exact is None:
+            return None
         use_fast = preview and fast is not None
         rc, lock = (fast, self._preview_lock) if use_fast else (exact, self._lock)
         if not lock.acquire(blocking=blocking):

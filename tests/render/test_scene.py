@@ -169,6 +169,15 @@ def test_progressive_mode_previews_then_refines(monkeypatch):
     calls = []
     scene.request_refine = lambda: calls.append(1)
     try:
+        # the casters are built by the refinement (a worker in the GUI), never by a preview
+        shot(pl)
+        assert calls and scene.shown_frame(layer) is None and scene.needs_refine()
+        assert scene.apply(scene.refine())
+        shot(pl)
+        assert scene.shown_frame(layer).final and not scene.needs_refine()
+        # a camera move shows a preview at the smallest scale, then refines
+        pl.camera.Azimuth(10)
+        calls.clear()
         shot(pl)
         assert calls and not scene.shown_frame(layer).final
         assert scene.shown_frame(layer).frame.hit.shape[1] < W // 2
