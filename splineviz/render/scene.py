@@ -228,7 +228,7 @@ class SplineScene:
 
     def _before_render(self, *_args) -> None:
         t0 = time.perf_counter()
-        self.renderer.ResetCameraClippingRange()
+        self._reset_clipping_range()
         view = self.view_state()
         stale = []
         for layer in self.layers:
@@ -256,6 +256,21 @@ class SplineScene:
         del self.frame_times[:-50]
         if stale and self.request_refine is not None and not self._interacting:
             self.request_refine()
+
+    def _reset_clipping_range(self) -> None:
+        """Near/far planes around the visible props *and* every visible layer's data box:
+        a layer whose quad has no image yet must count too, or its first exact frame
+        would be made for another clipping range than the frames after it."""
+        bounds = np.array(self.renderer.ComputeVisiblePropBounds(), dtype=float)
+        boxes = [np.ravel(layer.volume.bounds) for layer in self.layers if layer.visible]
+        if bounds[0] <= bounds[1]:
+            boxes.append(bounds)
+        if not boxes:
+            self.renderer.ResetCameraClippingRange()
+            return
+        b = np.stack(boxes)
+        self.renderer.ResetCameraClippingRange(b[:, 0].min(), b[:, 1].max(), b[:, 2].min(),
+                                               b[:, 3].max(), b[:, 4].min(), b[:, 5].max())
 
     def _order_quads(self) -> None:
         """Quads after all other props: opaque, then translucent from far to near."""
