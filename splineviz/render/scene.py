@@ -237,6 +237,10 @@ class SplineScene:
                 lv.quad.actor.VisibilityOff()
                 continue
             if self._is_current(layer, lv, view):
+                if self.progressive and not lv.shown.final:
+                    # a preview of this very view (the last drag step's, or a wheel step's
+                    # cast while interacting): no new preview, but the exact frame is due
+                    stale.append(layer)
                 continue
             if not self.progressive or self._force_exact:
                 self._show(layer, layer.compute(view))

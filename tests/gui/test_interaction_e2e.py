@@ -1,0 +1,216 @@
+"""End to end under Xvfb: the real interactor driven by Qt mouse events (issue 11).
+
+After each interaction (orbit by left-drag, wheel zoom, plane-widget drag, isovalue slider
+drag) the window must show the exact full-resolution frame within 2 s of the interaction
+ending, without any test hook asking for it: the picture grabbed from the window must match
+an off-screen exact render of the same camera (:func:`offscreen_screenshot`) and must not be
+blocky (the preview is cast at a reduced resolution, so its pixels come in equal blocks).
+
+The window stays open across the tests of this module (opening it and casting the first
+exact frame is most of the cost); each test leaves the scene as it found it, apart from the
+camera.
+"""
+
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pytestqt")
+pytest.importorskip("pyvistaqt")
+
+from interaction import (  # noqa: E402  (tests/gui helper, on sys.path via pytest)
+    StallMeter,
+    agreement,
+    blockiness,
+    drag,
+    pump,
+    surface_mask,
+    wheel,
+)
+
+from splineviz.gui.main_window import MainWindow  # noqa: E402
+from splineviz.render.scene import offscreen_screenshot  # noqa: E402
+
+#: requested size of the 3-D view (the docks may make it taller)
+VIEW = (360, 280)
+#: the exact frame must be on screen this long after the interaction ended
+SETTLE_S = 2.0
+#: an exact frame: at least this share of pixels within 2/255 of the off-screen render at
+#: the same pixel or one of its 8 neighbours (the window and the off-screen plotter draw the
+#: outline's lines one pixel apart in places: ~1.6 % of pixels; the surface matches exactly)
+MIN_AGREEMENT = 0.99
+#: ... and at least this share at the same pixel (previews: <= 0.83 and <= 0.94 shifted) ...
+MIN_STRICT_AGREEMENT = 0.95
+#: ... and at most this share of surface pixels equal to their left neighbour
+MAX_BLOCKINESS = 0.15
+
+
+@pytest.fixture(scope="module")
+def window(qapp, tmp_path_factory):
+    from PySide6.QtCore import QSettings
+
+    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope,
+                      str(tmp_path_factory.mktemp("settings")))
+    w = MainWindow(size=VIEW)
+    w.show()
+    w.resize(w.minimumSizeHint())
+    w.open_default()
+    # the orientation axes are a window decoration the off-screen reference does not draw
+    w.plotter.hide_axes()
+    pump(0.3)
+    w.wait_for_refine(120)
+    yield w
+    w.wait_idle()
+    w.close()
+    pump(0.1)
+
+
+def layer_of(w):
+    return w.scene.layers[0]
+
+
+def scene_shows_exact(w) -> bool:
+    """The layer's shown frame is final and made for the current view and layer state."""
+    layer = layer_of(w)
+    f = w.scene.shown_frame(layer)
+    return (f is not None and f.final and f.state == layer.state
+            and f.view.key() == w.scene.view_state().key())
+
+
+def window_image(w) -> np.ndarray:
+    """What the window shows now (the last rendered frame; no new render)."""
+    return np.asarray(w.plotter.screenshot(return_img=True))[..., :3]
+
+
+def center(w):
+    return w.plotter.width() / 2.0, w.plotter.height() / 2.0
+
+
+def assert_exact_after(w, what, compare_image=True):
+    """Process events for at most :data:`SETTLE_S`; then the window must show the exact frame."""
+    t0 = time.perf_counter()
+    pump(SETTLE_S, lambda: scene_shows_exact(w))
+    waited = time.perf_counter() - t0
+    shown = w.scene.shown_frame(layer_of(w))
+    img = window_image(w)
+    ref = offscreen_screenshot(w.scene, size=w.scene.window_size())[..., :3]
+    mask = surface_mask(ref, w.plotter.renderer.GetBackground())
+    block = blockiness(img, mask)
+    state = (f"{what}: after {waited:.2f} s the shown frame has scale {shown.scale:.3f} "
+             f"({shown.path}), final={shown.final}; blockiness {block:.3f} "
+             f"(exact reference {blockiness(ref, mask):.3f})")
+    assert mask.mean() > 0.05, f"{what}: the reference shows almost no surface"
+    assert scene_shows_exact(w), state
+    assert block < MAX_BLOCKINESS, state
+    if compare_image:
+        strict = agreement(img, ref, tol=2)
+        near = agreement(img, ref, tol=2, shift=1)
+        state += (f"; {strict:.4f} of pixels agree with the exact render ({near:.4f} within "
+                  f"one pixel)")
+        assert strict >= MIN_STRICT_AGREEMENT and near >= MIN_AGREEMENT, state
+    print(f"{what}: exact frame on screen {waited:.2f} s after the interaction ended "
+          f"(blockiness {block:.3f})")
+
+
+def test_orbit_by_left_drag_ends_on_the_exact_frame(window):
+    w = window
+    cam = w.plotter.camera
+    before = np.array(cam.GetPosition())
+    cx, cy = center(w)
+    with StallMeter() as stall:
+        drag(w.plotter, (cx - 60, cy), (cx + 60, cy + 20), n=15)
+    moved = np.linalg.norm(np.array(cam.GetPosition()) - before)
+    assert moved > 1e-3 * np.linalg.norm(before), "the drag did not reach the interactor"
+    print(f"orbit: longest GUI-thread stall {stall.max_ms:.0f} ms over {stall.ticks} ticks")
+    assert_exact_after(w, "orbit")
+
+
+def test_wheel_zoom_ends_on_the_exact_frame(window):
+    w = window
+    cam = w.plotter.camera
+    before = np.linalg.norm(np.subtract(cam.GetPosition(), cam.GetFocalPoint()))
+    with StallMeter() as stall:
+        wheel(w.plotter, center(w), clicks=2)
+    after = np.linalg.norm(np.subtract(cam.GetPosition(), cam.GetFocalPoint()))
+    assert after < 0.95 * before, "the wheel did not zoom in"
+    print(f"wheel: longest GUI-thread stall {stall.max_ms:.0f} ms")
+    assert_exact_after(w, "wheel zoom")
+    # and back out (wheel towards the user)
+    wheel(w.plotter, center(w), clicks=-2)
+    far = np.linalg.norm(np.subtract(cam.GetPosition(), cam.GetFocalPoint()))
+    assert far > 1.05 * after
+    assert_exact_after(w, "wheel zoom out")
+
+
+def display_point(renderer, world, height):
+    """Widget pixel (x right, y down) of a world point."""
+    renderer.SetWorldPoint(*map(float, world), 1.0)
+    renderer.WorldToDisplay()
+    x, y, _ = renderer.GetDisplayPoint()
+    return x, height - 1 - y
+
+
+def test_plane_widget_drag_ends_on_the_exact_frame(window):
+    w = window
+    scene, plotter = w.scene, w.plotter
+    bounds = np.asarray(layer_of(w).volume.bounds, float).reshape(3, 2)
+    mid = bounds.mean(axis=1)
+    normal = (1.0, 0.0, 0.0)
+
+    def moved(n, origin):
+        scene.set_clip_planes([(tuple(origin), tuple(n))])
+
+    scene.set_clip_planes([(tuple(mid), normal)])
+    widget = plotter.add_plane_widget(
+        moved, normal=normal, origin=tuple(mid), bounds=bounds.ravel(), normal_rotation=True,
+        outline_translation=False, origin_translation=True, implicit=True,
+        interaction_event="always", color="white", test_callback=False)
+    try:
+        w.request_render()
+        w.wait_for_refine(60)
+        start = scene.clip_planes
+        # grab the plane away from its origin sphere and normal arrow, push it along x
+        ext = bounds[:, 1] - bounds[:, 0]
+        grip = mid + np.array([0.0, 0.3 * ext[1], 0.3 * ext[2]])
+        h = plotter.height()
+        p0 = display_point(plotter.renderer, grip, h)
+        p1 = display_point(plotter.renderer, grip + np.array([0.25 * ext[0], 0, 0]), h)
+        with StallMeter() as stall:
+            drag(plotter, p0, p1, n=10)
+        assert scene.clip_planes != start, "the drag did not move the plane widget"
+        print(f"plane drag: longest GUI-thread stall {stall.max_ms:.0f} ms")
+        # the widget is drawn in the window but not in the off-screen reference: compare the
+        # frame state and the blockiness of the window's surface pixels, not whole images
+        assert_exact_after(w, "plane widget drag", compare_image=False)
+    finally:
+        plotter.clear_plane_widgets()
+        scene.set_clip_planes([])
+        w.request_render()
+        w.wait_for_refine(60)
+
+
+def test_isovalue_slider_drag_ends_on_the_exact_frame(window):
+    w = window
+    hist = getattr(getattr(w, "iso_panel", None), "histogram", None)
+    if hist is None or not hist.isVisible():
+        pytest.skip("the isovalue histogram slider is not reachable as window.iso_panel.histogram")
+    layer = layer_of(w)
+    before = layer.isovalue
+    lo, hi = hist.range()
+    width, y = hist.width(), hist.height() / 2.0
+
+    def x_of(v):  # the slider's plot area spans 6 .. width - 6 pixels
+        return 6 + (v - lo) / (hi - lo) * (width - 12)
+
+    x0 = x_of(before)
+    x1 = x0 + 0.1 * width if x0 < width / 2 else x0 - 0.1 * width
+    with StallMeter() as stall:
+        drag(hist, (x0, y), (x1, y), n=8)
+    assert abs(layer.isovalue - before) > 0.02 * (hi - lo), "the slider drag did not apply"
+    print(f"slider drag: longest GUI-thread stall {stall.max_ms:.0f} ms")
+    try:
+        assert_exact_after(w, "isovalue slider drag")
+    finally:
+        w.iso_panel.spin.setValue(before) if hasattr(w.iso_panel, "spin") else None
+        w.wait_for_refine(60)
