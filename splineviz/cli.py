@@ -20,7 +20,7 @@ from splineviz.core.errors import SplinevizError
 # sub-command name -> "module:register_function"
 SUBCOMMANDS: dict[str, str] = {
     "info": "splineviz.io.info:register",
-    "render": "splineviz.compute.cli_render:register",
+    "render": "splineviz.render.cli_render:register",
     "bench": "splineviz.bench:register",
     "remesh": "splineviz.pointcloud.cli_remesh:register",
 }

@@ -5,6 +5,8 @@ Convention: ``data[i, j, k]`` is the sample at world point ``origin + (i*sx, j*s
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -70,9 +72,12 @@ class Volume:
             (o, o + (n - 1) * s) for o, n, s in zip(self.origin, self.shape, self.spacing)
         )
 
-    @property
+    @functools.cached_property
     def finite_range(self) -> tuple[float, float]:
-        """(min, max) over the finite samples; raises VolumeError if there are none."""
+        """(min, max) over the finite samples; raises VolumeError if there are none.
+
+        Computed once (a full pass over the data: ~0.1 s for 256^3), so callers in a GUI
+        thread can ask again for free; the samples are not meant to change in place."""
         finite = self.data[np.isfinite(self.data)]
         if finite.size == 0:
             raise VolumeError("the volume has no finite samples")

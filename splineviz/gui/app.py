@@ -1,12 +1,14 @@
 """Start the application: ``splineviz [FILE|SESSION] [--screenshot PNG --size WxH ...]``.
 
-With ``--screenshot`` the window opens, loads, renders exact frames, saves the view at
-``--size`` and quits (for scripts and tests). Without a display (no ``$DISPLAY``), a
-screenshot is rendered off-screen by the same scene code instead of a window.
+The scene comes from :mod:`splineviz.model.opening` and a screenshot from
+:func:`splineviz.render.scene_view.render_scene` on every path: with ``--screenshot`` and no
+display the window is not even opened (off-screen rendering), with a display the window opens,
+loads, saves and quits — the same scene and the same picture either way.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 
@@ -16,76 +18,32 @@ from splineviz.core.errors import SplinevizError
 DEFAULT_SIZE = (1024, 768)
 
 
-def _iso_kwargs(args) -> dict:
-    kw = {}
-    if args.iso is not None:
-        kw["iso"] = args.iso
-    if args.model:
-        kw["model"] = args.model
-    return kw
+def _scene(args):
+    from splineviz.model.opening import default_scene, override, scene_from_path
 
-
-def _apply_overrides(window, args) -> None:
-    """--iso / --model for data that came from a session or the default set."""
-    for item in window.items:
-        for layer in item.layers:
-            if args.iso is not None:
-                layer.set_isovalue(args.iso)
-            if args.model:
-                layer.set_model(args.model)
+    if args.file:
+        return scene_from_path(args.file, isovalue=args.iso, model=args.model)
+    scene = default_scene()
+    override(scene, isovalue=args.iso, model=args.model)
+    return scene
 
 
 def headless_screenshot(args, size) -> int:
     """``--screenshot`` without a display: the same scene, rendered off-screen."""
-    import numpy as np
-    import pyvista as pv
+    from splineviz.render.scene_view import render_scene
 
-    from splineviz.gui.main_window import (
-        BACKGROUND,
-        _outline,
-        default_data,
-        default_model,
-        load_path,
-    )
-    from splineviz.render.isosurface import IsosurfaceLayer
-    from splineviz.render.scene import SplineScene, offscreen_screenshot
-
-    pl = pv.Plotter(off_screen=True, window_size=size)
-    pl.set_background(BACKGROUND)
-    scene = SplineScene(pl)
-    try:
-        if args.file:
-            kind, obj = load_path(args.file)
-            if kind != "volume":
-                raise SplinevizError("without a display only volumes can be rendered; "
-                                     "set DISPLAY or run under xvfb-run")
-            vol, iso = obj, None
-        else:
-            vol, iso = default_data()
-        iso = args.iso if args.iso is not None else iso
-        scene.add_layer(IsosurfaceLayer(vol, model=args.model or default_model(), isovalue=iso))
-        pl.add_mesh(_outline(vol), color="gray")
-        pl.reset_camera(bounds=np.ravel(vol.bounds))
-        pl.camera.Azimuth(30)
-        pl.camera.Elevation(20)
-        pl.camera.Zoom(1.4)
-        pl.camera_set = True
-        offscreen_screenshot(scene, args.screenshot, size=size)
-    finally:
-        scene.close()
-        pl.close()
+    render_scene(_scene(args), size, args.screenshot)
     return 0
 
 
 def _install_excepthook(window) -> None:
-    """Unexpected errors in Qt slots: traceback on stderr and a message in the window, which
-    stays usable (Qt would otherwise only print them, or abort on some platforms)."""
-    import traceback
-
+    """Unexpected errors in Qt slots: logged, and a message in the window, which stays usable
+    (Qt would otherwise only print them, or abort on some platforms)."""
     previous = sys.excepthook
+    log = logging.getLogger("splineviz")
 
     def hook(exc_type, exc, tb):
-        traceback.print_exception(exc_type, exc, tb)
+        log.error("unexpected error", exc_info=(exc_type, exc, tb))
         if issubclass(exc_type, KeyboardInterrupt):
             previous(exc_type, exc, tb)
             return
@@ -105,30 +63,31 @@ def run_gui(args) -> int:
         raise SplinevizError(f"file not found: {args.file}")
     if args.screenshot and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
         return headless_screenshot(args, size or DEFAULT_SIZE)
+    session = bool(args.file) and args.file.lower().endswith(".svs") and not args.screenshot
+    # data are read before the window opens, so a bad file is one line on stderr; a session
+    # is opened by the window instead, which asks for data files that moved
+    scene = None if session else _scene(args)
     from PySide6.QtWidgets import QApplication
 
     from splineviz.gui.main_window import MainWindow
 
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setApplicationName("splineviz")
-    window = MainWindow(size=size or DEFAULT_SIZE)
-    window.resize(*(s + 420 for s in (size or DEFAULT_SIZE)))
-    if not args.screenshot:
-        _install_excepthook(window)
-    window.show()
-    if args.file:
-        window.open_path(args.file, block=True, **_iso_kwargs(args))
-        if window.last_error is not None and args.screenshot:
-            window.close()
-            raise SplinevizError(window.last_error)
-        if args.file.lower().endswith(".svs"):
-            _apply_overrides(window, args)
-    else:
-        window.open_default()
-        _apply_overrides(window, args)
+    window = MainWindow(scene=scene)
     if args.screenshot:
+        window.show()
         app.processEvents()
-        window.export_screenshot(args.screenshot, size=size or window.scene.window_size())
+        window.export_screenshot(args.screenshot, size=size or DEFAULT_SIZE)
         window.close()
         return 0
+    if size is not None:
+        window.resize(window.width() + size[0] - window.plotter.width(),
+                      window.height() + size[1] - window.plotter.height())
+    window.ask_before_closing = True
+    _install_excepthook(window)
+    window.show()
+    if session:
+        window.open_path(args.file)
+    elif window.scene.volumes:
+        window.scene.select(window.scene.volumes[0])
     return app.exec()

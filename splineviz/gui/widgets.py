@@ -49,7 +49,12 @@ class HistogramSlider(QWidget):
     # -- data ----------------------------------------------------------------------------
 
     def set_data(self, data: np.ndarray) -> None:
-        self._counts, self._edges = log_histogram(data)
+        self.set_histogram(*log_histogram(data))
+
+    def set_histogram(self, counts: np.ndarray, edges: np.ndarray) -> None:
+        """Show ``(bins,)`` log counts over ``(bins + 1,)`` edges (see :func:`log_histogram`;
+        computed in a worker for big volumes)."""
+        self._counts, self._edges = np.asarray(counts), np.asarray(edges)
         self.update()
 
     def range(self) -> tuple[float, float]:

@@ -99,6 +99,13 @@ def regular_input(path, *, allow_dir: bool = False) -> Path:
     return p
 
 
+def _umask() -> int:
+    """The process umask (reading it means setting it: set it straight back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 @contextlib.contextmanager
 def atomic_output(path, *, suffix: str | None = None):
     """Yield a temporary path beside ``path``; rename it onto ``path`` only on success.
@@ -122,6 +129,13 @@ def atomic_output(path, *, suffix: str | None = None):
         yield tmp_path
         if not tmp_path.exists() or tmp_path.stat().st_size == 0:
             raise WriteError(f"writing {target.name} produced no data")
+        # mkstemp creates 0600; a saved file gets the mode any new file gets (umask), or
+        # keeps the mode of the file it replaces
+        try:
+            mode = stat.S_IMODE(target.stat().st_mode)
+        except OSError:
+            mode = 0o666 & ~_umask()
+        os.chmod(tmp_path, mode)
         os.replace(tmp_path, target)
     except BaseException:
         with contextlib.suppress(OSError):

@@ -11,6 +11,7 @@ one :class:`Scene`.
 
 from splineviz.model.nodes import (
     MATERIALS,
+    MAX_SIGMA,
     PALETTE,
     CameraNode,
     ClipPlaneNode,
@@ -24,6 +25,6 @@ from splineviz.model.nodes import (
 )
 from splineviz.model.scene import STANDARD_VIEWS, Scene
 
-__all__ = ["MATERIALS", "PALETTE", "STANDARD_VIEWS", "CameraNode", "ClipPlaneNode",
+__all__ = ["MATERIALS", "MAX_SIGMA", "PALETTE", "STANDARD_VIEWS", "CameraNode", "ClipPlaneNode",
            "IsosurfaceNode", "MeshNode", "ModelError", "Node", "PointsNode", "Scene",
            "ViewNode", "VolumeNode"]

@@ -77,10 +77,10 @@ class Node(EventedModel):
             raise ModelError(f"{type(self).__name__} {self.name or self.id}: "
                              f"{_describe(exc)}") from None
 
-    def update(self, values: dict | None = None, **kwargs) -> None:
-        """Set several properties, each validated and emitting its own event."""
-        for key, value in {**(values or {}), **kwargs}.items():
-            setattr(self, key, value)
+    def update(self, values: dict | None = None, recurse: bool = True, **kwargs) -> None:
+        """Set several properties; listeners of ``node.events`` hear of them only once all
+        are set (a camera is never seen half moved)."""
+        super().update({**(values or {}), **kwargs}, recurse=recurse)
 
     def state(self) -> dict:
         """The properties that differ from their defaults (for session files)."""
@@ -103,8 +103,8 @@ class VolumeNode(Node):
     source: str | None = None
     sigma: Annotated[float, Field(ge=0.0, le=MAX_SIGMA, allow_inf_nan=False)] = 0.0
     show_outline: bool = True
-    data: Volume | None = Field(default=None, exclude=True)
-    smoothed: Volume | None = Field(default=None, exclude=True)
+    data: Volume | None = Field(default=None, exclude=True, repr=False)
+    smoothed: Volume | None = Field(default=None, exclude=True, repr=False)
     #: the sigma ``smoothed`` was made with
     smoothed_sigma: float = Field(default=0.0, exclude=True)
 
@@ -170,7 +170,7 @@ class PointsNode(Node):
     color: RGB = (0.85, 0.85, 0.9)
     point_size: Annotated[float, Field(gt=0.0, le=100.0, allow_inf_nan=False)] = 3.0
     opacity: Unit = 1.0
-    data: PointCloud | None = Field(default=None, exclude=True)
+    data: PointCloud | None = Field(default=None, exclude=True, repr=False)
 
 
 class MeshNode(Node):
@@ -188,10 +188,10 @@ class MeshNode(Node):
     color: RGB = (0.75, 0.85, 0.95)
     opacity: Unit = 1.0
     show_edges: bool = True
-    vertices: np.ndarray | None = Field(default=None, exclude=True)
-    faces: np.ndarray | None = Field(default=None, exclude=True)
-    normals: np.ndarray | None = Field(default=None, exclude=True)
-    stats: dict = Field(default_factory=dict, exclude=True)
+    vertices: np.ndarray | None = Field(default=None, exclude=True, repr=False)
+    faces: np.ndarray | None = Field(default=None, exclude=True, repr=False)
+    normals: np.ndarray | None = Field(default=None, exclude=True, repr=False)
+    stats: dict = Field(default_factory=dict, exclude=True, repr=False)
 
 
 class ClipPlaneNode(Node):

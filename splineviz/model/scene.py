@@ -80,8 +80,10 @@ class Scene:
         self.selected: Node | None = None
         #: True after any change since :meth:`mark_saved`
         self.modified = False
-        for fixed in (self.camera, self.view):
-            fixed.events.connect(self._node_changed)
+        self.view.events.connect(self._node_changed)
+        # looking around is not an edit: the camera is saved, but moving it leaves
+        # ``modified`` alone (no "unsaved changes" prompt after an orbit)
+        self.camera.events.connect(self.changed.emit)
 
     # -- access --------------------------------------------------------------------------
 

@@ -223,4 +223,5 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
 
 def load_scene(path, *, repoint=None, scene: Scene | None = None) -> Scene:
     """Read a session file and its data into ``scene`` (a new one when None)."""
-    return apply_session(scene or Scene(), load_session(path, repoint=repoint))
+    return apply_session(Scene() if scene is None else scene,
+                         load_session(path, repoint=repoint))

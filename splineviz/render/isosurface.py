@@ -127,8 +127,8 @@ class IsosurfaceLayer:
         self.set_opacity(opacity)
         self.material_name = "default"
         self.set_material(material)
-        lo, hi = volume.finite_range
-        self._isovalue = 0.5 * (lo + hi) if isovalue is None else float(isovalue)
+        self._isovalue = (0.5 * sum(volume.finite_range) if isovalue is None
+                          else float(isovalue))
         self.last_stats: dict = {}
 
     # -- events --------------------------------------------------------------------------

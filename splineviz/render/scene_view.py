@@ -202,7 +202,9 @@ class SceneView:
         self.spline_scene.set_clip_planes([p.as_pair() for p in self.scene.clip_planes
                                            if p.enabled and p.volume_id is None])
         for iso in self.scene.isosurfaces:
-            self.layers[iso.id].set_clip_planes(self._volume_planes(iso.volume_id))
+            layer = self.layers.get(iso.id)  # None while the view replays the scene
+            if layer is not None:
+                layer.set_clip_planes(self._volume_planes(iso.volume_id))
 
     # -- camera and view -----------------------------------------------------------------
 

@@ -1,14 +1,13 @@
-"""``splineviz render``: ray cast an isosurface of a volume file into a PNG.
+"""``splineviz render``: the isosurface of a volume file (or a whole session) as a PNG.
 
-The PNG is written by a small pure-Python encoder (zlib), so this command needs neither VTK
-nor a display.
+The scene is built like the app's (:mod:`splineviz.model.opening`) and drawn by
+:func:`~splineviz.render.scene_view.render_scene`, off-screen (no display needed), so the
+picture is the one the window would show for the same camera.
 """
 
 from __future__ import annotations
 
-import struct
 import sys
-import zlib
 
 import numpy as np
 
@@ -18,26 +17,6 @@ from splineviz.core.errors import SplinevizError
 
 class RenderArgumentError(SplinevizError, ValueError):
     """A malformed ``--camera`` or ``--clip`` argument."""
-
-
-def write_png(path, rgba: np.ndarray) -> None:
-    """Write an ``(H, W, 4)`` uint8 image as an 8-bit RGBA PNG (filter type 0 per row)."""
-    img = np.ascontiguousarray(rgba, dtype=np.uint8)
-    if img.ndim != 3 or img.shape[2] != 4:
-        raise ValueError(f"write_png needs an (H, W, 4) image, got shape {img.shape}")
-    h, w, _ = img.shape
-    raw = np.concatenate([np.zeros((h, 1), np.uint8), img.reshape(h, w * 4)], axis=1)
-
-    def chunk(tag: bytes, data: bytes) -> bytes:
-        return (struct.pack(">I", len(data)) + tag + data
-                + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF))
-
-    header = struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0)
-    with open(path, "wb") as fh:
-        fh.write(b"\x89PNG\r\n\x1a\n")
-        fh.write(chunk(b"IHDR", header))
-        fh.write(chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)))
-        fh.write(chunk(b"IEND", b""))
 
 
 def _floats(text: str, counts, what: str) -> list[float]:
@@ -74,47 +53,49 @@ def make_camera(spec: str | None, bounds, view_angle: float) -> Camera:
 
 
 def run(args) -> int:
-    from splineviz.compute.raycast import RayCaster
-    from splineviz.io.volumes import read_volume
+    from splineviz.core.splines import model_spec
+    from splineviz.model.opening import scene_from_path
+    from splineviz.render.scene_view import render_scene
 
-    vol = read_volume(args.volume)
-    lo, hi = vol.finite_range
-    iso = 0.5 * (lo + hi) if args.iso is None else args.iso
     size = parse_size(args.size)
-    try:
-        cam = make_camera(args.camera, vol.bounds, args.view_angle)
-    except CameraError as exc:
-        raise RenderArgumentError(f"bad --camera: {exc}") from None
-    planes = []
+    scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model)
+    if not scene.isosurfaces:
+        raise RenderArgumentError(f"{args.volume} holds no volume to render")
+    for vol in scene.volumes:
+        vol.show_outline = False
+    scene.view.show_scale = False
+    if not str(args.volume).lower().endswith(".svs") or args.camera is not None:
+        bounds = scene.bounds()
+        try:
+            cam = make_camera(args.camera, bounds, args.view_angle)
+        except CameraError as exc:
+            raise RenderArgumentError(f"bad --camera: {exc}") from None
+        scene.camera.update(position=cam.position, focal_point=cam.focal_point,
+                            view_up=cam.view_up, view_angle=cam.view_angle)
     for text in args.clip or ():
         p = _floats(text, (6,), "--clip")
-        planes.append((p[:3], p[3:]))
-    rc = RayCaster(vol, model=args.model, device=args.device)
-    if rc.stats["path"] == "numpy":
-        from splineviz.compute.raycast import KERNEL_MODELS
-
-        why = ("no OpenCL device" if args.model in KERNEL_MODELS
-               else f"OpenCL kernels exist for {', '.join(sorted(KERNEL_MODELS))} only")
-        print(f"splineviz: note: model {args.model!r} renders on the NumPy reference path "
-              f"(slow): {why}", file=sys.stderr)
-    rc.set_isovalue(iso)
-    frame = rc.render(cam, size, clip_planes=planes)
-    write_png(args.output, frame.color)
-    s = rc.stats
-    print(f"{args.output}: {size[0]}x{size[1]}, iso {iso:g}, model {args.model}, "
-          f"{int(frame.hit.sum())} hit pixels, active cells {s['active_cells']}, "
-          f"classify {s['classify_s']:.3f} s, render {s['render_s']:.3f} s on {s['device']}")
+        scene.add_clip_plane(p[:3], p[3:])
+    spec = model_spec(scene.isosurfaces[0].model)
+    if spec.family is None:
+        print(f"splineviz: note: model {spec.name!r} renders on the NumPy reference path "
+              "(slow): it has no OpenCL kernel", file=sys.stderr)
+    render_scene(scene, size, args.output, device=args.device)
+    iso = scene.isosurfaces[0]
+    print(f"{args.output}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
     return 0
 
 
 def register(subparsers) -> None:
     """Add the ``render`` sub-command (see :mod:`splineviz.cli`)."""
+    from splineviz.core.splines import MODELS
+
     p = subparsers.add_parser("render", help="ray cast a spline isosurface into a PNG",
-                              description="Ray cast the isosurface of a spline model of a volume.")
-    p.add_argument("volume", help="volume file (any format splineviz reads)")
+                              description="Ray cast the isosurface of a spline model of a "
+                              "volume (or render a session) into a PNG, without a display.")
+    p.add_argument("volume", help="volume file (any format splineviz reads) or session")
     p.add_argument("--iso", type=float, default=None, help="isovalue (default: mid-range)")
-    p.add_argument("--model", default="cubic-c1",
-                   help="trilinear | super-quadratic | cubic-c1 | to-quadratic")
+    p.add_argument("--model", default=None,
+                   help=" | ".join(MODELS) + " (default: cubic-c1, or the session's)")
     p.add_argument("--size", default="1024x768", help="image size WxH")
     p.add_argument("--camera", default=None,
                    help="px,py,pz[,fx,fy,fz[,ux,uy,uz]] eye [focal point [view up]] in world units")

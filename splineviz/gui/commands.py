@@ -1,0 +1,219 @@
+"""What the File menu, drag and drop and the command line do to the scene: open, save,
+export. Reading and writing run as jobs (progress, cancel); the scene model is changed in
+the GUI thread when they finish. No method here blocks the GUI thread on data."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QObject, Signal
+from PySide6.QtWidgets import QFileDialog, QMessageBox
+
+from splineviz.core.errors import SplinevizError
+from splineviz.gui.panels.isosurface import cached_histogram
+from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
+from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
+
+#: what to do with the current objects when a file is opened
+OPEN_MODES = ("ask", "replace", "add")
+
+
+def read_any(path):
+    """Read a volume or point cloud file (worker): ``(kind, data)``; the data's range and
+    histogram are computed here too, so showing them costs the GUI thread nothing."""
+    from splineviz.io.opening import open_path
+
+    opened = open_path(path)
+    if opened.kind == "volume":
+        cached_histogram(opened.value)
+        _ = opened.value.finite_range
+    return opened.kind, opened.value
+
+
+def export_mesh_data(scene: Scene, node, path, clip: bool) -> str:
+    """Write a mesh node, or an isosurface meshed on a refined grid, with normals (worker).
+
+    ``clip``: cut the mesh by the clip planes that cut the object (ParaView's "Clip").
+    """
+    import pyvista as pv
+
+    import splineviz as sv
+    from splineviz.render.extract import spline_isosurface
+
+    if isinstance(node, MeshNode):
+        cells = np.hstack([np.full((len(node.faces), 1), 3), node.faces]).ravel()
+        mesh = pv.PolyData(node.vertices, cells)
+        if node.normals is not None:
+            mesh.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
+        planes = [p.as_pair() for p in scene.clip_planes if p.enabled and p.volume_id is None]
+    elif isinstance(node, IsosurfaceNode):
+        vol = scene.volume_of(node)
+        opts = {"k": node.k} if node.model == "to-quadratic" else {}
+        mesh = spline_isosurface(sv.build_spline(vol.active, node.model, **opts),
+                                 node.isovalue)
+        planes = scene.planes_for(vol)
+    else:
+        raise SplinevizError("select a mesh or an isosurface to export")
+    if clip:
+        for origin, normal in planes:
+            # clip() keeps the side the normal points away from unless inverted
+            mesh = mesh.clip(normal=normal, origin=origin, invert=False)
+        mesh = mesh.extract_surface().triangulate()
+    return str(sv.write_mesh(path, mesh))
+
+
+class Commands(QObject):
+    """File operations of the window (see module docstring).
+
+    Signals
+    -------
+    opened(str)
+        A file or session was opened (its path): for the recent-files list.
+    saved(str)
+        A file was written (its path).
+    """
+
+    opened = Signal(str)
+    saved = Signal(str)
+
+    def __init__(self, scene: Scene, jobs, window):
+        super().__init__(window)
+        self.scene = scene
+        self.jobs = jobs
+        self.window = window
+
+    # -- open ----------------------------------------------------------------------------
+
+    def open_default(self) -> VolumeNode:
+        """Replace the scene by the embedded default data."""
+        from splineviz.model.opening import default_scene
+
+        default_scene(self.scene)
+        node = self.scene.volumes[0]
+        self.scene.select(node)
+        return node
+
+    def open_source(self, name: str, shape=None, mode: str = "add") -> VolumeNode:
+        """Sample a synthetic source offered by a plugin (see :mod:`splineviz.plugins`)."""
+        from splineviz.plugins import source_volume, sources
+
+        src = sources().get(name)
+        if src is None:
+            raise SplinevizError(f"no synthetic source named {name!r}; plugins offer "
+                                 f"{', '.join(sorted(sources())) or 'none'}")
+        vol = source_volume(name, shape)
+        return self._add_volume(vol, f"{src.title} {'x'.join(map(str, vol.shape))}", mode,
+                                isovalue=src.isovalue, source=name)
+
+    def open_path(self, path, mode: str = "ask", **iso):
+        """Open a volume, point cloud or session in a job; returns the job (None if the
+        session could not even be parsed: the message is shown)."""
+        path = str(path)
+        if Path(path).suffix.lower() == SESSION_SUFFIX:
+            return self.load_session(path)
+
+        def done(result):
+            kind, data = result
+            self.opened.emit(path)
+            if kind == "volume":
+                self._add_volume(data, Path(path).name, mode, path=path, **iso)
+            else:
+                self._add(mode, lambda: self.scene.add_points(data, Path(path).name,
+                                                              path=path))
+
+        return self.jobs.run(f"Opening {Path(path).name}", read_any, path, on_done=done)
+
+    def _replace_or_add(self, mode: str) -> str | None:
+        """"replace" or "add" (asked when the scene has objects and ``mode`` is "ask");
+        None: the user cancelled."""
+        if mode != "ask" or not len(self.scene):
+            return "replace" if mode == "ask" else mode
+        box = QMessageBox(QMessageBox.Icon.Question, "Open",
+                          "Replace the objects shown now, or add the new data to them?",
+                          parent=self.window)
+        replace = box.addButton("Replace", QMessageBox.ButtonRole.AcceptRole)
+        add = box.addButton("Add", QMessageBox.ButtonRole.ActionRole)
+        box.addButton(QMessageBox.StandardButton.Cancel)
+        box.exec()
+        clicked = box.clickedButton()
+        return "replace" if clicked is replace else "add" if clicked is add else None
+
+    def _add(self, mode: str, make):
+        mode = self._replace_or_add(mode)
+        if mode is None:
+            return None
+        if mode == "replace":
+            self.scene.clear()
+        node = make()
+        # frame what is new when replacing, everything when adding
+        self.scene.frame(node.bounds if mode == "replace" and isinstance(node, VolumeNode)
+                         else None, view="isometric" if mode == "replace" else None)
+        self.scene.select(node)
+        return node
+
+    def _add_volume(self, vol, name, mode, path=None, isovalue=None, model=None,
+                    source=None) -> VolumeNode:
+        return self._add(mode, lambda: self.scene.add_volume(
+            vol, name, path=path, source=source, isovalue=isovalue, model=model))
+
+    # -- sessions ------------------------------------------------------------------------
+
+    def load_session(self, path):
+        """Parse the session here (fast; missing data files are asked for), read its data
+        in a job, then replace the scene."""
+        from splineviz.io.session import load_session
+
+        try:
+            session = load_session(path, repoint=self._ask_repoint)
+        except (SplinevizError, OSError) as exc:
+            self.window.show_error(str(exc))
+            return None
+
+        def done(data):
+            apply_session(self.scene, session, data)
+            self.opened.emit(str(path))
+
+        return self.jobs.run(f"Loading {Path(path).name}", read_session_data, session,
+                             on_done=done)
+
+    def _ask_repoint(self, obj_id: str, missing: Path):
+        found, _ = QFileDialog.getOpenFileName(
+            self.window, f"Where is {Path(missing).name}? (object {obj_id})",
+            str(Path(missing).parent))
+        return found or None
+
+    def save_session(self, path) -> Path:
+        """Write the scene as a session (``.svs`` appended when missing); data without a
+        file is written beside it. Small: done in the GUI thread."""
+        from splineviz.model.session import save_scene
+
+        p = save_scene(self.scene, session_path(path))
+        self.saved.emit(str(p))
+        self.opened.emit(str(p))
+        return p
+
+    # -- export --------------------------------------------------------------------------
+
+    def export_screenshot(self, path, size=None, transparent: bool = False) -> np.ndarray:
+        """Write the view as PNG at ``size`` (exact frames, off-screen, through the same
+        :func:`~splineviz.render.scene_view.render_scene` as the command line)."""
+        from splineviz.render.scene_view import render_scene
+
+        size = size or self.window.view.spline_scene.window_size()
+        img = render_scene(self.scene, size, str(path), transparent_background=transparent,
+                           device=self.window.device)
+        self.saved.emit(str(path))
+        return img
+
+    def export_mesh(self, path, node=None, clip: bool = True):
+        """Write the selected mesh or isosurface as a mesh file in a job."""
+        node = node if node is not None else self.scene.selected
+        if isinstance(node, VolumeNode):
+            isos = self.scene.isosurfaces_of(node)
+            node = isos[0] if isos else None
+        if not isinstance(node, MeshNode | IsosurfaceNode):
+            raise SplinevizError("select a mesh or an isosurface to export")
+        return self.jobs.run(f"Exporting {Path(path).name}", export_mesh_data, self.scene,
+                             node, str(path), clip, on_done=lambda p: self.saved.emit(p))

@@ -1,0 +1,244 @@
+"""Long work off the GUI thread, with progress, a cancel that acts at once, and one message
+per error.
+
+:class:`JobRunner` runs a function in a daemon thread. The function may take a keyword
+``job`` (a :class:`JobContext`): ``job.progress(fraction, message)`` reports progress and
+returns False once the user cancelled, and ``job.cancelled`` can be polled; functions that
+cannot check (reading a file) simply run on. Either way a cancel *acts* within
+:data:`CANCEL_GRACE_S`: the status shows "cancelling ...", the job gets that long to stop by
+itself, then it is detached — the window is idle again and its result, should it still
+arrive, is dropped. Results and errors reach the GUI thread through queued Qt signals.
+"""
+
+from __future__ import annotations
+
+import inspect
+import threading
+import time
+
+from PySide6.QtCore import QObject, QTimer, Signal, Slot
+
+from splineviz.core.errors import SplinevizError
+
+#: seconds a cancelled job may take to stop by itself before it is detached
+CANCEL_GRACE_S = 0.5
+
+
+class Cancelled(SplinevizError):
+    """Raised inside a job that noticed it was cancelled."""
+
+
+class JobContext:
+    """What a running job sees: progress reporting and the cancel flag (thread safe)."""
+
+    def __init__(self, job: Job):
+        self._job = job
+
+    @property
+    def cancelled(self) -> bool:
+        return self._job._cancel.is_set()
+
+    def progress(self, fraction: float | None, message: str = "") -> bool:
+        """Report progress (``fraction`` in [0, 1], None: unknown); False once cancelled."""
+        self._job._bridge.progressed.emit(-1.0 if fraction is None else float(fraction),
+                                          str(message))
+        return not self.cancelled
+
+    def check(self) -> None:
+        """Raise :class:`Cancelled` if the user cancelled."""
+        if self.cancelled:
+            raise Cancelled(f"{self._job.label} cancelled")
+
+
+class _Bridge(QObject):
+    """Carries a job's results from its thread to the GUI thread: the bridge lives in the GUI
+    thread, so signals emitted in the job's thread reach its slots queued."""
+
+    progressed = Signal(float, str)
+    returned = Signal(object)
+    failed = Signal(object)
+
+    def __init__(self, job: Job):
+        super().__init__()
+        self._job = job
+        self.progressed.connect(self._on_progressed)
+        self.returned.connect(self._on_returned)
+        self.failed.connect(self._on_failed)
+
+    @Slot(float, str)
+    def _on_progressed(self, fraction, message):
+        self._job._progressed(fraction, message)
+
+    @Slot(object)
+    def _on_returned(self, result):
+        self._job._returned(result)
+
+    @Slot(object)
+    def _on_failed(self, exc):
+        self._job._failed(exc)
+
+
+class Job:
+    """One piece of background work (see :class:`JobRunner`)."""
+
+    def __init__(self, runner: JobRunner, label: str, func, args, kwargs, on_done,
+                 on_error, cancellable: bool):
+        self.label = label
+        self.cancellable = cancellable
+        self.state = "running"  # running | cancelling | done | failed | cancelled
+        self.fraction: float | None = None
+        self.message = ""
+        self.started = time.perf_counter()
+        self._runner = runner
+        self._on_done = on_done
+        self._on_error = on_error
+        self._cancel = threading.Event()
+        self._bridge = _Bridge(self)
+        if "job" in _parameters(func):
+            kwargs = {**kwargs, "job": JobContext(self)}
+        self._thread = threading.Thread(target=self._run, args=(func, args, kwargs),
+                                         name=f"splineviz job: {label}", daemon=True)
+
+    @property
+    def active(self) -> bool:
+        return self.state in ("running", "cancelling")
+
+    def _run(self, func, args, kwargs) -> None:
+        try:
+            result = func(*args, **kwargs)
+        except BaseException as exc:  # noqa: BLE001  (handed to the GUI thread)
+            try:
+                self._bridge.failed.emit(exc)
+            except RuntimeError:  # the window (and the bridge) is gone
+                pass
+            return
+        try:
+            self._bridge.returned.emit(result)
+        except RuntimeError:
+            pass
+
+    def _progressed(self, fraction: float, message: str) -> None:
+        if self.state == "running":
+            self.fraction = None if fraction < 0 else min(max(fraction, 0.0), 1.0)
+            self.message = message
+            self._runner.changed.emit()
+
+    def _returned(self, result) -> None:
+        if self.state == "running":
+            self._finish("done")
+            if self._on_done is not None:
+                self._runner._call(self._on_done, result)
+        elif self.state == "cancelling":
+            self._finish("cancelled")
+
+    def _failed(self, exc) -> None:
+        if self.state == "cancelling" or isinstance(exc, Cancelled):
+            if self.active:
+                self._finish("cancelled")
+            return
+        if self.state != "running":
+            return
+        self._finish("failed")
+        if self._on_error is not None:
+            self._runner._call(self._on_error, exc)
+        else:
+            self._runner.error.emit(error_message(exc))
+
+    def cancel(self) -> None:
+        """Ask the job to stop; detach it after :data:`CANCEL_GRACE_S` if it does not."""
+        if self.state != "running":
+            return
+        self.state = "cancelling"
+        self._cancel.set()
+        self._runner.changed.emit()
+        QTimer.singleShot(int(CANCEL_GRACE_S * 1000), self._detach)
+
+    def _detach(self) -> None:
+        if self.state == "cancelling":
+            self._finish("cancelled")
+
+    def _finish(self, state: str) -> None:
+        self.state = state
+        self._runner._finished(self)
+
+    def wait(self, timeout_s: float) -> bool:
+        """Block until the thread ends (tests, shutdown); True if it did."""
+        self._thread.join(timeout_s)
+        return not self._thread.is_alive()
+
+
+def _parameters(func) -> set[str]:
+    try:
+        return set(inspect.signature(func).parameters)
+    except (TypeError, ValueError):
+        return set()
+
+
+def error_message(exc: BaseException) -> str:
+    """One sentence for the user: the message of our errors and of OS errors, else the
+    exception's type and text (never a traceback)."""
+    if isinstance(exc, SplinevizError | OSError | ValueError):
+        return str(exc) or type(exc).__name__
+    return f"{type(exc).__name__}: {exc}"
+
+
+class JobRunner(QObject):
+    """Runs :class:`Job` objects and tells the window about them.
+
+    Signals
+    -------
+    changed()
+        A job started, progressed, is being cancelled or ended.
+    error(str)
+        A job without its own error handler failed: one sentence to show.
+    """
+
+    changed = Signal()
+    error = Signal(str)
+    message = Signal(str)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.jobs: list[Job] = []
+        self.closed = False
+
+    def run(self, label: str, func, *args, on_done=None, on_error=None,
+            cancellable: bool = True, **kwargs) -> Job:
+        """Start ``func(*args, **kwargs)`` in a thread (``job=`` added if it takes one);
+        ``on_done(result)`` / ``on_error(exc)`` run in the GUI thread."""
+        job = Job(self, label, func, args, kwargs, on_done, on_error, cancellable)
+        self.jobs.append(job)
+        job._thread.start()
+        self.changed.emit()
+        return job
+
+    def _call(self, callback, value) -> None:
+        if self.closed:
+            return
+        try:
+            callback(value)
+        except Exception as exc:  # noqa: BLE001  (a slot error is a message, not a crash)
+            self.error.emit(error_message(exc))
+
+    def _finished(self, job: Job) -> None:
+        if job in self.jobs:
+            self.jobs.remove(job)
+        if job.state == "cancelled":
+            self.message.emit(f"{job.label}: cancelled")
+        self.changed.emit()
+
+    @property
+    def active(self) -> list[Job]:
+        return [j for j in self.jobs if j.active]
+
+    def cancel_all(self) -> None:
+        for job in list(self.jobs):
+            if job.cancellable:
+                job.cancel()
+
+    def close(self) -> None:
+        """Cancel everything and drop later results (the window is closing)."""
+        for job in list(self.jobs):
+            job._cancel.set()
+        self.closed = True
+        self.jobs.clear()

@@ -1,0 +1,254 @@
+"""The isosurface panel: isovalue over the data's histogram, spline model, colour, opacity,
+material of the current isosurface node.
+
+A view of one :class:`~splineviz.model.IsosurfaceNode` (the scene's selection, or the first
+isosurface of a selected volume): widgets write the node, node events update the widgets.
+The histogram of a big volume is computed in a worker and cached per volume.
+"""
+
+from __future__ import annotations
+
+import threading
+import weakref
+
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import (
+    QComboBox,
+    QDoubleSpinBox,
+    QFormLayout,
+    QLabel,
+    QPushButton,
+    QSpinBox,
+    QWidget,
+)
+from superqt import QLabeledDoubleSlider
+
+from splineviz.core.splines import MODELS
+from splineviz.gui.widgets import ColorButton, HistogramSlider, log_histogram
+from splineviz.model import MATERIALS, IsosurfaceNode, Scene, VolumeNode
+
+#: volumes with at most this many samples get their histogram in the GUI thread
+INLINE_HISTOGRAM_SAMPLES = 2_000_000
+
+_histograms: dict[int, tuple] = {}
+_histogram_lock = threading.Lock()
+
+
+def cached_histogram(volume):
+    """``log_histogram(volume.data)``, computed once per volume object (thread safe)."""
+    key = id(volume)
+    with _histogram_lock:
+        hit = _histograms.get(key)
+        if hit is not None and hit[0]() is volume:
+            return hit[1]
+    hist = log_histogram(volume.data)
+    with _histogram_lock:
+        _histograms[key] = (weakref.ref(volume, lambda _r, k=key: _histograms.pop(k, None)),
+                            hist)
+    return hist
+
+
+def model_label(name: str) -> str:
+    spec = MODELS[name]
+    degree = f", degree {spec.degree}" if spec.degree else ""
+    path = "" if spec.family else " — NumPy reference, slow"
+    return f"{spec.display_label}{degree}{path}"
+
+
+class IsosurfacePanel(QWidget):
+    """Controls of the current isosurface (see module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    jobs : splineviz.gui.jobs.JobRunner
+        Runs histogram computations of big volumes.
+    """
+
+    def __init__(self, scene: Scene, jobs, parent=None):
+        super().__init__(parent)
+        self.scene = scene
+        self.jobs = jobs
+        self.node: IsosurfaceNode | None = None
+        self._volume = None
+        self.title = QLabel("")
+        self.histogram = HistogramSlider()
+        self.spin = QDoubleSpinBox()
+        self.spin.setDecimals(5)
+        self.spin.setKeyboardTracking(False)
+        self.spin.setToolTip("Isovalue: type a value and press Enter")
+        self.model = QComboBox()
+        self.model.setToolTip("Spline model the surface is the isosurface of (thesis ch. 4-5): "
+                              "trilinear is the baseline; the smooth models have exact "
+                              "normals and curvature")
+        self.k = QSpinBox()
+        self.k.setRange(1, 16)
+        self.k.setToolTip("k of the truncated-octahedral operator Q_k (thesis eq. 5.9)")
+        self.k_label = QLabel("Q_k order")
+        self.color = ColorButton()
+        self.color.setToolTip("Colour of the front side of the surface")
+        self.opacity = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
+        self.opacity.setRange(0.05, 1.0)
+        self.opacity.setToolTip("Opacity: below 1 the surface blends over what is behind it")
+        self.material = QComboBox()
+        self.material.addItems(list(MATERIALS))
+        self.material.setToolTip("Shading: ambient, diffuse, specular and shininess constants")
+        self.add_button = QPushButton("Add isosurface")
+        self.add_button.setToolTip("Another isosurface of the same volume, at another value")
+        form = QFormLayout(self)
+        form.addRow(self.title)
+        form.addRow(self.histogram)
+        form.addRow("Isovalue", self.spin)
+        form.addRow("Model", self.model)
+        form.addRow(self.k_label, self.k)
+        form.addRow("Colour", self.color)
+        form.addRow("Opacity", self.opacity)
+        form.addRow("Material", self.material)
+        form.addRow(self.add_button)
+        self._syncing = False
+        self.fill_models()
+        self.histogram.valueChanged.connect(self._iso_from_slider)
+        self.spin.valueChanged.connect(self._iso_from_spin)
+        self.model.currentIndexChanged.connect(lambda _i: self._write(
+            "model", self.model.currentData()))
+        self.k.valueChanged.connect(lambda v: self._write("k", int(v)))
+        self.color.colorChanged.connect(lambda c: self._write("color", tuple(c)))
+        self.opacity.valueChanged.connect(lambda v: self._write("opacity", float(v)))
+        self.material.currentTextChanged.connect(lambda m: self._write("material", m))
+        self.add_button.clicked.connect(self.add_isosurface)
+        scene.selection.connect(self._selection_changed)
+        scene.removed.connect(self._removed)
+        self.set_node(None)
+
+    def fill_models(self) -> None:
+        """The registry's models (plugin models included) in the model box."""
+        self.model.blockSignals(True)
+        self.model.clear()
+        for name in MODELS:
+            self.model.addItem(model_label(name), name)
+        self.model.blockSignals(False)
+
+    # -- which node ----------------------------------------------------------------------
+
+    def _selection_changed(self, node) -> None:
+        if isinstance(node, IsosurfaceNode):
+            self.set_node(node)
+        elif isinstance(node, VolumeNode):
+            isos = self.scene.isosurfaces_of(node)
+            self.set_node(isos[0] if isos else None, volume=node)
+        elif node is None and self.node is not None and self.node.id not in self.scene:
+            self.set_node(None)
+
+    def _removed(self, node) -> None:
+        if node is self.node or node is self._volume:
+            isos = self.scene.isosurfaces
+            self.set_node(isos[-1] if isos else None)
+
+    def set_node(self, node: IsosurfaceNode | None, volume: VolumeNode | None = None) -> None:
+        if self.node is not None:
+            self.node.events.disconnect(self._node_changed)
+        if self._volume is not None:
+            self._volume.events.disconnect(self._volume_changed)
+        self.node = node
+        self._volume = self.scene.volume_of(node) if node is not None else volume
+        for w in (self.histogram, self.spin, self.model, self.k, self.color, self.opacity,
+                  self.material):
+            w.setEnabled(node is not None)
+        self.add_button.setEnabled(self._volume is not None)
+        if self._volume is not None:
+            self._volume.events.connect(self._volume_changed)
+        if node is None:
+            self.title.setText("Select an isosurface or a volume in the data panel")
+            return
+        node.events.connect(self._node_changed)
+        self.title.setText(f"{node.name} of {self._volume.name}")
+        self._load_histogram()
+        self._sync_all()
+
+    def _load_histogram(self) -> None:
+        vol = self._volume.active
+        lo, hi = vol.finite_range
+        if vol.data.size <= INLINE_HISTOGRAM_SAMPLES:
+            self.histogram.set_histogram(*cached_histogram(vol))
+        else:
+            import numpy as np
+
+            # the range now, the counts when the worker has them
+            self.histogram.set_histogram(np.zeros(1), np.array([lo, hi if hi > lo else lo + 1]))
+            node = self.node
+            self.jobs.run("Histogram", cached_histogram, vol, cancellable=False,
+                          on_done=lambda h: self.node is node and
+                          self.histogram.set_histogram(*h))
+        lo, hi = self.histogram.range()
+        self._syncing = True
+        self.spin.setRange(lo, hi)
+        self.spin.setSingleStep((hi - lo) / 200.0)
+        self._syncing = False
+
+    def _sync_all(self) -> None:
+        n = self.node
+        self._syncing = True
+        try:
+            self.spin.setValue(n.isovalue)
+            self.histogram.setValue(n.isovalue)
+            i = self.model.findData(n.model)
+            if i < 0:  # a plugin model registered after the panel was built
+                self.fill_models()
+                i = self.model.findData(n.model)
+            self.model.setCurrentIndex(i)
+            has_k = "k" in MODELS[n.model].options
+            self.k.setVisible(has_k)
+            self.k_label.setVisible(has_k)
+            self.k.setValue(n.k)
+            self.color.setColor(n.color)
+            self.opacity.setValue(n.opacity)
+            self.material.setCurrentText(n.material)
+        finally:
+            self._syncing = False
+
+    def _node_changed(self, info) -> None:
+        if not self._syncing and self.node is not None:
+            if info.signal.name == "name":
+                self.title.setText(f"{self.node.name} of {self._volume.name}")
+            self._sync_all()
+
+    def _volume_changed(self, info) -> None:
+        if info.signal.name in ("smoothed", "sigma", "data") and self.node is not None:
+            self._load_histogram()
+            self._sync_all()
+
+    # -- widgets -> node -----------------------------------------------------------------
+
+    def _write(self, field: str, value) -> None:
+        if self._syncing or self.node is None:
+            return
+        self._syncing = True
+        try:
+            setattr(self.node, field, value)
+        finally:
+            self._syncing = False
+        if field == "model":
+            self._sync_all()  # shows or hides the Q_k order
+
+    def _iso_from_slider(self, v) -> None:
+        if self._syncing:
+            return
+        self._syncing = True
+        self.spin.setValue(v)
+        self._syncing = False
+        self._write("isovalue", float(v))
+
+    def _iso_from_spin(self, v) -> None:
+        if self._syncing:
+            return
+        self._syncing = True
+        self.histogram.setValue(v)
+        self._syncing = False
+        self._write("isovalue", float(v))
+
+    def add_isosurface(self) -> IsosurfaceNode | None:
+        if self._volume is None:
+            return None
+        node = self.scene.add_isosurface(self._volume)
+        self.scene.select(node)
+        return node

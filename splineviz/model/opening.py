@@ -1,0 +1,64 @@
+"""A scene from what a user names on the command line: a file, a session or nothing.
+
+``splineviz FILE --screenshot``, ``splineviz render`` and the GUI's start-up all build their
+scene here, so the same arguments give the same scene (and, through
+:func:`splineviz.render.scene_view.render_scene`, the same picture) on every path.
+"""
+
+from __future__ import annotations
+
+from splineviz.core.errors import SplinevizError
+from splineviz.model.scene import Scene
+from splineviz.model.session import apply_session
+
+#: the embedded default data's name in the data panel
+DEFAULT_NAME = "Marschner-Lobb 41^3"
+
+
+def default_scene(scene: Scene | None = None) -> Scene:
+    """The embedded default data (Marschner-Lobb 41^3, generated) framed isometrically."""
+    from splineviz.core.testfunctions import ml
+    from splineviz.core.volume import Volume
+
+    scene = Scene() if scene is None else scene
+    scene.clear()
+    vol = Volume.from_function(ml, (41, 41, 41), ml.domain)
+    scene.add_volume(vol, DEFAULT_NAME, source="marschner-lobb", isovalue=ml.isovalue)
+    scene.frame(view="isometric")
+    scene.mark_saved()
+    return scene
+
+
+def scene_from_path(path, *, isovalue=None, model=None, repoint=None) -> Scene:
+    """Read a session, volume or point cloud into a new scene, framed isometrically
+    (a session keeps its own camera). ``isovalue``/``model`` override every isosurface."""
+    from splineviz.io.opening import open_path
+
+    opened = open_path(path, repoint=repoint)
+    scene = Scene()
+    if opened.kind == "session":
+        apply_session(scene, opened.value)
+    elif opened.kind == "volume":
+        scene.add_volume(opened.value, opened.path.name, path=str(opened.path))
+        scene.frame(view="isometric")
+    else:
+        scene.add_points(opened.value, opened.path.name, path=str(opened.path))
+        scene.frame(view="isometric")
+    override(scene, isovalue=isovalue, model=model)
+    scene.mark_saved()
+    return scene
+
+
+def override(scene: Scene, *, isovalue=None, model=None) -> None:
+    """Set the isovalue and/or spline model of every isosurface (command-line flags)."""
+    from splineviz.plugins import ensure_loaded
+
+    if model is not None:
+        ensure_loaded()  # a plugin model named on the command line
+    if (isovalue is not None or model is not None) and not scene.isosurfaces:
+        raise SplinevizError("--iso and --model need a volume; this scene has no isosurface")
+    for iso in scene.isosurfaces:
+        if isovalue is not None:
+            iso.isovalue = float(isovalue)
+        if model is not None:
+            iso.model = model
