@@ -56,11 +56,13 @@ def export_mesh_data(scene: Scene, node, path, clip: bool) -> str:
         planes = scene.planes_for(vol)
     else:
         raise SplinevizError("select a mesh or an isosurface to export")
-    if clip:
+    if clip and planes:
         for origin, normal in planes:
-            # clip() keeps the side the normal points away from unless inverted
+            # invert=False keeps the side the normal points to, as the ray caster does
             mesh = mesh.clip(normal=normal, origin=origin, invert=False)
-        mesh = mesh.extract_surface().triangulate()
+        if not isinstance(mesh, pv.PolyData):
+            mesh = mesh.extract_surface(algorithm="dataset_surface")
+        mesh = mesh.triangulate()
     return str(sv.write_mesh(path, mesh))
 
 

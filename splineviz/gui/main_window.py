@@ -197,6 +197,10 @@ class MainWindow(QMainWindow):
                 int(SCREEN_SHARE * avail.height()))
         self.resize(w, h)
         self.move(avail.x() + (avail.width() - w) // 2, avail.y() + (avail.height() - h) // 2)
+        # the 3-D view gets most of the width: each dock column about a fifth
+        side = max(240, int(0.2 * w))
+        self.resizeDocks([self.docks["Data"], self.docks["Clipping"]], [side, side],
+                         Qt.Orientation.Horizontal)
 
     # -- status --------------------------------------------------------------------------
 

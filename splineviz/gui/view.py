@@ -59,7 +59,15 @@ class View3D(QObject):
         self._axes = self.plotter.add_axes()
         self._refiner = JobRunner(self)
         self._refiner.changed.connect(self._refine_ended)
-        self._in_frame = False
+        self._render_timer = QTimer(self)
+        self._render_timer.setSingleShot(True)
+        self._render_timer.setInterval(0)
+        self._render_timer.timeout.connect(self._render_now)
+        self._camera_timer = QTimer(self)
+        self._camera_timer.setSingleShot(True)
+        self._camera_timer.setInterval(0)
+        self._camera_timer.timeout.connect(self._camera_to_model)
+        self._syncing_camera = False
         self._refine_job = None
         self._refine_again = False
         self._closed = False
@@ -91,9 +99,25 @@ class View3D(QObject):
     # -- rendering -----------------------------------------------------------------------
 
     def request_render(self) -> None:
-        # the camera written back at the end of a frame changes the model: no new render
-        if not self._closed and not self._in_frame:
+        """Render once control is back in the event loop: the changes made meanwhile (a
+        camera's position, focal point and view up are set one after the other) are all
+        in, and many changes cost one render."""
+        # the camera written back after a frame changes the model: that needs no new render
+        if not self._closed and not self._syncing_camera:
+            self._render_timer.start()
+
+    def _render_now(self) -> None:
+        if not self._closed:
             self.plotter.render()
+
+    def _camera_to_model(self) -> None:
+        if self._closed:
+            return
+        self._syncing_camera = True
+        try:
+            self.scene_view.camera_from_vtk()
+        finally:
+            self._syncing_camera = False
 
     def _frame_start(self, *_):
         self._t_frame = time.perf_counter()
@@ -104,11 +128,9 @@ class View3D(QObject):
         dt = time.perf_counter() - self._t_frame
         self.frame_times.append(dt)
         del self.frame_times[:-100]
-        self._in_frame = True
-        try:
-            self.scene_view.camera_from_vtk()
-        finally:
-            self._in_frame = False
+        # the mouse moves VTK's camera: tell the model, but after this event is handled —
+        # a render can happen while the model is in the middle of moving the camera itself
+        self._camera_timer.start()
         self.frame_rendered.emit(dt)
 
     def _interaction_started(self, *_):
@@ -116,7 +138,7 @@ class View3D(QObject):
 
     def _interaction_ended(self, *_):
         self.spline_scene.set_interacting(False)
-        self.request_render()  # schedules the exact frames
+        self._render_now()  # schedules the exact frames
 
     def _schedule_refine(self) -> None:
         if not self._closed:
@@ -139,7 +161,7 @@ class View3D(QObject):
 
     def _refined(self, results) -> None:
         if not self._closed and self.spline_scene.apply(results):
-            self.plotter.render()
+            self._render_now()
 
     def _failed(self, exc) -> None:
         from splineviz.gui.jobs import error_message
@@ -158,7 +180,8 @@ class View3D(QObject):
 
     @property
     def refining(self) -> bool:
-        return self._refine_job is not None or self._refine_timer.isActive()
+        return (self._refine_job is not None or self._refine_timer.isActive()
+                or self._render_timer.isActive())
 
     def wait_for_refine(self, timeout_s: float = 120.0) -> None:
         """Process events until exact frames are shown (tests, scripted screenshots)."""
@@ -210,6 +233,9 @@ class View3D(QObject):
                 p = event.position()
                 self._cursor = (p.x(), p.y())
                 self._readout_timer.start()
+            elif event.type() == QEvent.Type.Resize:
+                size = event.size()
+                self.scene.aspect = size.width() / max(size.height(), 1)
             elif event.type() == QEvent.Type.Leave:
                 self._cursor = None
                 self.readout.emit("")
@@ -254,6 +280,8 @@ class View3D(QObject):
         self._closed = True
         self._refine_timer.stop()
         self._readout_timer.stop()
+        self._camera_timer.stop()
+        self._render_timer.stop()
         self._refiner.close()
         self.scene.changed.disconnect(self.request_render)
         self.scene_view.close()

@@ -43,9 +43,21 @@ def as_polydata(mesh):
     return pv.PolyData(verts, cells)
 
 
+def _float32_normals(poly):
+    """A shallow copy whose active point normals are float32: VTK's PLY writer only writes
+    float normals (``nx ny nz``) and silently drops double ones."""
+    name = poly.point_data.active_normals_name
+    if name is None or poly.point_data[name].dtype == np.float32:
+        return poly
+    out = poly.copy(deep=False)
+    out.point_data[name] = np.asarray(poly.point_data[name], dtype=np.float32)
+    out.point_data.active_normals_name = name
+    return out
+
+
 def _vtk_writer(writer_cls, *, binary=True):
     def write(path: Path, mesh) -> None:
-        poly = as_polydata(mesh)
+        poly = _float32_normals(as_polydata(mesh))
         with atomic_output(path) as tmp:
             w = writer_cls()
             w.SetFileName(str(tmp))

@@ -80,6 +80,8 @@ class Scene:
         self.selected: Node | None = None
         #: True after any change since :meth:`mark_saved`
         self.modified = False
+        #: width / height of the view that shows the scene (set by views; used to frame)
+        self.aspect = 1.0
         self.view.events.connect(self._node_changed)
         # looking around is not an edit: the camera is saved, but moving it leaves
         # ``modified`` alone (no "unsaved changes" prompt after an orbit)
@@ -287,9 +289,10 @@ class Scene:
             direction = np.subtract(cam.position, cam.focal_point)
             up = np.asarray(cam.view_up, dtype=float)
         direction = direction / (np.linalg.norm(direction) or 1.0)
-        # the bounding sphere fits the narrower of the two view angles (the window may be
-        # wider than high, never assumed narrower), with a 10 % margin
+        # the bounding sphere fits the narrower of the two view angles (vertical, and
+        # horizontal from the view's aspect ratio), with a 10 % margin
         half = np.radians(cam.view_angle) / 2.0
+        half = min(half, float(np.arctan(np.tan(half) * max(self.aspect, 1e-3))))
         distance = 1.1 * radius / np.sin(half)
         up = up - np.dot(up, direction) * direction
         if np.linalg.norm(up) < 1e-9:

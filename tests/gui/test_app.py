@@ -1,4 +1,8 @@
-"""The desktop app under Xvfb (pytest-xvfb): window, panels, workers, export, robustness."""
+"""The desktop app under Xvfb (pytest-xvfb): window, panels, jobs, export, robustness.
+
+The window is a view of its scene model (``window.scene``): tests act through the panels or
+the model and check the model, the frames the view shows and the pictures.
+"""
 
 import os
 from pathlib import Path
@@ -10,8 +14,9 @@ pytest.importorskip("pytestqt")
 pv = pytest.importorskip("pyvista")
 
 import splineviz as sv  # noqa: E402
+from splineviz.core.splines import MODELS  # noqa: E402
 from splineviz.gui.main_window import MainWindow  # noqa: E402
-from splineviz.render.isosurface import MODEL_LABELS  # noqa: E402
+from splineviz.model import MeshNode, PointsNode  # noqa: E402
 
 SIZE = (160, 120)
 
@@ -23,7 +28,7 @@ def sphere_volume(n=15):
 
 
 @pytest.fixture
-def window(qtbot, tmp_path, monkeypatch):
+def window(qtbot, tmp_path):
     # recent files go to a private settings folder, not the user's
     from PySide6.QtCore import QSettings
 
@@ -38,85 +43,100 @@ def window(qtbot, tmp_path, monkeypatch):
     w.close()
 
 
+def add_sphere(w, iso=0.64, model="trilinear"):
+    vol = w.scene.add_volume(sphere_volume(), "sphere", isovalue=iso, model=model)
+    w.scene.frame(view="-Y")
+    w.scene.select(vol)
+    return vol, w.scene.isosurfaces_of(vol)[0]
+
+
 def view_image(w):
     w.plotter.render()
     return np.asarray(w.plotter.screenshot(return_img=True)).astype(int)
 
 
-def shown(w, layer):
-    return w.scene.shown_frame(layer)
+def shown(w, iso):
+    return w.spline_scene.shown_frame(w.view.scene_view.layers[iso.id])
 
 
 def test_window_opens_on_default_data_and_isovalue_changes_picture(window):
-    item = window.open_default()
-    layer = item.layers[0]
+    vol = window.open_default()
+    iso = window.scene.isosurfaces_of(vol)[0]
     window.wait_for_refine()
-    f = shown(window, layer)
-    assert f.final and f.frame.hit.mean() > 0.05
-    assert window.iso_panel.layer is layer
     a = view_image(window)
-    lo, hi = window.iso_panel.histogram.range()
-    window.iso_panel.spin.setValue(layer.isovalue + 0.15 * (hi - lo))
-    assert layer.isovalue == pytest.approx(window.iso_panel.spin.value())
+    layer = window.view.scene_view.layers[iso.id]
+    assert shown(window, iso).final and shown(window, iso).state == layer.state
+    window.iso_panel.spin.setValue(iso.isovalue + 0.1)
+    assert iso.isovalue == pytest.approx(window.iso_panel.spin.value())
     window.wait_for_refine()
     b = view_image(window)
-    assert shown(window, layer).state == layer.state
+    assert shown(window, iso).state == layer.state
     assert np.abs(a - b).sum(axis=2).astype(bool).mean() > 0.02
     # the status bar reports frame time and active cells
     assert "ms" in window.fps_label.text() and "active" in window.cells_label.text()
 
 
-def test_each_model_renders(window):
-    item = window.add_volume(sphere_volume(), "sphere", iso=0.64, model="trilinear")
-    layer = item.layers[0]
-    for index, model in enumerate(MODEL_LABELS):
-        window.iso_panel.model.setCurrentIndex(index)
-        assert layer.model == model
+def test_each_registered_model_is_offered_and_renders(window):
+    vol, iso = add_sphere(window)
+    box = window.iso_panel.model
+    offered = [box.itemData(i) for i in range(box.count())]
+    assert offered == list(MODELS)  # the registry, plugin models included
+    assert "tricubic-bspline" in offered  # the first-party model plugin
+    for index, model in enumerate(offered):
+        if MODELS[model].family is None:
+            continue  # NumPy-reference models: slow at any size; test_plugin_bspline renders
+        box.setCurrentIndex(index)
+        assert iso.model == model
         window.wait_for_refine()
-        f = shown(window, layer)
-        assert f.final and f.state == layer.state
+        f = shown(window, iso)
+        assert f.final and f.state == window.view.scene_view.layers[iso.id].state
         r = np.linalg.norm(f.frame.position[f.frame.hit], axis=1)
-        assert f.frame.hit.mean() > 0.1 and np.abs(r - 0.8).max() < 0.05, model
+        assert f.frame.hit.mean() > 0.02 and np.abs(r - 0.8).max() < 0.05, model
 
 
 def test_clip_plane_removes_surface_on_cut_side_and_shows_mesh_inside(window):
-    item = window.add_volume(sphere_volume(), "sphere", iso=0.64, model="trilinear")
-    layer = item.layers[0]
-    cam = window.plotter.camera
-    cam.position, cam.focal_point, cam.up = (0.2, -5, 0.3), (0, 0, 0), (0, 0, 1)
-    window.add_mesh_item(pv.Sphere(radius=0.5, theta_resolution=30, phi_resolution=30),
-                         "ball")
-    rec = window.scene.props[window.items[-1].prop_name]
-    rec.actor.GetProperty().SetColor(1, 0, 0)
+    vol, iso = add_sphere(window)
+    ball = pv.Sphere(radius=0.5, theta_resolution=30, phi_resolution=30)
+    mesh = window.scene.add_mesh(ball.points, ball.faces.reshape(-1, 4)[:, 1:], name="ball",
+                                 color=(1.0, 0.0, 0.0), show_edges=False)
+    window.scene.camera.update(position=(0.2, -5, 0.3), focal_point=(0, 0, 0),
+                               view_up=(0, 0, 1))
+    window.scene.view.show_scale = False
+    rec = window.spline_scene.props[f"mesh:{mesh.id}"]
     rec.actor.GetProperty().LightingOff()
-    rec.actor.GetProperty().EdgeVisibilityOff()
     window.wait_for_refine()
     img = view_image(window)
     red = (img[..., 0] > 200) & (img[..., 1] < 60) & (img[..., 2] < 60)
     assert red.sum() == 0  # the ball is inside the surface
+    window.scene.select(vol)
     plane = window.clip_panel.add_plane(origin=(0, 0, 0), normal=(-1, 0, 0))
-    assert len(window.clip_panel.planes) == 1 and plane["widget"].GetEnabled()
+    assert plane.volume_id == vol.id and window.plane_widgets.widgets[plane.id].GetEnabled()
     window.clip_panel.show_widgets.setChecked(False)  # its red outline is not the ball
+    assert not window.plane_widgets.widgets[plane.id].GetEnabled()
     window.wait_for_refine()
-    f = shown(window, layer).frame
+    f = shown(window, iso).frame
     assert np.nanmax(f.position[..., 0]) <= 1e-6  # nothing on the cut side x > 0
+    rec = window.spline_scene.props[f"mesh:{mesh.id}"]
+    rec.actor.GetProperty().LightingOff()
     img = view_image(window)
     red = (img[..., 0] > 200) & (img[..., 1] < 60) & (img[..., 2] < 60)
     assert red.sum() > 50
     # the ball shows through the cut, never over the near wall of the kept half
     near_wall = f.hit & (np.nan_to_num(f.position[..., 1]) < 0)
     assert near_wall.sum() > 500 and not np.any(red & near_wall)
-    window.clip_panel.list.setCurrentRow(0)
     window.clip_panel.flip_plane()
+    assert plane.normal == (1.0, 0.0, 0.0)
     window.wait_for_refine()
-    f = shown(window, layer).frame
+    f = shown(window, iso).frame
     assert np.nanmin(f.position[..., 0]) >= -1e-6
-    window.clip_panel.remove_plane()
-    assert window.scene.clip_planes == ()
+    # removing the volume removes its planes (they never outlive their volume)
+    window.scene.remove(vol)
+    assert not window.scene.clip_planes and not window.plane_widgets.widgets
+    assert window.clip_panel.list.count() == 0
 
 
 def test_screenshot_export_has_requested_size(window, tmp_path):
-    window.add_volume(sphere_volume(), "sphere", iso=0.64, model="trilinear")
+    add_sphere(window)
     window.wait_for_refine()
     img = window.export_screenshot(tmp_path / "a.png", size=(211, 97), transparent=True)
     assert img.shape == (97, 211, 4)
@@ -125,63 +145,97 @@ def test_screenshot_export_has_requested_size(window, tmp_path):
     with Image.open(tmp_path / "a.png") as im:
         assert im.size == (211, 97)
     assert img[0, 0, 3] == 0 and (img[..., 3] == 255).mean() > 0.01
+    assert oct(os.stat(tmp_path / "a.png").st_mode & 0o777) == oct(0o666 & ~_umask())
+
+
+def _umask():
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def test_corrupt_file_gives_message_and_window_stays_usable(window, tmp_path):
-    item = window.add_volume(sphere_volume(), "sphere", iso=0.64, model="trilinear")
+    vol, iso = add_sphere(window)
     bad = tmp_path / "broken.vti"
     bad.write_bytes(b"<?xml version='1.0'?>\n<VTKFile type='ImageData'>garbage" + os.urandom(64))
-    window.open_path(bad)
+    window.open_path(bad, mode="add")
     window.wait_idle()
     assert window.last_error and "broken.vti" in window.last_error
-    assert len(window.items) == 1 and window.isVisible()
+    assert len(window.scene) == 2 and window.isVisible()
+    assert "broken.vti" in window.log.lines()[-1]
     # still usable: the isovalue still drives the picture
+    window.scene.select(iso)
     window.iso_panel.spin.setValue(0.3)
+    assert iso.isovalue == pytest.approx(0.3)
     window.wait_for_refine()
-    f = shown(window, item.layers[0])
-    assert f.state == item.layers[0].state and f.frame.hit.any()
+    assert shown(window, iso).frame.hit.any()
+
+
+def test_open_replace_or_add_frames_the_data(window, tmp_path):
+    a, b = tmp_path / "a.npy", tmp_path / "b.npy"
+    np.save(a, sphere_volume().data)
+    np.save(b, sphere_volume(9).data)
+    window.open_path(a, mode="replace", block=True)
+    assert [v.name for v in window.scene.volumes] == ["a.npy"]
+    bounds = np.asarray(window.scene.volumes[0].bounds)
+    cam = window.scene.camera
+    assert np.allclose(cam.focal_point, bounds.mean(axis=1))  # the new data is framed
+    window.open_path(b, mode="add", block=True)
+    assert [v.name for v in window.scene.volumes] == ["a.npy", "b.npy"]
+    window.open_path(b, mode="replace", block=True)
+    assert [v.name for v in window.scene.volumes] == ["b.npy"]
+    # the panels show the new object, not a removed one
+    assert window.iso_panel.node is window.scene.isosurfaces[0]
+    assert window.data_panel.tree.topLevelItemCount() == 1
 
 
 def test_point_cloud_loads_and_session_round_trip(window, tmp_path, shared_data):
-    window.open_path(shared_data / "points" / "kitten.xyz", block=True)
-    pts = window.items[-1]
-    assert pts.kind == "points" and len(pts.points.points) > 5000
-    window.add_volume(sphere_volume(), "sphere", iso=0.64, model="trilinear")
+    window.open_path(shared_data / "points" / "kitten.xyz", mode="replace", block=True)
+    pts = window.scene.of_kind(PointsNode)[-1]
+    assert len(pts.data) > 5000
     vol = tmp_path / "sphere.npy"
     np.save(vol, sphere_volume().data)
-    window.clear()
-    window.open_path(vol, block=True, iso=0.5)
+    window.open_path(vol, mode="add", block=True, isovalue=0.5)
+    volume = window.scene.volumes[0]
+    window.scene.select(volume)
     window.clip_panel.add_plane(origin=(7, 7, 7), normal=(0, 0, 1))
-    window.items[0].layers[0].set_opacity(0.5)
-    path = tmp_path / "s.svs"
-    window.save_session(path)
-    window.clear()
-    assert not window.items
-    window.open_path(path, block=True)
+    window.scene.isosurfaces[0].opacity = 0.5
+    pts.point_size = 6.0
+    path = tmp_path / "s"  # typed without the suffix: .svs is appended
+    assert window.save_session(path) == tmp_path / "s.svs"
+    assert (tmp_path / "s.svs").exists() and not path.exists()
+    assert not window.scene.modified and "s.svs" in window.windowTitle()
+    window.scene.clear()
+    window.open_path(tmp_path / "s.svs", block=True)
     assert window.last_error is None
-    layer = window.items[0].layers[0]
-    assert layer.isovalue == 0.5 and layer.opacity == 0.5
-    assert window.scene.clip_planes[0][1] == (0.0, 0.0, 1.0)
-    assert str(path.absolute()) in window.recent_files()
+    iso = window.scene.isosurfaces[0]
+    assert iso.isovalue == 0.5 and iso.opacity == 0.5
+    assert window.scene.clip_planes[0].normal == (0.0, 0.0, 1.0)
+    assert window.scene.of_kind(PointsNode)[0].point_size == 6.0
+    assert str((tmp_path / "s.svs").absolute()) in window.recent_files()
 
 
 def test_smoothing_panel_feeds_the_spline_and_keeps_original(window):
-    item = window.add_volume(sphere_volume(), "sphere", iso=0.64, model="trilinear")
-    original = item.volume.data.copy()
+    vol, iso = add_sphere(window)
+    original = vol.data.data.copy()
     window.smooth_panel.sigma.setValue(1.5)   # live: runs after a short delay in a worker
     window.smooth_panel.apply()
     window.wait_idle()
-    assert item.sigma == 1.5 and item.smoothed is not None
-    assert np.array_equal(item.volume.data, original)
-    assert item.layers[0].volume is item.smoothed
+    layer = window.view.scene_view.layers[iso.id]
+    assert vol.sigma == 1.5 and vol.smoothed is not None and not vol.smoothing_pending
+    assert np.array_equal(vol.data.data, original)
+    assert layer.volume is vol.smoothed
+    assert "smoothed" in window.smooth_panel.info.text()
     window.smooth_panel.reset_button.click()
     window.wait_idle()
-    assert item.smoothed is None and item.layers[0].volume is item.volume
+    assert vol.sigma == 0 and layer.volume is vol.data
 
 
 def test_200_isovalue_changes_leave_memory_flat(window):
     window.resize(400, 300)  # the view shrinks to its minimum size: a fast loop
-    item = window.add_volume(sphere_volume(21), "sphere", iso=0.5, model="trilinear")
+    vol = window.scene.add_volume(sphere_volume(21), "sphere", isovalue=0.5, model="trilinear")
+    iso = window.scene.isosurfaces_of(vol)[0]
+    window.scene.select(iso)
     spin = window.iso_panel.spin
 
     def rss_mb():
@@ -191,11 +245,13 @@ def test_200_isovalue_changes_leave_memory_flat(window):
     values = 0.3 + 0.5 * (np.arange(220) % 20) / 20
     for v in values[:20]:  # warm up: kernels built, buffers allocated
         spin.setValue(float(v))
+        window.wait_for_refine()
     before = rss_mb()
     for v in values[20:]:
         spin.setValue(float(v))
+    window.wait_for_refine()
     after = rss_mb()
-    assert item.layers[0].isovalue == pytest.approx(values[-1])
+    assert iso.isovalue == pytest.approx(values[-1])
     print(f"RSS {before:.1f} -> {after:.1f} MiB over 200 isovalue changes")
     assert after - before < 25, f"RSS grew {after - before:.1f} MiB over 200 changes"
 
@@ -226,68 +282,91 @@ def test_cli_corrupt_file_is_one_line_error(qapp, tmp_path, capsys):
     assert not Path(tmp_path / "x.png").exists()
 
 
-def test_remesh_panel_runs_remesh_in_a_worker(window, shared_data):
-    window.open_path(shared_data / "points" / "kitten.xyz", block=True)
-    cloud = window.items[-1]
-    window.remesh_panel.mode.setCurrentIndex(0)
-    window.remesh_panel.rho.setValue(0.6)  # coarse: a quick run
-    window.remesh_panel.run()
+def test_remesh_panel_runs_remesh_in_a_job_and_cancel_acts_at_once(window, shared_data):
+    import time
+
+    window.open_path(shared_data / "points" / "kitten.xyz", mode="replace", block=True)
+    cloud = window.scene.of_kind(PointsNode)[-1]
+    panel = window.remesh_panel
+    panel.mode.setCurrentIndex(0)
+    panel.rho.setValue(0.6)  # coarse: a quick run
+    job = panel.run()
     assert window.busy() and window.cancel_button.isVisibleTo(window)
     window.wait_idle(300)
-    assert window.last_error is None
-    mesh_item = window.items[-1]
-    assert mesh_item.kind == "mesh" and mesh_item.mesh.n_cells > 500
-    assert mesh_item.stats["boundary_edges"] == 0 and mesh_item.stats["radius_ratio_mean"] > 0.8
-    assert "radius ratio mean" in window.remesh_panel.stats.text()
-    assert cloud.name in mesh_item.name
+    assert window.last_error is None and job.state == "done"
+    mesh = window.scene.of_kind(MeshNode)[-1]
+    assert len(mesh.faces) > 500 and mesh.points_id == cloud.id
+    assert mesh.stats["boundary_edges"] == 0 and mesh.stats["radius_ratio_mean"] > 0.8
+    assert mesh.normals.shape == mesh.vertices.shape
+    assert window.scene.selected is mesh and "radius ratio mean" in panel.stats.text()
+    assert cloud.name in mesh.name
+    # removing the mesh clears its statistics: nothing stale is shown
+    window.scene.remove(mesh)
+    assert panel.stats.text() == ""
+    # cancel: the window is idle again within a second, nothing is added
+    job = panel.run()
+    t0 = time.perf_counter()
+    window.cancel_button.click()
+    assert "cancelling" in window.statusBar().currentMessage()
+    window.wait_idle(5)
+    assert time.perf_counter() - t0 < 1.0 and job.state == "cancelled"
+    assert not window.scene.of_kind(MeshNode) and not window.cancel_button.isVisible()
 
 
 @pytest.mark.slow
 def test_bonsai_opens_in_a_worker_and_renders(window, shared_data):
-    window.open_path(shared_data / "volumes" / "bonsai.vti", iso=40.0)
+    window.open_path(shared_data / "volumes" / "bonsai.vti", mode="replace", isovalue=40.0)
     assert window.busy()
     window.wait_idle(300)
     window.wait_for_refine(300)
-    layer = window.items[-1].layers[0]
-    f = shown(window, layer)
+    iso = window.scene.isosurfaces[0]
+    f = shown(window, iso)
     assert f.final and f.frame.hit.mean() > 0.05 and f.stats["active_cells"] > 100_000
 
 
-def test_export_mesh_of_an_isosurface_and_drop_to_open(window, tmp_path, qtbot):
+def test_export_mesh_of_an_isosurface_clipped_with_normals_and_drop_to_open(window, tmp_path):
     from PySide6.QtCore import QMimeData, QPointF, Qt, QUrl
     from PySide6.QtGui import QDropEvent
 
-    item = window.add_volume(sphere_volume(), "sphere", iso=0.64, model="cubic-c1")
+    vol, iso = add_sphere(window, model="cubic-c1")
     out = tmp_path / "iso.ply"
-    window.export_mesh(out, item.layers[0])
+    window.commands.export_mesh(out, iso)
+    window.wait_idle()
     mesh = sv.read_mesh(out)
     r = np.linalg.norm(np.asarray(mesh.points), axis=1)
     assert mesh.n_cells > 500 and np.abs(r - 0.8).max() < 0.02
+    assert "Normals" in mesh.point_data or mesh.point_data.active_normals is not None
+    # with a clip plane of the volume, the export is clipped too
+    window.scene.add_clip_plane((0, 0, 0), (0, 0, 1), volume=vol)
+    window.commands.export_mesh(tmp_path / "half.ply", iso)
+    window.wait_idle()
+    half = sv.read_mesh(tmp_path / "half.ply")
+    assert np.asarray(half.points)[:, 2].min() > -1e-6 and half.n_cells < 0.7 * mesh.n_cells
     # dropping the file onto the window opens it (as a point cloud of its vertices)
     mime = QMimeData()
     mime.setUrls([QUrl.fromLocalFile(str(out))])
     event = QDropEvent(QPointF(10, 10), Qt.DropAction.CopyAction, mime,
                        Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier)
+    window.commands._replace_or_add = lambda mode: "add"  # the "replace or add?" answer
     window.dropEvent(event)
     window.wait_idle()
-    assert window.items[-1].kind == "points" and window.items[-1].name == "iso.ply"
+    assert window.scene.of_kind(PointsNode)[-1].name == "iso.ply"
 
 
 def test_synthetic_sources_from_plugins_and_default_session(window, tmp_path):
     from splineviz.plugins import sources
 
     names = sorted(sources())
-    if not names:
-        pytest.skip("no source plugin installed")
-    window._fill_sources()
+    assert names, "the first-party sources plugin is installed by ./install.sh --dev"
+    window.fill_sources()
     assert len(window.sources_menu.actions()) >= len(names)
-    item = window.open_source(names[0], shape=(12, 13, 14))
-    assert item.volume.shape == (12, 13, 14) and item.source == names[0]
+    vol = window.commands.open_source(names[0], shape=(12, 13, 14), mode="replace")
+    assert vol.data.shape == (12, 13, 14) and vol.source == names[0]
     path = tmp_path / "src.svs"
     window.save_session(path)
-    window.clear()
+    window.scene.clear()
     window.open_path(path, block=True)
-    assert window.last_error is None and window.items[0].volume.shape == (12, 13, 14)
+    assert window.last_error is None and window.scene.volumes[0].data.shape == (12, 13, 14)
 
 
 def test_cli_screenshot_without_display_renders_offscreen(tmp_path):
@@ -312,10 +391,10 @@ def test_cli_screenshot_without_display_renders_offscreen(tmp_path):
 def test_session_with_a_moved_data_file_is_repointed(window, tmp_path, monkeypatch):
     vol = tmp_path / "a.npy"
     np.save(vol, sphere_volume().data)
-    window.open_path(vol, block=True, iso=0.5)
+    window.open_path(vol, mode="replace", block=True, isovalue=0.5)
     path = tmp_path / "s.svs"
     window.save_session(path)
-    window.clear()
+    window.scene.clear()
     moved = tmp_path / "elsewhere.npy"
     vol.rename(moved)
     asked = []
@@ -324,8 +403,54 @@ def test_session_with_a_moved_data_file_is_repointed(window, tmp_path, monkeypat
         asked.append(Path(missing).name)
         return str(moved)
 
-    monkeypatch.setattr(window, "_ask_repoint", fake_dialog)
+    monkeypatch.setattr(window.commands, "_ask_repoint", fake_dialog)
     window.open_path(path)   # parsed here, data read in a worker
     window.wait_idle()
     assert asked == ["a.npy"] and window.last_error is None
-    assert window.items[0].path == str(moved) and window.items[0].layers[0].isovalue == 0.5
+    assert window.scene.volumes[0].path == str(moved)
+    assert window.scene.isosurfaces[0].isovalue == 0.5
+
+
+def test_window_fits_the_screen_and_every_control_has_a_tooltip(window):
+    from PySide6.QtWidgets import QAbstractButton, QAbstractSpinBox, QComboBox
+
+    avail = window.screen().availableGeometry()
+    window.fit_to_screen()
+    frame = window.frameGeometry()
+    assert frame.width() <= avail.width() and frame.height() <= avail.height()
+    assert window.statusBar().isVisible()
+    # every control of every panel (superqt's labelled slider carries it on its parent)
+    missing = [f"{name}: {type(w).__name__} {getattr(w, 'text', lambda: '')()}"
+               for name, dock in window.docks.items()
+               for cls in (QAbstractButton, QAbstractSpinBox, QComboBox)
+               for w in dock.widget().findChildren(cls)
+               if not w.toolTip() and not (w.parent() and w.parent().toolTip())]
+    assert not missing, missing
+    for action in window.toolbar.actions():
+        assert action.isSeparator() or action.toolTip()
+    view_menu = [a.text() for a in window.menuBar().actions()]
+    assert "&View" in view_menu
+
+
+def test_standard_views_look_along_the_axes(window):
+    add_sphere(window)
+    window.actions_by_name["view +X"].trigger()
+    cam = window.scene.camera
+    d = np.subtract(cam.position, cam.focal_point)
+    assert d[0] > 0 and np.allclose(d[1:], 0, atol=1e-9)
+    vtk_cam = window.plotter.renderer.GetActiveCamera()
+    assert np.allclose(vtk_cam.GetPosition(), cam.position)
+    window.actions_by_name["view -Z"].trigger()
+    d = np.subtract(cam.position, cam.focal_point)
+    assert d[2] < 0 and np.allclose(d[:2], 0, atol=1e-9)
+
+
+def test_value_readout_under_the_cursor(window):
+    vol, iso = add_sphere(window)
+    window.wait_for_refine()
+    w, h = window.plotter.width(), window.plotter.height()
+    hit = window.view.pick(w / 2, h / 2)
+    assert hit is not None and hit["name"] == iso.name
+    assert np.linalg.norm(hit["position"]) == pytest.approx(0.8, abs=0.02)
+    assert hit["value"] == pytest.approx(iso.isovalue, abs=0.05)
+    assert window.view.pick(2, 2) is None  # the background
