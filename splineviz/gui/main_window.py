@@ -413,6 +413,9 @@ class MainWindow(QMainWindow):
     def wait_for_refine(self, timeout_s: float = 120.0) -> None:
         self.view.wait_for_refine(timeout_s)
 
+    def request_render(self) -> None:
+        self.view.request_render()
+
     # -- drag and drop, close ------------------------------------------------------------
 
     def dragEnterEvent(self, event):  # noqa: N802 (Qt naming)

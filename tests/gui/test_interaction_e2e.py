@@ -56,8 +56,10 @@ def window(qapp, tmp_path_factory):
     w.show()
     w.resize(w.minimumSizeHint())
     w.open_default()
-    # the orientation axes are a window decoration the off-screen reference does not draw
+    # the orientation axes and the axes grid are window decorations the off-screen
+    # reference (a copy of the spline scene's props) does not draw
     w.plotter.hide_axes()
+    w.scene.view.show_scale = False
     pump(0.3)
     w.wait_for_refine(120)
     yield w
@@ -67,15 +69,15 @@ def window(qapp, tmp_path_factory):
 
 
 def layer_of(w):
-    return w.scene.layers[0]
+    return w.spline_scene.layers[0]
 
 
 def scene_shows_exact(w) -> bool:
     """The layer's shown frame is final and made for the current view and layer state."""
     layer = layer_of(w)
-    f = w.scene.shown_frame(layer)
+    f = w.spline_scene.shown_frame(layer)
     return (f is not None and f.final and f.state == layer.state
-            and f.view.key() == w.scene.view_state().key())
+            and f.view.key() == w.spline_scene.view_state().key())
 
 
 def window_image(w) -> np.ndarray:
@@ -92,15 +94,15 @@ def assert_exact_after(w, what, compare_image=True):
     t0 = time.perf_counter()
     pump(SETTLE_S, lambda: scene_shows_exact(w))
     waited = time.perf_counter() - t0
-    shown = w.scene.shown_frame(layer_of(w))
+    shown = w.spline_scene.shown_frame(layer_of(w))
     img = window_image(w)
-    ref = offscreen_screenshot(w.scene, size=w.scene.window_size())[..., :3]
+    ref = offscreen_screenshot(w.spline_scene, size=w.spline_scene.window_size())[..., :3]
     mask = surface_mask(ref, w.plotter.renderer.GetBackground())
     block = blockiness(img, mask)
     state = (f"{what}: after {waited:.2f} s the shown frame has scale {shown.scale:.3f} "
              f"({shown.path}), final={shown.final}; blockiness {block:.3f} "
              f"(exact reference {blockiness(ref, mask):.3f})")
-    assert mask.mean() > 0.05, f"{what}: the reference shows almost no surface"
+    assert mask.mean() > 0.02, f"{what}: the reference shows almost no surface"
     assert scene_shows_exact(w), state
     assert block < MAX_BLOCKINESS, state
     if compare_image:
@@ -153,7 +155,7 @@ def display_point(renderer, world, height):
 
 def test_plane_widget_drag_ends_on_the_exact_frame(window):
     w = window
-    scene, plotter = w.scene, w.plotter
+    scene, plotter = w.spline_scene, w.plotter
     bounds = np.asarray(layer_of(w).volume.bounds, float).reshape(3, 2)
     mid = bounds.mean(axis=1)
     normal = (1.0, 0.0, 0.0)
