@@ -70,6 +70,13 @@ class Node(EventedModel):
     #: session object type written for this node (set by subclasses)
     kind: str = Field(default="", exclude=True, frozen=True)
 
+    def __init__(self, **data: Any) -> None:
+        try:
+            super().__init__(**data)
+        except ValidationError as exc:
+            raise ModelError(f"{type(self).__name__} {data.get('name') or data.get('id', '')}: "
+                             f"{_describe(exc)}") from None
+
     def __setattr__(self, name: str, value: Any) -> None:
         try:
             super().__setattr__(name, value)
