@@ -4,7 +4,6 @@ the GUI thread when they finish. No method here blocks the GUI thread on data.""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np

@@ -1,6 +1,11 @@
 """Long work off the GUI thread, with progress, a cancel that acts at once, and one message
 per error.
 
+Work that is mostly Python (the remesher's advancing front) runs in a child process
+(``process=True``): a thread would hold the GIL for hundreds of milliseconds at a time and
+stall the window, and a process can be stopped on Cancel. The child reports progress
+through a queue; its result and errors come back pickled.
+
 :class:`JobRunner` runs a function in a daemon thread. The function may take a keyword
 ``job`` (a :class:`JobContext`): ``job.progress(fraction, message)`` reports progress and
 returns False once the user cancelled, and ``job.cancelled`` can be polled; functions that
@@ -13,6 +18,9 @@ arrive, is dropped. Results and errors reach the GUI thread through queued Qt si
 from __future__ import annotations
 
 import inspect
+import multiprocessing
+import pickle
+import queue
 import threading
 import time
 
@@ -82,7 +90,7 @@ class Job:
     """One piece of background work (see :class:`JobRunner`)."""
 
     def __init__(self, runner: JobRunner, label: str, func, args, kwargs, on_done,
-                 on_error, cancellable: bool):
+                 on_error, cancellable: bool, process: bool = False):
         self.label = label
         self.cancellable = cancellable
         self.state = "running"  # running | cancelling | done | failed | cancelled
@@ -94,7 +102,9 @@ class Job:
         self._on_error = on_error
         self._cancel = threading.Event()
         self._bridge = _Bridge(self)
-        if "job" in _parameters(func):
+        if process:
+            func, args, kwargs = _in_process, (func, args, kwargs, JobContext(self)), {}
+        elif "job" in _parameters(func):
             kwargs = {**kwargs, "job": JobContext(self)}
         self._thread = threading.Thread(target=self._run, args=(func, args, kwargs),
                                          name=f"splineviz job: {label}", daemon=True)
@@ -167,6 +177,67 @@ class Job:
         return not self._thread.is_alive()
 
 
+class _ChildJob:
+    """The job context a function sees in a child process: progress goes to the parent."""
+
+    cancelled = False  # the parent stops the process instead
+
+    def __init__(self, messages):
+        self._messages = messages
+
+    def progress(self, fraction, message: str = "") -> bool:
+        self._messages.put(("progress", (fraction, str(message))))
+        return True
+
+    def check(self) -> None:
+        pass
+
+
+def _child_main(func, args, kwargs, messages) -> None:
+    if "job" in _parameters(func):
+        kwargs = {**kwargs, "job": _ChildJob(messages)}
+    try:
+        messages.put(("result", func(*args, **kwargs)))
+    except BaseException as exc:  # noqa: BLE001  (handed to the parent)
+        try:
+            pickle.dumps(exc)
+        except Exception:  # noqa: BLE001  (an exception that does not pickle: its text)
+            exc = RuntimeError(f"{type(exc).__name__}: {exc}")
+        messages.put(("error", exc))
+
+
+def _in_process(func, args, kwargs, job: JobContext):
+    """Run ``func`` in a spawned child process (job thread side): forward its progress,
+    stop it on cancel, return its result or raise its error."""
+    ctx = multiprocessing.get_context("spawn")  # never fork a process that runs Qt threads
+    messages = ctx.Queue()
+    child = ctx.Process(target=_child_main, args=(func, args, kwargs, messages), daemon=True,
+                        name=f"splineviz job: {job._job.label}")
+    child.start()
+    try:
+        while True:
+            try:
+                kind, payload = messages.get(timeout=0.05)
+            except queue.Empty:
+                if job.cancelled:
+                    raise Cancelled(f"{job._job.label} cancelled") from None
+                if not child.is_alive() and messages.empty():
+                    raise RuntimeError(f"the worker process of {job._job.label} ended "
+                                       f"unexpectedly (exit code {child.exitcode})") from None
+                continue
+            if kind == "progress":
+                job.progress(*payload)
+            elif kind == "error":
+                raise payload
+            else:
+                return payload
+    finally:
+        if child.is_alive():
+            child.terminate()
+        child.join(2.0)
+        messages.close()
+
+
 def _parameters(func) -> set[str]:
     try:
         return set(inspect.signature(func).parameters)
@@ -203,10 +274,11 @@ class JobRunner(QObject):
         self.closed = False
 
     def run(self, label: str, func, *args, on_done=None, on_error=None,
-            cancellable: bool = True, **kwargs) -> Job:
-        """Start ``func(*args, **kwargs)`` in a thread (``job=`` added if it takes one);
+            cancellable: bool = True, process: bool = False, **kwargs) -> Job:
+        """Start ``func(*args, **kwargs)`` in a thread (``job=`` added if it takes one), or
+        in a child process (``process=True``: ``func`` and its arguments must pickle);
         ``on_done(result)`` / ``on_error(exc)`` run in the GUI thread."""
-        job = Job(self, label, func, args, kwargs, on_done, on_error, cancellable)
+        job = Job(self, label, func, args, kwargs, on_done, on_error, cancellable, process)
         self.jobs.append(job)
         job._thread.start()
         self.changed.emit()

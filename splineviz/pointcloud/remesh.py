@@ -134,3 +134,33 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     rep.flips = flips
     cells = np.hstack([np.full((len(faces), 1), 3, dtype=np.int64), faces]).ravel()
     return pv.PolyData(vertices, cells)
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals ``(V, 3)`` of triangles ``(F, 3)`` oriented
+    counter-clockwise (zero for a vertex of no triangle)."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # 2 x area x unit normal
+    n = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(n, f[:, k], fn)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def remesh_with_quality(points, edge_length=None, rho=None, job=None) -> dict:
+    """:func:`remesh` plus what a viewer shows of the result: ``{"vertices" (V, 3), "faces"
+    (F, 3), "normals" (V, 3), "quality"}`` (:func:`~splineviz.pointcloud.quality.mesh_quality`
+    against the points). ``job``: an object with ``progress(fraction, message)``, e.g. the
+    GUI's job context; runs in a worker process there, so it returns plain arrays."""
+    from splineviz.pointcloud.quality import mesh_quality
+
+    progress = None if job is None else job.progress
+    mesh = remesh(points, edge_length=edge_length, rho=rho, progress=progress)
+    if progress is not None:
+        progress(None, "measuring the mesh")
+    vertices = np.asarray(mesh.points, dtype=np.float64)
+    faces = np.asarray(mesh.faces).reshape(-1, 4)[:, 1:].astype(np.int64)
+    return {"vertices": vertices, "faces": faces, "normals": vertex_normals(vertices, faces),
+            "quality": mesh_quality(mesh, reference=points)}

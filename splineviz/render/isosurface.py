@@ -26,9 +26,8 @@ import numpy as np
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import Frame
-from splineviz.core.volume import Volume
-
 from splineviz.core.splines import MODELS
+from splineviz.core.volume import Volume
 from splineviz.model import nodes
 
 #: default front colours of successive layers (a qualitative palette: tell surfaces apart)

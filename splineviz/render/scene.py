@@ -37,6 +37,12 @@ from splineviz.render.quad import FrameQuad, view_normals
 PREVIEW_BUDGET_S = 0.06
 #: smallest preview resolution factor
 MIN_PREVIEW_SCALE = 1.0 / 16.0
+#: the resolution factors a preview may use (powers of sqrt 2 from 1 down to
+#: :data:`MIN_PREVIEW_SCALE`). The OpenCL device (PoCL) compiles the ray-cast kernel anew for
+#: each new frame size (0.2-0.7 s measured on 2 cores); a continuous scale made almost every
+#: drag step a new size and stalled the window for that long. With these few levels each
+#: size of a window is compiled once (and PoCL keeps it in its disk cache).
+PREVIEW_LEVELS = tuple(2.0 ** (-k / 2.0) for k in range(9))
 #: a preview may classify cells for a new isovalue itself when the last classification took
 #: at most this long (or, before the first, when the volume has at most
 #: :data:`PREVIEW_CLASSIFY_SAMPLES` samples); else the refinement worker classifies and the
@@ -67,6 +73,10 @@ class _LayerView:
     shown: RenderedFrame | None = None
     mean_depth: float = 1.0
     preview_scale: float | None = None
+    #: preview frame sizes cast so far; seconds of the last preview (None: none yet, or
+    #: one of a new size, whose time includes compiling the kernel for that size)
+    preview_sizes: set = field(default_factory=set)
+    preview_seconds: float | None = None
     callback: object = None
     pending: dict = field(default_factory=dict)
 
@@ -215,16 +225,22 @@ class SplineScene:
 
         The scale follows the time of the last preview (frames have fixed costs, so a
         per-pixel estimate would overshoot): it grows or shrinks by the square root of the
-        budget ratio, at most by a factor two per frame.
+        budget ratio, at most by a factor two per frame; the time of a preview of a size not
+        cast before is not counted (it includes the kernel's compilation). The frame is cast
+        at the largest of :data:`PREVIEW_LEVELS` not above that scale, so a level is left
+        upwards only when a preview took at most half the budget.
         """
-        last = lv.shown
-        if last is None or lv.preview_scale is None:
+        if lv.shown is None or lv.preview_scale is None:
             lv.preview_scale = 0.25
-        elif last.scale < 1.0 and last.seconds > 0:
-            ratio = float(np.sqrt(PREVIEW_BUDGET_S / last.seconds))
+        elif lv.preview_seconds:
+            # the last *preview*: an exact frame shown since does not count, but a preview
+            # at scale 1 does (else the scale would stay at 1 however slow those frames are)
+            ratio = float(np.sqrt(PREVIEW_BUDGET_S / lv.preview_seconds))
             lv.preview_scale *= float(np.clip(ratio, 0.5, 2.0))
         lv.preview_scale = float(np.clip(lv.preview_scale, MIN_PREVIEW_SCALE, 1.0))
-        return lv.preview_scale, True
+        level = max((v for v in PREVIEW_LEVELS if v <= lv.preview_scale * (1 + 1e-9)),
+                    default=MIN_PREVIEW_SCALE)
+        return max(level, MIN_PREVIEW_SCALE), True
 
     def _before_render(self, *_args) -> None:
         t0 = time.perf_counter()
@@ -252,6 +268,10 @@ class SplineScene:
                 rf = layer.compute(view, scale=scale, preview=fast, blocking=False,
                                    classify=quick)
                 if rf is not None:  # else a worker holds the caster: keep the old frame
+                    size = rf.frame.hit.shape
+                    lv.preview_seconds = rf.seconds if size in lv.preview_sizes else None
+                    lv.preview_sizes.add(size)
+                    lv.preview_scale = rf.scale  # the next step starts from the level cast
                     self._show(layer, rf)
                 stale.append(layer)
         self._order_quads()

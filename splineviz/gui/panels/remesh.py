@@ -19,29 +19,15 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+# imported with the window, not on the first point cloud: importing scipy.spatial takes
+# ~0.6 s and holds the GIL, which would stall the window even from a worker thread
+from scipy.spatial import cKDTree
+
 from splineviz.model import MeshNode, PointsNode, Scene
-
-
-def remesh_points(points, edge_length=None, rho=None, job=None) -> dict:
-    """Run :func:`splineviz.remesh` (worker thread) -> vertices, faces, normals, quality."""
-    import splineviz as sv
-
-    progress = None if job is None else job.progress
-    mesh = sv.remesh(points, edge_length=edge_length, rho=rho, progress=progress)
-    if job is not None:
-        job.progress(None, "measuring the mesh")
-    quality = sv.mesh_quality(mesh, reference=points)
-    with_normals = mesh.compute_normals(cell_normals=False, point_normals=True,
-                                        split_vertices=False, auto_orient_normals=False)
-    faces = np.asarray(mesh.faces).reshape(-1, 4)[:, 1:]
-    return {"vertices": np.asarray(mesh.points, dtype=np.float64), "faces": faces,
-            "normals": np.asarray(with_normals.point_data["Normals"]), "quality": quality}
 
 
 def median_spacing(points: np.ndarray) -> float:
     """Median nearest-neighbour distance of (up to 2000 sampled) points."""
-    from scipy.spatial import cKDTree
-
     if len(points) < 2:
         return 1.0
     rng = np.random.default_rng(0)
@@ -109,7 +95,10 @@ class RemeshPanel(QWidget):
     def _inserted(self, node) -> None:
         if isinstance(node, PointsNode):
             self._set_points(node)
-            self.edge.setValue(2.0 * median_spacing(np.asarray(node.data.points)))
+            # a k-d tree of the cloud: not in the GUI thread
+            self.jobs.run("Point spacing", median_spacing, np.asarray(node.data.points),
+                          cancellable=False,
+                          on_done=lambda h: self.edge.setValue(2.0 * h))
 
     def _removed(self, node) -> None:
         if node is self.points:
@@ -157,5 +146,9 @@ class RemeshPanel(QWidget):
                                        edge_length=edge, rho=rho, stats=out["quality"])
             self.scene.select(mesh)
 
-        return self.jobs.run(f"Remeshing {node.name}", remesh_points, node.data,
-                             edge_length=edge, rho=rho, on_done=done)
+        from splineviz.pointcloud.remesh import remesh_with_quality
+
+        # a process, not a thread: the front is Python that would hold the GIL for
+        # hundreds of milliseconds at a time, and Cancel can stop a process at once
+        return self.jobs.run(f"Remeshing {node.name}", remesh_with_quality, node.data,
+                             edge_length=edge, rho=rho, on_done=done, process=True)

@@ -42,14 +42,24 @@ class Smoother:
             self.update(node)
 
     def update(self, node: VolumeNode) -> None:
-        from splineviz.compute.smoothing import gaussian_smooth
-
         if not node.smoothing_pending or node.id not in self.scene:
             return
         sigma = node.sigma
-        self.jobs.run(f"Smoothing {node.name} (sigma {sigma:g})", gaussian_smooth, node.data,
+        self.jobs.run(f"Smoothing {node.name} (sigma {sigma:g})", smooth_volume, node.data,
                       sigma, device=self.device,
                       on_done=lambda vol: node.set_smoothed(vol, sigma))
+
+
+def smooth_volume(volume, sigma: float, device=None):
+    """Gaussian smoothing (worker thread), with the result's range and histogram computed
+    here too: the panels showing them then cost the GUI thread nothing."""
+    from splineviz.compute.smoothing import gaussian_smooth
+    from splineviz.gui.panels.isosurface import cached_histogram
+
+    out = gaussian_smooth(volume, sigma, device=device)
+    _ = out.finite_range
+    cached_histogram(out)
+    return out
 
 
 class SmoothingPanel(QWidget):
