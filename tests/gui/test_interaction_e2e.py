@@ -29,8 +29,8 @@ from interaction import (  # noqa: E402  (tests/gui helper, on sys.path via pyte
     wheel,
 )
 
-from splineviz.gui.main_window import MainWindow  # noqa: E402
-from splineviz.render.scene import offscreen_screenshot  # noqa: E402
+import splineviz as sv  # noqa: E402
+from splineviz.render.scene import SplineScene, offscreen_screenshot  # noqa: E402
 
 #: requested size of the 3-D view (the docks may make it taller)
 VIEW = (360, 280)
@@ -49,6 +49,8 @@ MAX_BLOCKINESS = 0.15
 @pytest.fixture(scope="module")
 def window(qapp, tmp_path_factory):
     from PySide6.QtCore import QSettings
+
+    from splineviz.gui.main_window import MainWindow
 
     QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope,
                       str(tmp_path_factory.mktemp("settings")))
@@ -216,3 +218,44 @@ def test_isovalue_slider_drag_ends_on_the_exact_frame(window):
     finally:
         hist.setValue(before)  # back to the default isovalue for the tests after this one
         w.wait_for_refine(60)
+
+
+def test_scene_asks_for_exact_frames_when_an_interaction_ends():
+    """What the window's interactor does in a drag or a wheel step, without a window: the
+    render at the end of the interaction finds the last preview made for the current view;
+    it must still ask for the exact frame (it did not: the view stayed blocky)."""
+    import pyvista as pv
+
+    from splineviz.render.isosurface import IsosurfaceLayer
+
+    x = np.linspace(-1, 1, 15)
+    vol = sv.Volume(np.add.outer(np.add.outer(x**2, x**2), x**2), spacing=2 / 14,
+                    origin=(-1, -1, -1))
+    pl = pv.Plotter(off_screen=True, window_size=(80, 60))
+    scene = SplineScene(pl, progressive=True)
+    layer = IsosurfaceLayer(vol, model="trilinear", isovalue=0.64)
+    scene.add_layer(layer)
+    pl.camera_position = [(0.3, -5, 0.4), (0, 0, 0), (0, 0, 1)]
+    pl.camera_set = True
+    calls = []
+    scene.request_refine = lambda: calls.append(1)
+    try:
+        pl.render_window.Render()
+        scene.apply(scene.refine())
+        pl.render_window.Render()
+        assert scene.shown_frame(layer).final and not scene.needs_refine()
+        calls.clear()
+        scene.set_interacting(True)  # StartInteractionEvent
+        pl.camera.Azimuth(15)
+        pl.render_window.Render()  # a drag step: a preview, no refinement yet
+        assert not scene.shown_frame(layer).final and not calls
+        scene.set_interacting(False)  # EndInteractionEvent, then the window renders
+        pl.render_window.Render()
+        assert calls, "the end of the interaction did not ask for the exact frame"
+        assert scene.needs_refine() and scene.apply(scene.refine())
+        calls.clear()
+        pl.render_window.Render()
+        assert scene.shown_frame(layer).final and not calls and not scene.needs_refine()
+    finally:
+        scene.close()
+        pl.close()
