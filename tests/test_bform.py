@@ -14,7 +14,8 @@ def _poly(d):
 
     def f(p):
         x, y, z = p[:, 0], p[:, 1], p[:, 2]
-        return a[0] + a[1] * x ** d + a[2] * y ** (d - 1) * z + a[3] * x * y ** (d - 1) + a[4] * z + a[5] * z ** d
+        return (a[0] + a[1] * x ** d + a[2] * y ** (d - 1) * z + a[3] * x * y ** (d - 1)
+                + a[4] * z + a[5] * z ** d)
 
     def grad(p):
         x, y, z = p[:, 0], p[:, 1], p[:, 2]
@@ -32,7 +33,8 @@ def test_multi_indices_order_and_count():
         [2, 0, 0, 0], [1, 1, 0, 0], [1, 0, 1, 0], [1, 0, 0, 1], [0, 2, 0, 0],
         [0, 1, 1, 0], [0, 1, 0, 1], [0, 0, 2, 0], [0, 0, 1, 1], [0, 0, 0, 2]]
     for d in range(4):
-        assert len(bform.multi_indices(d)) == bform.n_coefficients(d) == (d + 1) * (d + 2) * (d + 3) // 6
+        n = (d + 1) * (d + 2) * (d + 3) // 6
+        assert len(bform.multi_indices(d)) == bform.n_coefficients(d) == n
 
 
 def test_barycentric_roundtrip_and_partition_of_unity():
@@ -74,7 +76,8 @@ def test_directional_derivatives_and_hessian_match_finite_differences(d):
     e = 1e-4
     fd = (f(x + e * u) - f(x - e * u)) / (2 * e)
     assert np.allclose(bform.directional_derivative(c, lam, du), fd, atol=1e-6)
-    fd2 = (f(x + e * u + e * w) - f(x + e * u - e * w) - f(x - e * u + e * w) + f(x - e * u - e * w)) / (4 * e * e)
+    fd2 = (f(x + e * u + e * w) - f(x + e * u - e * w) - f(x - e * u + e * w)
+           + f(x - e * u - e * w)) / (4 * e * e)
     assert np.allclose(bform.directional_derivative(c, lam, du, dw), fd2, atol=1e-4)
     hess = bform.hessian(c, lam, m)
     assert np.allclose(np.einsum("na,nab,nb->n", u, hess, w), fd2, atol=1e-4)

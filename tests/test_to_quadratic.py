@@ -57,7 +57,8 @@ def test_neighbour_table_is_symmetric():
     for t in range(144):
         for nu in range(4):
             t2, s = nb[t, nu], shift[t, nu]
-            back = [(nu2) for nu2 in range(4) if nb[t2, nu2] == t and np.allclose(shift[t2, nu2], -s)]
+            back = [nu2 for nu2 in range(4)
+                    if nb[t2, nu2] == t and np.allclose(shift[t2, nu2], -s)]
             assert len(back) == 1
             shared = np.delete(verts[t], nu, axis=0)
             other = np.delete(verts[t2], back[0], axis=0) + s
@@ -79,7 +80,8 @@ def test_centres_covering_box():
 
 def _grid_volume(func, n=9, h=0.25, origin=(-1.0, -0.5, -0.75)):
     return sv.Volume.from_function(
-        func, (n, n + 1, n + 2), [(o, o + h * (m - 1)) for o, m in zip(origin, (n, n + 1, n + 2))]
+        func, (n, n + 1, n + 2),
+        [(o, o + h * (m - 1)) for o, m in zip(origin, (n, n + 1, n + 2), strict=True)]
     )
 
 
@@ -236,7 +238,9 @@ def test_spline_covers_whole_box_and_uses_world_units():
     p = _points(vol, 50)
     p = np.clip(p, [b[0] + 0.01 for b in vol.bounds], [b[1] - 0.01 for b in vol.bounds])
     eps = 1e-6
-    fd = np.stack([(s.evaluate(p + eps * e) - s.evaluate(p - eps * e)) / (2 * eps) for e in np.eye(3)], 1)
+    fd = np.stack([(s.evaluate(p + eps * e) - s.evaluate(p - eps * e)) / (2 * eps)
+                   for e in np.eye(3)], 1)
     assert np.allclose(s.gradient(p), fd, atol=1e-5)
-    fd2 = np.stack([(s.gradient(p + eps * e) - s.gradient(p - eps * e)) / (2 * eps) for e in np.eye(3)], 2)
+    fd2 = np.stack([(s.gradient(p + eps * e) - s.gradient(p - eps * e)) / (2 * eps)
+                    for e in np.eye(3)], 2)
     assert np.allclose(s.hessian(p), fd2, atol=1e-3)

@@ -20,7 +20,7 @@ def test_volume_geometry_and_validation():
     with pytest.raises(sv.VolumeError):
         sv.Volume(np.zeros((2, 2, 2)), spacing=(1, 0, 1))
     with pytest.raises(sv.VolumeError):
-        sv.Volume(np.full((2, 2, 2), np.nan)).finite_range
+        _ = sv.Volume(np.full((2, 2, 2), np.nan)).finite_range
 
 
 def test_pointcloud_validation():

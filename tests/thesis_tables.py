@@ -175,7 +175,7 @@ def main(argv):
                 ref = THESIS.get((name, k, r, n))
                 if ref is None:
                     continue
-                cells = "  ".join(f"{v:.6g} ({t:.6g})" for v, t in zip(vals, ref))
+                cells = "  ".join(f"{v:.6g} ({t:.6g})" for v, t in zip(vals, ref, strict=False))
                 print(f"{name:5s} k={k} D^{r} 1/h={n:4d}  {cells}", flush=True)
 
 

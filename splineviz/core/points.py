@@ -52,7 +52,7 @@ class PointCloud:
         if len(self) == 0:
             raise PointCloudError("an empty point cloud has no bounds")
         lo, hi = self.points.min(axis=0), self.points.max(axis=0)
-        return tuple((float(a), float(b)) for a, b in zip(lo, hi))
+        return tuple((float(a), float(b)) for a, b in zip(lo, hi, strict=True))
 
     @property
     def diagonal(self) -> float:

@@ -15,8 +15,8 @@ barth: Barth's sextic (§5.6, Fig. 5.7). chmutov: Fig. 6.20. x2 and f1: Remark 3
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -76,7 +76,8 @@ def _cos_sqrt(a: Jet, k: float) -> Jet:
 
 
 def _blob(x, y, z):
-    return jet.exp(-5 * ((x - 0.5) ** 2 + y**2 + z**2)) + jet.exp(-5 * (x**2 + (y - 0.5) ** 2 + z**2))
+    return (jet.exp(-5 * ((x - 0.5) ** 2 + y**2 + z**2))
+            + jet.exp(-5 * (x**2 + (y - 0.5) ** 2 + z**2)))
 
 
 def _franke(x, y, z):

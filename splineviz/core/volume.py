@@ -6,7 +6,6 @@ Convention: ``data[i, j, k]`` is the sample at world point ``origin + (i*sx, j*s
 from __future__ import annotations
 
 import functools
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +47,8 @@ class Volume:
         if data.ndim != 3:
             raise VolumeError(f"a volume needs a 3-D array, got {data.ndim} dimension(s)")
         if min(data.shape) < 1:
-            raise VolumeError(f"a volume needs at least one sample per axis, got shape {data.shape}")
+            raise VolumeError("a volume needs at least one sample per axis, got shape "
+                              f"{data.shape}")
         if not (np.issubdtype(data.dtype, np.number) or data.dtype == bool):
             raise VolumeError(f"volume samples must be numeric, got dtype {data.dtype}")
         spacing = tuple(float(s) for s in np.broadcast_to(np.asarray(self.spacing, float), 3))
@@ -69,7 +69,8 @@ class Volume:
     def bounds(self) -> tuple[tuple[float, float], ...]:
         """((xmin, xmax), (ymin, ymax), (zmin, zmax)) of the sample grid."""
         return tuple(
-            (o, o + (n - 1) * s) for o, n, s in zip(self.origin, self.shape, self.spacing)
+            (o, o + (n - 1) * s)
+            for o, n, s in zip(self.origin, self.shape, self.spacing, strict=True)
         )
 
     @functools.cached_property
@@ -105,7 +106,8 @@ class Volume:
         bounds : ((xmin, xmax), (ymin, ymax), (zmin, zmax))
         """
         shape = tuple(int(n) for n in shape)
-        axes = [np.linspace(lo, hi, n) for (lo, hi), n in zip(bounds, shape)]
+        axes = [np.linspace(lo, hi, n) for (lo, hi), n in zip(bounds, shape, strict=True)]
         x, y, z = np.meshgrid(*axes, indexing="ij")
-        spacing = tuple((hi - lo) / max(n - 1, 1) for (lo, hi), n in zip(bounds, shape))
+        spacing = tuple((hi - lo) / max(n - 1, 1)
+                        for (lo, hi), n in zip(bounds, shape, strict=True))
         return cls(func(x, y, z), spacing=spacing, origin=tuple(lo for lo, _ in bounds))

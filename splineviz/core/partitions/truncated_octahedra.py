@@ -254,7 +254,7 @@ def centres_covering(lo, hi) -> np.ndarray:
     for first in (0.5, 1.5):
         axes = [
             np.arange(first + 2 * np.floor((a - 1 - first) / 2), b + 1 + EPS, 2.0)
-            for a, b in zip(lo, hi)
+            for a, b in zip(lo, hi, strict=True)
         ]
         c = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
         out.append(c)

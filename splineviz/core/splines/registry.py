@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 from splineviz.core.errors import SplinevizError
 
+
 class UnknownModelError(SplinevizError, ValueError):
     """A model name that no built-in model or installed plugin provides."""
 

@@ -100,7 +100,7 @@ def _roles(centres, xi):
         return {"A": centres[0]}
     second = [_sq(_ordered_data(c, xi)[1], xi) for c in centres]
     order = sorted(range(len(centres)), key=lambda i: (second[i], tuple(centres[i])))
-    return {role: centres[i] for role, i in zip("ABCD", order)}
+    return {role: centres[i] for role, i in zip("ABCD", order, strict=False)}
 
 
 def coefficient_stencil(tet: int, alpha, k: float) -> dict:
