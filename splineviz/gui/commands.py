@@ -11,24 +11,13 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from splineviz.core.errors import SplinevizError
-from splineviz.gui.panels.isosurface import cached_histogram
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
+from splineviz.model.histogram import remember_histogram
+from splineviz.model.opening import read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
 
 #: what to do with the current objects when a file is opened
 OPEN_MODES = ("ask", "replace", "add")
-
-
-def read_any(path):
-    """Read a volume or point cloud file (worker): ``(kind, data)``; the data's range and
-    histogram are computed here too, so showing them costs the GUI thread nothing."""
-    from splineviz.io.opening import open_path
-
-    opened = open_path(path)
-    if opened.kind == "volume":
-        cached_histogram(opened.value)
-        _ = opened.value.finite_range
-    return opened.kind, opened.value
 
 
 def export_mesh_data(scene: Scene, node, path, clip: bool) -> str:
@@ -116,7 +105,9 @@ class Commands(QObject):
             return self.load_session(path)
 
         def done(result):
-            kind, data = result
+            kind, data, histogram = result
+            if histogram is not None:
+                remember_histogram(data, histogram)
             self.opened.emit(path)
             if kind == "volume":
                 self._add_volume(data, Path(path).name, mode, path=path, **iso)
@@ -124,7 +115,9 @@ class Commands(QObject):
                 self._add(mode, lambda: self.scene.add_points(data, Path(path).name,
                                                               path=path))
 
-        return self.jobs.run(f"Opening {Path(path).name}", read_any, path, on_done=done)
+        # a process: readers (VTK's, NumPy's text parser) hold the GIL while they parse
+        return self.jobs.run(f"Opening {Path(path).name}", read_file, path, on_done=done,
+                             process=True)
 
     def _replace_or_add(self, mode: str) -> str | None:
         """"replace" or "add" (asked when the scene has objects and ``mode`` is "ask");

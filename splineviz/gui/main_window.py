@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt
+from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QGuiApplication
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -33,7 +33,7 @@ import splineviz
 from splineviz.core.errors import SplinevizError
 from splineviz.gui.actions import HELP_TEXT, build_actions, icon
 from splineviz.gui.commands import Commands
-from splineviz.gui.jobs import JobRunner, error_message
+from splineviz.gui.jobs import JobRunner, error_message, start_process_server
 from splineviz.gui.panels import (
     ClippingPanel,
     DataPanel,
@@ -51,6 +51,16 @@ from splineviz.model import Scene
 MAX_RECENT = 8
 #: share of the screen's available area the window takes at most
 SCREEN_SHARE = 0.92
+
+
+def _preload() -> None:
+    """Import now what the first volume needs: a module imported later by a worker thread
+    holds the GIL while it executes (pyopencl's import alone is ~0.3 s), stalling the
+    window; before the window is shown nobody waits."""
+    import splineviz.compute.raycast  # noqa: F401
+    import splineviz.compute.smoothing  # noqa: F401
+    import splineviz.core.testfunctions  # noqa: F401
+    import splineviz.model.opening  # noqa: F401
 
 
 class ScreenshotDialog(QDialog):
@@ -94,6 +104,7 @@ class MainWindow(QMainWindow):
         from splineviz.plugins import load_plugins
 
         load_plugins()  # plugin models and sources appear in the panels and menus
+        _preload()
         self.setWindowTitle("splineviz")
         self.setWindowIcon(icon("splineviz"))
         self.setAcceptDrops(True)
@@ -107,6 +118,7 @@ class MainWindow(QMainWindow):
         self._message_boxes: list[QMessageBox] = []
         self._closed = False
         self.jobs = JobRunner(self)
+        start_process_server()  # remeshing forks from it later, not from this process
         self.view = View3D(self.scene, self, device=device, min_size=size)
         self.plotter = self.view.plotter
         self.spline_scene = self.view.spline_scene
@@ -197,10 +209,20 @@ class MainWindow(QMainWindow):
                 int(SCREEN_SHARE * avail.height()))
         self.resize(w, h)
         self.move(avail.x() + (avail.width() - w) // 2, avail.y() + (avail.height() - h) // 2)
-        # the 3-D view gets most of the width: each dock column about a fifth
-        side = max(240, int(0.2 * w))
+        self._size_docks()
+
+    def _size_docks(self) -> None:
+        """The 3-D view gets most of the width: each dock column about a fifth."""
+        side = max(250, int(0.2 * self.width()))
         self.resizeDocks([self.docks["Data"], self.docks["Clipping"]], [side, side],
                          Qt.Orientation.Horizontal)
+
+    def showEvent(self, event):  # noqa: N802 (Qt naming)
+        super().showEvent(event)
+        if not getattr(self, "_docks_sized", False):
+            # dock sizes only take once the window is laid out on screen
+            self._docks_sized = True
+            QTimer.singleShot(0, self._size_docks)
 
     # -- status --------------------------------------------------------------------------
 
@@ -225,6 +247,7 @@ class MainWindow(QMainWindow):
         self.progress.setVisible(bool(jobs))
         self.cancel_button.setVisible(any(j.cancellable for j in jobs))
         if not jobs:
+            self.statusBar().clearMessage()
             return
         job = jobs[-1]
         cancelling = job.state == "cancelling"

@@ -7,22 +7,7 @@ from PySide6.QtCore import QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QColor, QPainter, QPainterPath, QPen
 from PySide6.QtWidgets import QColorDialog, QPushButton, QSizePolicy, QWidget
 
-#: bins of the histogram drawn behind the isovalue slider
-HISTOGRAM_BINS = 128
-
-
-def log_histogram(data: np.ndarray, bins: int = HISTOGRAM_BINS):
-    """``(log(1 + counts), edges)`` of the finite samples; counts ``(bins,)``, edges
-    ``(bins + 1,)``. A constant volume gives one full bin around its value."""
-    d = np.asarray(data).ravel()
-    d = d[np.isfinite(d)]
-    if d.size == 0:
-        return np.zeros(bins), np.linspace(0.0, 1.0, bins + 1)
-    lo, hi = float(d.min()), float(d.max())
-    if hi <= lo:
-        hi = lo + 1.0
-    counts, edges = np.histogram(d, bins=bins, range=(lo, hi))
-    return np.log1p(counts.astype(np.float64)), edges
+from splineviz.model.histogram import HISTOGRAM_BINS, log_histogram
 
 
 class HistogramSlider(QWidget):

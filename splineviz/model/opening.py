@@ -29,6 +29,23 @@ def default_scene(scene: Scene | None = None) -> Scene:
     return scene
 
 
+def read_file(path):
+    """Read a volume or point cloud file: ``(kind, data, histogram or None)`` with kind
+    ``"volume"`` or ``"points"``. A volume's range (kept when the volume is pickled) and its
+    histogram (:func:`~splineviz.model.histogram.log_histogram`) are computed here too, so
+    a GUI that reads in a job process pays nothing to show them."""
+    from splineviz.io.opening import open_path
+    from splineviz.model.histogram import log_histogram
+
+    opened = open_path(path)
+    if opened.kind == "session":
+        raise SplinevizError(f"{opened.path.name} is a session; open it as one")
+    if opened.kind != "volume":
+        return opened.kind, opened.value, None
+    _ = opened.value.finite_range
+    return opened.kind, opened.value, log_histogram(opened.value.data)
+
+
 def scene_from_path(path, *, isovalue=None, model=None, repoint=None) -> Scene:
     """Read a session, volume or point cloud into a new scene, framed isometrically
     (a session keeps its own camera). ``isovalue``/``model`` override every isosurface."""

@@ -64,6 +64,10 @@ class RenderedFrame:
     seconds: float
     path: str
     stats: dict = field(default_factory=dict)
+    #: upload-ready textures and the mean hit depth (filled by the scene, in the thread that
+    #: made the frame when it can)
+    textures: tuple | None = None
+    mean_depth: float = 1.0
 
     @property
     def final(self) -> bool:

@@ -124,6 +124,15 @@ def view_normals(normal: np.ndarray, hit: np.ndarray, basis) -> np.ndarray:
     return out
 
 
+def frame_textures(hit: np.ndarray, normal: np.ndarray, depth: np.ndarray, basis):
+    """The two textures of a frame, ready to upload: ``(normals (H*W, 4), depth (H*W, 3))``
+    uint8, rows flipped to VTK's bottom-up order (:func:`view_normals`, :func:`pack_depth`).
+    Pure NumPy, so a worker thread can make them while the GUI thread draws."""
+    rows = (view_normals(normal, hit, basis), pack_depth(depth))
+    h, w = hit.shape
+    return tuple(np.ascontiguousarray(a[::-1]).reshape(h * w, -1) for a in rows)
+
+
 def _image_texture(ncomp: int) -> tuple[vtk.vtkTexture, vtk.vtkImageData]:
     image = vtk.vtkImageData()
     image.SetDimensions(1, 1, 1)
@@ -221,8 +230,14 @@ class FrameQuad:
         """Upload a frame: ``normal_rgba`` (H, W, 4) uint8 from :func:`view_normals`, ``depth``
         (H, W) window depth, ``hit`` (H, W) bool. Row 0 is the top row."""
         h, w = hit.shape
-        for image, arr in ((self._norm_img, normal_rgba), (self._depth_img, pack_depth(depth))):
-            flat = np.ascontiguousarray(arr[::-1]).reshape(h * w, -1)
+        flip = (np.ascontiguousarray(a[::-1]).reshape(h * w, -1)
+                for a in (normal_rgba, pack_depth(depth)))
+        self.set_textures((w, h), *flip)
+
+    def set_textures(self, size, normals: np.ndarray, depth: np.ndarray) -> None:
+        """Upload textures made by :func:`frame_textures` for a frame of ``size`` (W, H)."""
+        w, h = size
+        for image, flat in ((self._norm_img, normals), (self._depth_img, depth)):
             vtk_arr = numpy_support.numpy_to_vtk(flat, deep=True,
                                                  array_type=vtk.VTK_UNSIGNED_CHAR)
             image.SetDimensions(w, h, 1)

@@ -31,7 +31,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import normalize_clip_planes
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
-from splineviz.render.quad import FrameQuad, view_normals
+from splineviz.render.quad import FrameQuad, frame_textures
 
 #: seconds a synchronous preview may take (keeps the window responsive while dragging)
 PREVIEW_BUDGET_S = 0.06
@@ -208,12 +208,14 @@ class SplineScene:
             return
         f = rf.frame
         cam = rf.view.camera
-        lv.quad.set_image(f.hit, view_normals(f.normal, f.hit, cam.basis()), f.depth)
+        if rf.textures is None:
+            _prepare(rf)
+        lv.quad.set_textures(f.hit.shape[::-1], *rf.textures)
         w, h = rf.view.size
         t = np.tan(np.radians(cam.view_angle) / 2.0)
         lv.quad.set_view_scale(t * w / h, t)
         lv.shown = rf
-        lv.mean_depth = float(f.depth[f.hit].mean()) if f.hit.any() else 1.0
+        lv.mean_depth = rf.mean_depth
         self._apply_appearance(layer, lv)
 
     def _is_current(self, layer, lv, view) -> bool:
@@ -343,6 +345,7 @@ class SplineScene:
                 continue
             rf = layer.compute(view)
             if rf is not None:
+                _prepare(rf)  # the textures, here in the worker, not in the GUI thread
                 out.append((layer, rf))
         return out
 
@@ -369,6 +372,13 @@ class SplineScene:
         self.renderer.RemoveObserver(self._observer)
         for layer in list(self.layers):
             self.remove_layer(layer)
+
+
+def _prepare(rf: RenderedFrame) -> None:
+    """Fill a frame's upload-ready textures and mean depth (thread safe: NumPy only)."""
+    f = rf.frame
+    rf.textures = frame_textures(f.hit, f.normal, f.depth, rf.view.camera.basis())
+    rf.mean_depth = float(f.depth[f.hit].mean()) if f.hit.any() else 1.0
 
 
 def offscreen_screenshot(scene: SplineScene, filename=None, size=None,

@@ -140,8 +140,9 @@ class SceneView:
             if node.data is None:
                 return
             data = pv.PolyData(np.asarray(node.data.points, dtype=np.float64))
+            # shaded sprites: a cloud shows its shape, not a flat silhouette
             opts = dict(color=node.color, point_size=node.point_size, opacity=node.opacity,
-                        render_points_as_spheres=False, style="points")
+                        render_points_as_spheres=True, style="points")
         else:
             if node.vertices is None:
                 return
@@ -248,15 +249,18 @@ class SceneView:
 
     def _update_grid(self) -> None:
         """An axes grid with world-unit labels around all data (the scale of the scene)."""
-        if self._grid is not None:
-            self.plotter.remove_actor(self._grid, reset_camera=False, render=False)
-            self._grid = None
         bounds = self.scene.bounds()
         if not self.scene.view.show_scale or bounds is None:
+            if self._grid is not None:
+                self.plotter.remove_actor(self._grid, reset_camera=False, render=False)
+                self._grid = None
+            return
+        if self._grid is not None:  # moving the grid is cheap; building one is ~40 ms
+            self._grid.SetBounds(np.ravel(bounds))
             return
         self._grid = self.plotter.show_bounds(bounds=np.ravel(bounds), color=OUTLINE_COLOR,
                                               grid=False, location="outer", ticks="outside",
-                                              font_size=10, minor_ticks=False,
+                                              font_size=10, minor_ticks=False, fmt="%.3g",
                                               use_3d_text=False, render=False)
 
     # -- pictures ------------------------------------------------------------------------

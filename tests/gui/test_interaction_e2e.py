@@ -157,23 +157,16 @@ def display_point(renderer, world, height):
 
 def test_plane_widget_drag_ends_on_the_exact_frame(window):
     w = window
-    scene, plotter = w.spline_scene, w.plotter
+    plotter = w.plotter
     bounds = np.asarray(layer_of(w).volume.bounds, float).reshape(3, 2)
     mid = bounds.mean(axis=1)
-    normal = (1.0, 0.0, 0.0)
-
-    def moved(n, origin):
-        scene.set_clip_planes([(tuple(origin), tuple(n))])
-
-    scene.set_clip_planes([(tuple(mid), normal)])
-    plotter.add_plane_widget(
-        moved, normal=normal, origin=tuple(mid), bounds=bounds.ravel(), normal_rotation=True,
-        outline_translation=False, origin_translation=True, implicit=True,
-        interaction_event="always", color="white", test_callback=False)
+    w.view.standard_view("isometric")  # the plane x = mid at 45 degrees, whatever came before
+    w.scene.select(w.scene.volumes[0])
+    node = w.clip_panel.add_plane(origin=tuple(mid), normal=(1.0, 0.0, 0.0))
+    assert node.id in w.plane_widgets.widgets  # the model's plane has its widget
     try:
-        w.request_render()
         w.wait_for_refine(60)
-        start = scene.clip_planes
+        start = node.origin
         # grab the plane away from its origin sphere and normal arrow, push it along x
         ext = bounds[:, 1] - bounds[:, 0]
         grip = mid + np.array([0.0, 0.3 * ext[1], 0.3 * ext[2]])
@@ -182,15 +175,14 @@ def test_plane_widget_drag_ends_on_the_exact_frame(window):
         p1 = display_point(plotter.renderer, grip + np.array([0.25 * ext[0], 0, 0]), h)
         with StallMeter() as stall:
             drag(plotter, p0, p1, n=10)
-        assert scene.clip_planes != start, "the drag did not move the plane widget"
+        assert node.origin != start, "the drag did not move the plane widget"
+        assert w.spline_scene.layers[0].clip_planes[0][0] == pytest.approx(node.origin)
         print(f"plane drag: longest GUI-thread stall {stall.max_ms:.0f} ms")
         # the widget is drawn in the window but not in the off-screen reference: compare the
         # frame state and the blockiness of the window's surface pixels, not whole images
         assert_exact_after(w, "plane widget drag", compare_image=False)
     finally:
-        plotter.clear_plane_widgets()
-        scene.set_clip_planes([])
-        w.request_render()
+        w.scene.remove(node)
         w.wait_for_refine(60)
 
 

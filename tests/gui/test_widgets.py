@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from PySide6.QtCore import QPointF, Qt
 
-from splineviz.gui.widgets import HISTOGRAM_BINS, HistogramSlider, log_histogram
+from splineviz.gui.widgets import HistogramSlider
+from splineviz.model.histogram import HISTOGRAM_BINS, log_histogram
 
 
 def test_log_histogram_counts():

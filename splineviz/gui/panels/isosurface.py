@@ -8,9 +8,6 @@ The histogram of a big volume is computed in a worker and cached per volume.
 
 from __future__ import annotations
 
-import threading
-import weakref
-
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QComboBox,
@@ -24,29 +21,12 @@ from PySide6.QtWidgets import (
 from superqt import QLabeledDoubleSlider
 
 from splineviz.core.splines import MODELS
-from splineviz.gui.widgets import ColorButton, HistogramSlider, log_histogram
+from splineviz.gui.widgets import ColorButton, HistogramSlider
 from splineviz.model import MATERIALS, IsosurfaceNode, Scene, VolumeNode
+from splineviz.model.histogram import cached_histogram
 
 #: volumes with at most this many samples get their histogram in the GUI thread
 INLINE_HISTOGRAM_SAMPLES = 2_000_000
-
-_histograms: dict[int, tuple] = {}
-_histogram_lock = threading.Lock()
-
-
-def cached_histogram(volume):
-    """``log_histogram(volume.data)``, computed once per volume object (thread safe)."""
-    key = id(volume)
-    with _histogram_lock:
-        hit = _histograms.get(key)
-        if hit is not None and hit[0]() is volume:
-            return hit[1]
-    hist = log_histogram(volume.data)
-    with _histogram_lock:
-        _histograms[key] = (weakref.ref(volume, lambda _r, k=key: _histograms.pop(k, None)),
-                            hist)
-    return hist
-
 
 def model_label(name: str) -> str:
     spec = MODELS[name]
@@ -78,6 +58,10 @@ class IsosurfacePanel(QWidget):
         self.spin.setKeyboardTracking(False)
         self.spin.setToolTip("Isovalue: type a value and press Enter")
         self.model = QComboBox()
+        # long model labels must not widen the dock: the box elides, the list shows them
+        self.model.setSizeAdjustPolicy(
+            QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.model.setMinimumContentsLength(12)
         self.model.setToolTip("Spline model the surface is the isosurface of (thesis ch. 4-5): "
                               "trilinear is the baseline; the smooth models have exact "
                               "normals and curvature")
@@ -159,6 +143,8 @@ class IsosurfacePanel(QWidget):
             self._volume.events.connect(self._volume_changed)
         if node is None:
             self.title.setText("Select an isosurface or a volume in the data panel")
+            self.k.setVisible(False)
+            self.k_label.setVisible(False)
             return
         node.events.connect(self._node_changed)
         self.title.setText(f"{node.name} of {self._volume.name}")
