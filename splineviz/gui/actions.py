@@ -10,6 +10,8 @@ from __future__ import annotations
 from PySide6.QtGui import QAction, QIcon, QKeySequence
 from PySide6.QtWidgets import QToolBar
 
+from splineviz.gui import dialogs
+
 #: (view name, menu text, shortcut, icon name) of the standard views
 STANDARD_VIEW_ACTIONS = (
     ("+X", "Look down +X", "Ctrl+1", "view-px"),
@@ -20,17 +22,6 @@ STANDARD_VIEW_ACTIONS = (
     ("-Z", "Look down -Z", "Ctrl+Shift+3", "view-mz"),
     ("isometric", "Isometric", "Ctrl+0", "view-iso"),
 )
-
-#: shown by Help > Keyboard and mouse
-HELP_TEXT = """<b>Mouse in the 3-D view</b><br>
-left drag: rotate &nbsp; right drag or wheel: zoom &nbsp; middle drag or Shift+left: pan<br>
-hover over a surface: position and data value in the status bar<br><br>
-<b>Keys in the 3-D view</b><br>
-r: reset the camera to all data &nbsp; v: isometric view<br><br>
-<b>Shortcuts</b><br>
-Ctrl+O open, Ctrl+S save session, Ctrl+Shift+S save session as, Ctrl+E export screenshot,
-Ctrl+1/2/3 look down +X/+Y/+Z (with Shift: -X/-Y/-Z), Ctrl+0 isometric, Esc cancel jobs"""
-
 
 def icon(name: str) -> QIcon:
     """The toolbar icon ``name`` from ``resources/icons`` (an empty icon when missing)."""
@@ -63,29 +54,32 @@ def build_actions(window) -> dict[str, QAction]:
     """Fill the window's menu bar and toolbar; returns the actions by name."""
     acts: dict[str, QAction] = {}
     m = window.menuBar().addMenu("&File")
-    acts["open"] = _action(window, "&Open...", window.open_dialog, menu=m,
+    acts["open"] = _action(window, "&Open...", lambda: dialogs.open_file(window), menu=m,
                            shortcut=QKeySequence.StandardKey.Open, icon_name="open",
                            tip="Open a volume, point cloud or session")
-    window.recent_menu = m.addMenu("Open &Recent")
+    window.recent = dialogs.RecentFiles(window, m.addMenu("Open &Recent"))
     _action(window, "Open &default data", lambda: window.commands.open_default(), menu=m,
             tip="The embedded Marschner-Lobb test volume")
     window.sources_menu = m.addMenu("Open s&ynthetic source")
-    window.sources_menu.aboutToShow.connect(window.fill_sources)
+    window.sources_menu.aboutToShow.connect(
+        lambda: dialogs.fill_sources(window, window.sources_menu))
     window.examples_menu = m.addMenu("E&xample sessions")
-    window.examples_menu.aboutToShow.connect(window.fill_examples)
+    window.examples_menu.aboutToShow.connect(
+        lambda: dialogs.fill_examples(window, window.examples_menu))
     m.addSeparator()
-    _action(window, "&Load session...", window.load_session_dialog, menu=m,
+    _action(window, "&Load session...", lambda: dialogs.load_session(window), menu=m,
             tip="Replace the scene by a saved session (.svs)")
-    acts["save"] = _action(window, "&Save session", window.save_session_action, menu=m,
+    acts["save"] = _action(window, "&Save session", lambda: dialogs.save_session(window), menu=m,
                            shortcut=QKeySequence.StandardKey.Save, icon_name="save",
                            tip="Save the scene as a session (.svs)")
-    _action(window, "Save session &as...", window.save_session_dialog, menu=m,
+    _action(window, "Save session &as...", lambda: dialogs.save_session_as(window), menu=m,
             shortcut="Ctrl+Shift+S", tip="Save the scene under another name")
     m.addSeparator()
-    acts["screenshot"] = _action(window, "Export s&creenshot...", window.screenshot_dialog,
-                                 menu=m, shortcut="Ctrl+E", icon_name="screenshot",
+    acts["screenshot"] = _action(window, "Export s&creenshot...",
+                                 lambda: dialogs.export_screenshot(window), menu=m,
+                                 shortcut="Ctrl+E", icon_name="screenshot",
                                  tip="Save the view as PNG at any size")
-    _action(window, "Export &mesh...", window.export_mesh_dialog, menu=m,
+    _action(window, "Export &mesh...", lambda: dialogs.export_mesh(window), menu=m,
             tip="Save the selected mesh or isosurface as PLY/OBJ/STL/VTP (clipped, normals)")
     m.addSeparator()
     _action(window, "&Quit", window.close, menu=m, shortcut=QKeySequence.StandardKey.Quit)
@@ -118,8 +112,8 @@ def build_actions(window) -> dict[str, QAction]:
                              shortcut="Esc", icon_name="cancel")
 
     h = window.menuBar().addMenu("&Help")
-    _action(window, "&Keyboard and mouse", window.show_help, menu=h, shortcut="F1")
-    _action(window, "&About splineviz", window.about, menu=h)
+    _action(window, "&Keyboard and mouse", lambda: dialogs.show_help(window), menu=h, shortcut="F1")
+    _action(window, "&About splineviz", lambda: dialogs.about(window), menu=h)
 
     bar = QToolBar("Main toolbar", window)
     bar.setObjectName("main toolbar")

@@ -12,27 +12,21 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtGui import QAction, QGuiApplication
 from PySide6.QtWidgets import (
-    QCheckBox,
-    QDialog,
-    QDialogButtonBox,
     QDockWidget,
-    QFileDialog,
-    QFormLayout,
     QLabel,
     QMainWindow,
     QMessageBox,
     QProgressBar,
     QPushButton,
-    QSpinBox,
 )
 
-import splineviz
 from splineviz.core.errors import SplinevizError
-from splineviz.gui.actions import HELP_TEXT, build_actions, icon
+from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
+from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
 from splineviz.gui.panels import (
     ClippingPanel,
@@ -47,8 +41,6 @@ from splineviz.gui.panels import (
 from splineviz.gui.view import View3D
 from splineviz.model import Scene
 
-#: entries kept in File > Open Recent
-MAX_RECENT = 8
 #: share of the screen's available area the window takes at most
 SCREEN_SHARE = 0.92
 
@@ -61,31 +53,6 @@ def _preload() -> None:
     import splineviz.compute.smoothing  # noqa: F401
     import splineviz.core.testfunctions  # noqa: F401
     import splineviz.model.opening  # noqa: F401
-
-
-class ScreenshotDialog(QDialog):
-    """Size and transparency of an exported screenshot."""
-
-    def __init__(self, parent, size):
-        super().__init__(parent)
-        self.setWindowTitle("Export screenshot")
-        self.width = QSpinBox()
-        self.height = QSpinBox()
-        for s, v in ((self.width, size[0]), (self.height, size[1])):
-            s.setRange(16, 16384)
-            s.setValue(v)
-            s.setToolTip("Pixels; the view is rendered again at this size")
-        self.transparent = QCheckBox("Transparent background")
-        self.transparent.setToolTip("Alpha 0 where nothing was drawn")
-        form = QFormLayout(self)
-        form.addRow("Width", self.width)
-        form.addRow("Height", self.height)
-        form.addRow(self.transparent)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok
-                                   | QDialogButtonBox.StandardButton.Cancel)
-        buttons.accepted.connect(self.accept)
-        buttons.rejected.connect(self.reject)
-        form.addRow(buttons)
 
 
 class MainWindow(QMainWindow):
@@ -129,7 +96,6 @@ class MainWindow(QMainWindow):
         self._build_panels()
         self.actions_by_name = build_actions(self)
         self._build_status()
-        self._fill_recent()
         self.jobs.changed.connect(self._jobs_changed)
         self.jobs.error.connect(self.show_error)
         self.jobs.message.connect(lambda m: self.statusBar().showMessage(m, 4000))
@@ -283,7 +249,7 @@ class MainWindow(QMainWindow):
         self._message_boxes.append(box)
         box.show()
 
-    def _guard(self, fn, *args, **kwargs):
+    def guard(self, fn, *args, **kwargs):
         """Run a command; a user error becomes one message."""
         try:
             return fn(*args, **kwargs)
@@ -298,122 +264,29 @@ class MainWindow(QMainWindow):
 
     def open_path(self, path, mode: str = "ask", block: bool = False, **iso):
         """Open a file or session (a job; ``block`` waits for it: scripts and tests)."""
-        job = self._guard(self.commands.open_path, path, mode=mode, **iso)
+        job = self.guard(self.commands.open_path, path, mode=mode, **iso)
         if block:
             self.wait_idle()
         return job
 
+    def recent_files(self) -> list[str]:
+        return self.recent.files()
+
     def _opened(self, path: str) -> None:
-        self._add_recent(path)
+        self.recent.add(path)
         if path.lower().endswith(".svs"):
             self.session_file = Path(path)
             self._update_title()
 
-    def open_dialog(self):
-        path, _ = QFileDialog.getOpenFileName(self, "Open volume, point cloud or session")
-        if path:
-            self.open_path(path)
-
-    def load_session_dialog(self):
-        path, _ = QFileDialog.getOpenFileName(self, "Load session", "",
-                                              "splineviz sessions (*.svs)")
-        if path:
-            self.open_path(path)
-
     def save_session(self, path) -> Path | None:
-        p = self._guard(self.commands.save_session, path)
+        p = self.guard(self.commands.save_session, path)
         if p is not None:
             self.session_file = Path(p)
             self._update_title()
         return p
 
-    def save_session_action(self):
-        if self.session_file is not None:
-            self.save_session(self.session_file)
-        else:
-            self.save_session_dialog()
-
-    def save_session_dialog(self) -> bool:
-        path, _ = QFileDialog.getSaveFileName(self, "Save session", "session.svs",
-                                              "splineviz sessions (*.svs)")
-        return bool(path) and self.save_session(path) is not None
-
-    def screenshot_dialog(self):
-        dlg = ScreenshotDialog(self, self.spline_scene.window_size())
-        if dlg.exec() != QDialog.DialogCode.Accepted:
-            return
-        path, _ = QFileDialog.getSaveFileName(self, "Export screenshot", "screenshot.png",
-                                              "PNG images (*.png)")
-        if path:
-            self._guard(self.commands.export_screenshot, path,
-                        (dlg.width.value(), dlg.height.value()), dlg.transparent.isChecked())
-
     def export_screenshot(self, path, size=None, transparent: bool = False):
         return self.commands.export_screenshot(path, size, transparent)
-
-    def export_mesh_dialog(self):
-        path, _ = QFileDialog.getSaveFileName(self, "Export mesh", "mesh.ply",
-                                              "Meshes (*.ply *.stl *.vtp *.obj)")
-        if path:
-            self._guard(self.commands.export_mesh, path)
-
-    def fill_sources(self):
-        from splineviz.plugins import failures, sources
-
-        self.sources_menu.clear()
-        for name, src in sorted(sources().items()):
-            a = QAction(src.title or name, self)
-            a.setToolTip(src.description or src.title or name)
-            a.triggered.connect(lambda _=False, n=name: self._guard(
-                self.commands.open_source, n, mode="ask"))
-            self.sources_menu.addAction(a)
-        for rec in failures():
-            a = QAction(f"plugin {rec.name} failed: {rec.error}", self)
-            a.setEnabled(False)
-            self.sources_menu.addAction(a)
-
-    def fill_examples(self):
-        self.examples_menu.clear()
-        try:
-            from splineviz.resources import example_sessions
-
-            examples = example_sessions()
-        except Exception:  # noqa: BLE001  (no resources folder: an empty menu)
-            examples = {}
-        for name, path in sorted(examples.items()):
-            a = QAction(name, self)
-            a.triggered.connect(lambda _=False, p=path: self.open_path(p))
-            self.examples_menu.addAction(a)
-        self.examples_menu.setEnabled(bool(examples))
-
-    def _settings(self) -> QSettings:
-        return QSettings("splineviz", "splineviz")
-
-    def recent_files(self) -> list[str]:
-        v = self._settings().value("recent", [])
-        return [v] if isinstance(v, str) else list(v or [])
-
-    def _add_recent(self, path: str) -> None:
-        p = str(Path(path).absolute())
-        files = [p] + [f for f in self.recent_files() if f != p]
-        self._settings().setValue("recent", files[:MAX_RECENT])
-        self._fill_recent()
-
-    def _fill_recent(self):
-        self.recent_menu.clear()
-        for f in self.recent_files():
-            a = QAction(f, self)
-            a.triggered.connect(lambda _=False, f=f: self.open_path(f))
-            self.recent_menu.addAction(a)
-        self.recent_menu.setEnabled(bool(self.recent_files()))
-
-    def show_help(self):
-        QMessageBox.information(self, "Keyboard and mouse", HELP_TEXT)
-
-    def about(self):
-        QMessageBox.about(self, "About splineviz",
-                          f"splineviz {splineviz.__version__}\n\nSmooth trivariate spline "
-                          "isosurfaces by exact ray casting, and point-cloud meshing.")
 
     # -- tests and scripts ---------------------------------------------------------------
 
@@ -463,7 +336,7 @@ class MainWindow(QMainWindow):
         if answer == QMessageBox.StandardButton.Save:
             if self.session_file is not None:
                 return self.save_session(self.session_file) is not None
-            return self.save_session_dialog()
+            return save_session_as(self)
         return True
 
     def closeEvent(self, event):  # noqa: N802

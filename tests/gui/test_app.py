@@ -358,7 +358,9 @@ def test_synthetic_sources_from_plugins_and_default_session(window, tmp_path):
 
     names = sorted(sources())
     assert names, "the first-party sources plugin is installed by ./install.sh --dev"
-    window.fill_sources()
+    from splineviz.gui.dialogs import fill_sources
+
+    fill_sources(window, window.sources_menu)
     assert len(window.sources_menu.actions()) >= len(names)
     vol = window.commands.open_source(names[0], shape=(12, 13, 14), mode="replace")
     assert vol.data.shape == (12, 13, 14) and vol.source == names[0]
