@@ -88,6 +88,13 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
+def nonzero_normal(v):
+    """A clip plane's normal, refused when it is the zero vector (pydantic validator)."""
+    if sum(c * c for c in v) == 0.0:
+        raise ValueError("a clip plane normal must not be zero")
+    return v
+
+
 def _check_path_text(v: str) -> str:
     if not v or "\x00" in v:
         raise ValueError("a data path must be a non-empty string without NUL characters")
@@ -181,12 +188,7 @@ class ClipPlaneProps(_Model):
     enabled: bool = True
     show_widget: bool = True
 
-    @field_validator("normal")
-    @classmethod
-    def _nonzero(cls, v):
-        if sum(c * c for c in v) == 0.0:
-            raise ValueError("a clip plane normal must not be zero")
-        return v
+    _nonzero = field_validator("normal")(classmethod(lambda cls, v: nonzero_normal(v)))
 
 
 # ---------------------------------------------------------------------------- objects

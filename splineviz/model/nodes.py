@@ -25,6 +25,7 @@ from pydantic import ConfigDict, Field, ValidationError, field_validator
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
 from splineviz.core.volume import Volume
+from splineviz.io.session import nonzero_normal
 
 Unit = Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)]
 RGB = tuple[Unit, Unit, Unit]
@@ -214,12 +215,7 @@ class ClipPlaneNode(Node):
     enabled: bool = True
     show_widget: bool = True
 
-    @field_validator("normal")
-    @classmethod
-    def _nonzero(cls, v):
-        if sum(c * c for c in v) == 0.0:
-            raise ValueError("a clip plane normal must not be zero")
-        return v
+    _nonzero = field_validator("normal")(classmethod(lambda cls, v: nonzero_normal(v)))
 
     def as_pair(self) -> tuple[tuple, tuple]:
         """``(origin, normal)`` as :meth:`splineviz.RayCaster.render` takes it."""
