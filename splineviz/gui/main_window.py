@@ -100,6 +100,8 @@ class MainWindow(QMainWindow):
         self.jobs.error.connect(self.show_error)
         self.jobs.message.connect(lambda m: self.statusBar().showMessage(m, 4000))
         self.view._refiner.error.connect(self.show_error)
+        self.iso_panel.histogram.pressed.connect(self.view.begin_interaction)
+        self.iso_panel.histogram.released.connect(self.view.end_interaction)
         self.commands.opened.connect(self._opened)
         self.commands.saved.connect(lambda p: self.statusBar().showMessage(f"saved {p}", 6000))
         self.commands.saved.connect(lambda p: self.log.add(f"saved {p}"))

@@ -140,6 +140,15 @@ class View3D(QObject):
         self.spline_scene.set_interacting(False)
         self._render_now()  # schedules the exact frames
 
+    def begin_interaction(self) -> None:
+        """A drag outside the view started (the isovalue slider): previews only, no exact
+        frame is started — it would hold the ray caster the next preview needs."""
+        self._interaction_started()
+
+    def end_interaction(self) -> None:
+        """The drag ended: the exact frames follow."""
+        self._interaction_ended()
+
     def _schedule_refine(self) -> None:
         if not self._closed:
             self._refine_timer.start()

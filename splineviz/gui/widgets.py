@@ -14,11 +14,12 @@ class HistogramSlider(QWidget):
     """A horizontal value slider drawn over the log histogram of the data.
 
     Click or drag to set the value; arrow keys step by one bin (Page Up/Down by ten).
-    Emits :attr:`valueChanged` (float) while dragging and :attr:`released` when the mouse
-    is released.
+    Emits :attr:`pressed` when a drag starts, :attr:`valueChanged` (float) while dragging
+    and :attr:`released` when the mouse is released.
     """
 
     valueChanged = Signal(float)
+    pressed = Signal()
     released = Signal()
 
     def __init__(self, parent=None):
@@ -96,6 +97,7 @@ class HistogramSlider(QWidget):
         p.end()
 
     def mousePressEvent(self, event):  # noqa: N802
+        self.pressed.emit()
         self.setValue(self._v_of(event.position().x()))
 
     def mouseMoveEvent(self, event):  # noqa: N802

@@ -1,0 +1,101 @@
+"""Dragging the isovalue slider: every step shows a picture of the new isovalue within
+100 ms (a reduced-resolution preview), the last one becomes the exact frame, and a frame of
+an older isovalue is never shown after one of a newer isovalue.
+
+Runs on the default data in the default suite; ``-m slow`` drags across bonsai (256^3) with
+the cubic C1 model, the issue's case.
+"""
+
+import time
+
+import pytest
+
+pytest.importorskip("pytestqt")
+
+from interaction import LEFT, NO_BUTTON, _mouse, pump  # noqa: E402
+from PySide6.QtCore import QEvent  # noqa: E402
+
+from splineviz.gui.main_window import MainWindow  # noqa: E402
+
+#: a picture of the new isovalue must be on screen this soon after a slider step
+PREVIEW_S = 0.100
+#: the exact frame must follow the release within this time
+EXACT_S = 30.0
+
+
+@pytest.fixture
+def window(qapp, tmp_path):
+    from PySide6.QtCore import QSettings
+
+    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
+    w = MainWindow()
+    w.show()
+    pump(0.3)
+    yield w
+    w.wait_idle()
+    w.close()
+    pump(0.1)
+
+
+def _drag_across(w, steps=12):
+    iso = w.scene.isosurfaces[0]
+    w.scene.select(iso)
+    layer = w.view.scene_view.layers[iso.id]
+    scene = w.spline_scene
+    shown_versions = []
+    original = scene._show
+
+    def spy(lyr, rf):  # every frame that reaches the screen, in order
+        shown_versions.append(rf.state[0])
+        return original(lyr, rf)
+
+    scene._show = spy
+    hist = w.iso_panel.histogram
+    lo, hi = hist.range()
+    width, y = hist.width(), hist.height() / 2.0
+
+    def x_of(v):  # the slider's plot area spans 6 .. width - 6 pixels
+        return 6 + (v - lo) / (hi - lo) * (width - 12)
+
+    xs = [x_of(lo + (hi - lo) * f) for f in [0.15 + 0.7 * i / (steps - 1) for i in range(steps)]]
+    latencies, values = [], []
+    try:
+        _mouse(hist, QEvent.Type.MouseButtonPress, (xs[0], y), LEFT, LEFT)
+        for x in xs[1:]:
+            _mouse(hist, QEvent.Type.MouseMove, (x, y), NO_BUTTON, LEFT)
+            t0 = time.perf_counter()
+            state = layer.state
+            ok = pump(2.0, lambda s=state: (scene.shown_frame(layer) is not None
+                                            and scene.shown_frame(layer).state == s))
+            latencies.append(time.perf_counter() - t0 if ok else float("inf"))
+            values.append(iso.isovalue)
+        _mouse(hist, QEvent.Type.MouseButtonRelease, (xs[-1], y), LEFT, NO_BUTTON)
+        t0 = time.perf_counter()
+        assert pump(EXACT_S, lambda: (scene.shown_frame(layer).final
+                                      and scene.shown_frame(layer).state == layer.state
+                                      and not w.view.refining))
+        exact_s = time.perf_counter() - t0
+    finally:
+        scene._show = original
+    print(f"{len(latencies)} slider steps over {values[0]:.4g} .. {values[-1]:.4g}: picture of "
+          f"the new isovalue after {1000 * max(latencies):.0f} ms at worst "
+          f"(median {1000 * sorted(latencies)[len(latencies) // 2]:.0f} ms); exact frame "
+          f"{exact_s:.2f} s after the release")
+    assert len(set(values)) == len(values), "every step changed the isovalue"
+    assert max(latencies) <= PREVIEW_S, latencies
+    assert shown_versions == sorted(shown_versions), "an older frame came after a newer one"
+
+
+def test_slider_drag_on_the_default_data_previews_every_step(window):
+    window.open_default()
+    window.wait_for_refine()
+    _drag_across(window)
+
+
+@pytest.mark.slow
+def test_slider_drag_across_bonsai_with_cubic_c1(window, shared_data):
+    window.open_path(shared_data / "volumes" / "bonsai.vti", mode="replace", isovalue=40.5,
+                     model="cubic-c1")
+    window.wait_idle(300)
+    window.wait_for_refine(300)
+    _drag_across(window)
