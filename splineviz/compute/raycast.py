@@ -2,13 +2,16 @@
 
 Pipeline on the device, without a CPU round trip of the volume:
 
-* on a data change: per-cell value bounds (the convex-hull/min-max test of §6.1.1) and the
-  levels of a min-max octree (§6.2.1), reduced level by level;
-* on an isovalue change: classification (active flag per cell), prefix-scan compaction of the
-  active cells with pyopencl's scan (Q_class -> Q_scan -> Q_active, Fig. 6.3), and the skip
-  volume (skip index of the largest empty macro cube per cell);
+* on a data change (isovalue-independent, thesis §6.1.1, §6.2.1): per-cell value bounds (the
+  convex-hull/min-max test) and the levels of a min-max octree, reduced level by level;
+* on an isovalue change: nothing but a new cache epoch. The work the picture needs is done by
+  the rays that need it (§6.2.3 "only what the picture needs"): the skip index of a cell comes
+  from the octree when a ray reaches the cell, and a type-6 cube's tet code is computed by the
+  first ray that reaches the cube and cached per cube for later frames at the same isovalue
+  (visible-first classification). :meth:`RayCaster.classify_all` classifies every cell at
+  once (prefix-scan compaction of the candidates, Fig. 6.3) for counts and checks;
 * per frame: one work-item per pixel; macro-cell leaping with the Heaviside plane choice,
-  cell traversal, the exact restriction of the model to the ray in each active cell, first
+  cell traversal, the exact restriction of the model to the ray in each candidate cell, first
   root, gradient, Phong headlight shading and OpenGL window depth.
 
 Models with an OpenCL kernel:
@@ -17,24 +20,27 @@ Models with an OpenCL kernel:
   cubic (split at its critical points, so no root is missed).
 * ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Data
   change: conservative per-cube bounds from the 27-point stencil (every coefficient is an
-  affine combination of it). Isovalue change: candidate cubes -> scan compaction -> per
-  candidate all cube B-coefficients and the 24-bit tet code (convex hull test per tet,
-  §6.1.1) -> an OR pyramid of the cube activity gives exact skip codes. Per frame: in each
-  relevant cube, the ray part inside each relevant tet comes from the tet's four
+  affine combination of it). In a candidate cube a ray reads the cube's cached 24-bit tet code
+  (all cube B-coefficients, convex hull test per tet, §6.1.1) or computes and caches it; the
+  ray part inside each relevant tet comes from the tet's four
   barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
   model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
   root by the same monotone-piece cubic solver, the gradient from the last de Casteljau step.
   Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
   the neighbour table (same result, no special cases at cube faces).
 
-``"to-quadratic"`` renders through the NumPy reference ray caster
-(:mod:`splineviz.core.raycast_reference`) until its kernel exists; ``stats["path"]`` says
-which path made the frame.
+* ``"to-quadratic"`` (truncated octahedra, §5.2): unit cells of the grid; in a candidate
+  cell the ray gets B-coefficients only for the (TO, tet) pieces it crosses, and a root search
+  only where they straddle the isovalue.
+
+Other models render through the NumPy reference ray caster
+(:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -54,12 +60,35 @@ GHOSTS = {"MODEL_TYPE6": 1, "MODEL_TO": 3}
 TO_WORDS = 5
 #: slack of the barycentric inside test of a tetrahedron (rays on shared faces)
 TET_SLACK = 1e-6
-#: skip code of an active cell (classify.cl)
+#: skip code of a candidate cell (raycast.cl skip_codes)
 SKIP_ACTIVE = 255
+#: epochs of the per-cube tet-code cache: 8 bits beside the 24-bit code, 0 = never valid
+MAX_EPOCH = 255
 
 
 class RayCastError(SplinevizError, ValueError):
-    """Bad ray-casting input (unknown model, volume too small, no isovalue set)."""
+    """Bad ray-casting input (unknown model, volume too small or too big, no isovalue set)."""
+
+
+@dataclass
+class Classification:
+    """Every cell classified at once (:meth:`RayCaster.classify_all`).
+
+    Attributes
+    ----------
+    cells : (n,) int32
+        Flat indices of the candidate cells (value bounds straddle the isovalue), ascending.
+    relevant : (n,) int32 or None
+        Relevant tetrahedra per candidate (coefficients straddle the isovalue); ``None`` for
+        the trilinear model.
+    codes : (n,) uint32 or (n, TO_WORDS) uint32 or None
+        Type-6: the 24-bit tet code per candidate cube; ``"to-quadratic"``: the bit set of the
+        relevant (TO, tet) pieces of the cell's parity class; ``None`` for trilinear.
+    """
+
+    cells: np.ndarray
+    relevant: np.ndarray | None
+    codes: np.ndarray | None
 
 
 def _shading_defines() -> dict:
@@ -176,31 +205,74 @@ class RayCaster:
         return self._spline
 
     def set_volume(self, volume) -> None:
-        """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt."""
+        """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt.
+
+        Raises
+        ------
+        RayCastError
+            When the device cannot hold the volume and its octree.
+        """
         if not isinstance(volume, Volume):
             volume = Volume(volume)
         if min(volume.shape) < 2:
             raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
-        self._volume = volume
-        self._spline = None
         # trilinear and TO: unit cells between samples; type-6: cubes centred at the samples
         shift = 1 if self._family == "MODEL_TYPE6" else 0
-        self._cells = tuple(n - 1 + shift for n in volume.shape)
+        cells = tuple(n - 1 + shift for n in volume.shape)
+        if self._device is not None:
+            self._check_device_memory(volume.shape, cells)
+        self._volume = volume
+        self._spline = None
+        self._cells = cells
         if self._device is not None:
             self._upload()
         if self._isovalue is not None:
-            self.set_isovalue(self._isovalue)
+            self._new_epoch()
+
+    def device_bytes(self, shape, cells) -> dict:
+        """Bytes of the device buffers kept for a volume of ``shape`` (per buffer name).
+
+        Parameters
+        ----------
+        shape : (3,) samples per axis
+        cells : (3,) cells of the traversal grid per axis
+        """
+        ghost = {"MODEL_TYPE6": 1, "MODEL_TO": GHOSTS["MODEL_TO"]}.get(self._family, 0)
+        levels = _octree_levels(cells)
+        out = {"samples": 4 * int(np.prod([n + 2 * ghost for n in shape])),
+               "octree": 8 * (levels[-1][0] + int(np.prod(levels[-1][1:])))}
+        if self._family == "MODEL_TYPE6":
+            out["tet code cache"] = 4 * int(np.prod(cells))
+        return out
+
+    def _check_device_memory(self, shape, cells) -> None:
+        """Refuse, before allocating anything, a volume the device cannot hold."""
+        dev = self._device.device
+        need = self.device_bytes(shape, cells)
+        gib = 2.0**30
+        total = sum(need.values())
+        # the frame buffers and the compaction of classify_all need room beside the volume
+        if total > 0.8 * dev.global_mem_size or max(need.values()) > dev.max_mem_alloc_size:
+            big = max(need, key=need.get)
+            raise RayCastError(
+                f"a {'x'.join(map(str, shape))} volume with the {self.model} model needs "
+                f"{total / gib:.2f} GiB of device memory ({big}: {need[big] / gib:.2f} GiB), "
+                f"but {self._device.name} has {dev.global_mem_size / gib:.2f} GiB (at most "
+                f"{dev.max_mem_alloc_size / gib:.2f} GiB per buffer); use a smaller or "
+                f"downsampled volume")
 
     def _defines(self) -> dict:
         """-D options of this model's programs."""
         d = {self._family: 1, **_shading_defines()}
         if self._family == "MODEL_TYPE6":
-            d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK)
+            d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK,
+                     NPOINTS=len(self.spline.scheme.cube_points))
         elif self._family == "MODEL_TO":
-            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS)
+            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"])
         return d
 
     def _upload(self):
+        """Samples, min-max octree and (type-6) the cleared tet-code cache on the device."""
         import pyopencl.array as cla
 
         dev = self._device
@@ -210,8 +282,7 @@ class RayCaster:
         total = levels[-1][0] + int(np.prod(levels[-1][1:]))
         self._levels = levels
         self._levels_buf = cla.to_device(q, np.array(levels, dtype=np.int32).reshape(-1, 4))
-        self._vmin = cla.empty(q, total, np.float32)
-        self._vmax = cla.empty(q, total, np.float32)
+        self._bounds = cla.empty(q, 2 * total, np.float32)  # float2 (lo, hi) per node
         nx, ny, nz = self._volume.shape
         cx, cy, cz = self._cells
         if self.model == "trilinear":
@@ -219,40 +290,30 @@ class RayCaster:
             self._data = cla.to_device(q, self._volume.data)
             self._strides = (ny, nz)
             k_minmax = get_kernel(ctx, "classify", "cell_minmax")
-            k_minmax(q, (cz, cy, cx), None, self._data.data, self._vmin.data,
-                     self._vmax.data, np.int32(nx), np.int32(ny), np.int32(nz))
+            k_minmax(q, (cz, cy, cx), None, self._data.data, self._bounds.data,
+                     np.int32(nx), np.int32(ny), np.int32(nz))
         elif self._family == "MODEL_TO":
             cls_defines = self._to_tables()
             k_bounds = get_kernel(ctx, "classify", "to_bounds", cls_defines)
             k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
                      np.int32(self._strides[1]), np.int32(cx), np.int32(cy), np.int32(cz),
                      self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass),
-                     self._vmin.data, self._vmax.data)
+                     self._bounds.data)
         else:
             cls_defines = self._type6_tables()
             k_bounds = get_kernel(ctx, "classify", "stencil_bounds", cls_defines)
             k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
                      np.int32(self._strides[1]), np.int32(nx), np.int32(ny), np.int32(nz),
-                     np.float32(self._negmass), self._vmin.data, self._vmax.data)
+                     np.float32(self._negmass), self._bounds.data)
         self._cls_defines = cls_defines
         k_reduce = get_kernel(ctx, "classify", "reduce_level", cls_defines)
         for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
-            k_reduce(q, (dz, dy, dx), None, self._vmin.data, self._vmax.data,
+            k_reduce(q, (dz, dy, dx), None, self._bounds.data,
                      *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
-        self._k_skip = get_kernel(ctx, "classify", "skip_codes", cls_defines)
-        ncell = cx * cy * cz
-        self._skip = cla.empty(q, ncell, np.uint8)
-        self._active_flags = cla.empty(q, ncell, np.int32)
-        self._active_list = cla.empty(q, ncell, np.int32)
-        self._count = cla.empty(q, 1, np.int32)
-        self._scan = _compaction_kernel(ctx)
-        if self._family == "MODEL_TO":
-            self._slots = cla.empty(q, ncell, np.int32)
-            self._bits = cla.empty(q, max(1, ncell // 64) * TO_WORDS, np.uint32)
-        if self.model != "trilinear":
-            self._tetcode = cla.zeros(q, ncell, np.uint32)
-            self._n_relevant = cla.empty(q, ncell, np.int32)
-            self._activity = cla.empty(q, total, np.uint8)
+        self._epoch = 0
+        if self._family == "MODEL_TYPE6":
+            self._tetcache = cla.zeros(q, int(np.prod(self._cells)), np.uint32)
+            self._counts = cla.zeros(q, 2, np.int32)
         q.finish()
 
     def _to_tables(self) -> dict:
@@ -373,103 +434,131 @@ class RayCaster:
     # -- classification ------------------------------------------------------------------
 
     def set_isovalue(self, value) -> None:
-        """Set the isovalue; classifies cells (active flags, compaction, skip volume)."""
+        """Set the isovalue.
+
+        Constant time: cells are classified by the rays that reach them (visible-first), and
+        type-6 tet codes cached for an older isovalue become invalid by a new cache epoch.
+        ``stats["active_cells"]``/``["active_tets"]`` then count, for the type-6 models, the
+        relevant cubes/tets found so far by the frames at this isovalue (``None`` for the
+        other models) until :meth:`classify_all` gives the totals.
+        """
         value = float(value)
         if not np.isfinite(value):
             raise RayCastError(f"the isovalue must be finite, got {value}")
-        self._isovalue = value
         t = time.perf_counter()
-        tets = None
-        if self._device is not None:
-            q = self._device.queue
-            cx, cy, cz = self._cells
-            self._k_skip(q, (cz, cy, cx), None, self._vmin.data, self._vmax.data,
-                         self._levels_buf.data, np.int32(len(self._levels)),
-                         np.float32(value), self._skip.data, self._active_flags.data)
-            self._scan(self._active_flags, self._active_list, self._count, queue=q)
-            count = int(self._count.get(queue=q)[0])
-            if self.model != "trilinear":
-                count, tets = self._classify_tets(value, count)
-        elif self.model == "trilinear":
-            vmin, vmax = numpy_cell_bounds(self._volume.data)
-            count = int(np.count_nonzero((vmin <= np.float32(value)) & (np.float32(value) <= vmax)))
-        else:
-            count = None  # the NumPy path of the tetrahedral models does no classification
+        if value != self._isovalue:
+            self._isovalue = value
+            self._new_epoch()
         self.stats["classify_s"] = time.perf_counter() - t
-        self.stats["active_cells"] = count
-        self.stats["active_tets"] = tets
 
-    def _classify_tets(self, value: float, candidates: int) -> tuple[int, int]:
-        """Tet codes of the candidate cubes, then exact skip codes from the activity pyramid.
+    def _new_epoch(self) -> None:
+        """Invalidate every cached classification (new isovalue or new data)."""
+        visible = 0 if self._family == "MODEL_TYPE6" else None
+        if self._device is None:
+            visible = None
+            if self.model == "trilinear":
+                vmin, vmax = numpy_cell_bounds(self._volume.data)
+                iso = np.float32(self._isovalue)
+                visible = int(np.count_nonzero((vmin <= iso) & (iso <= vmax)))
+        elif self._family == "MODEL_TYPE6":
+            q = self._device.queue
+            self._epoch += 1
+            if self._epoch > MAX_EPOCH:
+                # the 8-bit stamp wraps: clear once every MAX_EPOCH isovalues
+                self._tetcache.fill(np.uint32(0), queue=q)
+                self._epoch = 1
+            self._counts.fill(np.int32(0), queue=q)
+        self.stats.update(active_cells=visible, active_tets=visible, classified="visible")
+        if self.model == "trilinear":
+            self.stats["active_tets"] = None
 
-        Returns (cubes with a relevant tetrahedron, relevant tetrahedra).
+    def classify_all(self) -> Classification:
+        """Classify every cell at the current isovalue (OpenCL path).
+
+        Candidate cells (value bounds straddle the isovalue) by a prefix-scan compaction
+        (thesis Fig. 6.3); for the tetrahedral models the relevant tets of each candidate. The
+        type-6 tet codes go into the cache, so the next frames use them. Sets
+        ``stats["active_cells"]`` (cells with a relevant tet; trilinear: candidates) and
+        ``stats["active_tets"]``. Seconds on big volumes: frames do not need it.
         """
-        dev = self._device
-        q = dev.queue
-        ctx = dev.context
-        d = self._cls_defines
-        self._tetcode.fill(np.uint32(0), queue=q)
-        relevant_cubes = relevant_tets = 0
-        if candidates and self._family == "MODEL_TO":
-            import pyopencl.array as cla
+        import pyopencl.array as cla
 
-            if self._bits.size < candidates * TO_WORDS:
-                # grow with headroom so that nearby isovalues reuse the buffer
-                self._bits = cla.empty(q, (candidates * 5 // 4 + 1) * TO_WORDS, np.uint32)
-            k_to = get_kernel(ctx, "classify", "to_codes", d)
-            _, cy, cz = self._cells
-            e = self._ent
-            k_to(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
-                 np.int32(self._strides[1]), np.int32(cy), np.int32(cz),
-                 self._active_list.data, self._cls_start.data, self._cls_offsets.data,
-                 e["start"].data, *(a.data for a in self._union_csr), np.float32(value),
-                 self._tetcode.data,
-                 self._slots.data, self._bits.data, self._n_relevant.data)
-            nrel = self._n_relevant[:candidates]
-            relevant_tets = int(cla_sum(nrel, q))
-            relevant_cubes = int(cla_count_nonzero(nrel, q))
-        elif candidates:
-            k_tet = get_kernel(ctx, "classify", "tet_codes", d)
-            _, ny, nz = self._volume.shape
-            k_tet(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
-                  np.int32(self._strides[1]), np.int32(ny), np.int32(nz),
-                  self._active_list.data, self._stencil.data,
-                  *(a.data for a in self._cube_csr), self._tet_points.data,
-                  np.float32(value), self._tetcode.data, self._n_relevant.data)
-            nrel = self._n_relevant[:candidates]
-            relevant_tets = int(cla_sum(nrel, q))
-            relevant_cubes = int(cla_count_nonzero(nrel, q))
-        # the skip volume from the exact per-cube activity (an OR pyramid, §6.2.1)
+        if self._device is None or self._isovalue is None:
+            raise RayCastError("classify_all needs the OpenCL path and an isovalue")
+        q = self._device.queue
+        ctx = self._device.context
+        iso = np.float32(self._isovalue)
         ncell = int(np.prod(self._cells))
-        get_kernel(ctx, "classify", "activity_level0", d)(
-            q, (ncell,), None, self._tetcode.data, self._activity.data, np.int32(ncell))
-        k_or = get_kernel(ctx, "classify", "reduce_or", d)
-        levels = self._levels
-        for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
-            k_or(q, (dz, dy, dx), None, self._activity.data,
-                 *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
-        cx, cy, cz = self._cells
-        get_kernel(ctx, "classify", "skip_from_activity", d)(
-            q, (cz, cy, cx), None, self._activity.data, self._levels_buf.data,
-            np.int32(len(levels)), self._skip.data)
-        return relevant_cubes, relevant_tets
+        flags = cla.empty(q, ncell, np.int32)
+        get_kernel(ctx, "classify", "candidates", self._cls_defines)(
+            q, (ncell,), None, self._bounds.data, np.int32(ncell), iso, flags.data)
+        listed = cla.empty(q, ncell, np.int32)
+        count = cla.empty(q, 1, np.int32)
+        _compaction_kernel(ctx)(flags, listed, count, queue=q)
+        del flags
+        n = int(count.get(queue=q)[0])
+        cells = listed[:n].get(queue=q) if n else np.zeros(0, np.int32)
+        relevant = codes = None
+        if self._family == "MODEL_TYPE6":
+            relevant, codes = np.zeros(n, np.int32), np.zeros(n, np.uint32)
+            if n:
+                nrel = cla.empty(q, n, np.int32)
+                code_buf = cla.empty(q, n, np.uint32)
+                _, ny, nz = self._volume.shape
+                get_kernel(ctx, "raycast", "tet_codes", self._defines())(
+                    q, (n,), None, self._data.data, np.int32(self._strides[0]),
+                    np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
+                    self._stencil.data, *(a.data for a in self._cube_csr),
+                    self._tet_points.data, iso, np.uint32(self._epoch), self._tetcache.data,
+                    code_buf.data, nrel.data)
+                relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
+            # the cache is complete: later frames count nothing new
+            self._counts.set(np.array([np.count_nonzero(relevant), relevant.sum()], np.int32),
+                             queue=q)
+        elif self._family == "MODEL_TO":
+            relevant, codes = np.zeros(n, np.int32), np.zeros((n, TO_WORDS), np.uint32)
+            if n:
+                nrel = cla.empty(q, n, np.int32)
+                bits = cla.empty(q, n * TO_WORDS, np.uint32)
+                _, cy, cz = self._cells
+                get_kernel(ctx, "classify", "to_codes", self._cls_defines)(
+                    q, (n,), None, self._data.data, np.int32(self._strides[0]),
+                    np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
+                    self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
+                    *(a.data for a in self._union_csr), iso, bits.data, nrel.data)
+                relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
+        if relevant is None:
+            self.stats.update(active_cells=n, active_tets=None)
+        else:
+            self.stats.update(active_cells=int(np.count_nonzero(relevant)),
+                              active_tets=int(relevant.sum()))
+        self.stats["classified"] = "all"
+        return Classification(cells, relevant, codes)
 
     def active_cells(self) -> np.ndarray:
-        """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the active cells."""
+        """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the candidate cells."""
         if self._isovalue is None:
             raise RayCastError("set an isovalue before asking for active cells")
         if self._device is None:
             vmin, vmax = numpy_cell_bounds(self._volume.data)
             iso = np.float32(self._isovalue)
             return np.flatnonzero(((vmin <= iso) & (iso <= vmax)).ravel()).astype(np.int32)
-        n = self.stats["active_cells"]
-        return self._active_list[:n].get(queue=self._device.queue)
+        return self.classify_all().cells
 
     def skip_volume(self) -> np.ndarray:
-        """(nx-1, ny-1, nz-1) uint8 skip codes (255 = active, else macro level); OpenCL path."""
+        """(cx, cy, cz) uint8 skip codes (255 = candidate, else the empty macro level) that the
+        ray kernel derives from the min-max octree at the current isovalue; OpenCL path."""
+        import pyopencl.array as cla
+
         if self._device is None or self._isovalue is None:
             raise RayCastError("the skip volume exists on the OpenCL path after set_isovalue")
-        return self._skip.get(queue=self._device.queue).reshape(self._cells)
+        q = self._device.queue
+        skip = cla.empty(q, int(np.prod(self._cells)), np.uint8)
+        cx, cy, cz = self._cells
+        get_kernel(self._device.context, "raycast", "skip_codes", self._defines())(
+            q, (cz, cy, cx), None, self._bounds.data, self._levels_buf.data,
+            np.int32(len(self._levels)), np.float32(self._isovalue), skip.data)
+        return skip.get(queue=q).reshape(self._cells)
 
     # -- rendering -----------------------------------------------------------------------
 
@@ -533,23 +622,28 @@ class RayCaster:
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
         nx, ny, nz = vol.shape
-        type6_args = []
+        model_args = []
         if self._family == "MODEL_TYPE6":
-            type6_args = [self._tetcode.data, self._stencil.data,
-                          *(a.data for a in self._tet_csr), self._bary.data, self._red.data]
+            model_args = [self._tetcache.data, np.uint32(self._epoch), self._counts.data,
+                          self._stencil.data, *(a.data for a in self._tet_csr),
+                          *(a.data for a in self._cube_csr), self._tet_points.data,
+                          self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
-            type6_args = [self._tetcode.data, self._slots.data, self._bits.data,
-                          e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
+            model_args = [e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
               *(np.int32(c) for c in self._cells), np.float32(shift),
-              self._skip.data, *type6_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
+              self._bounds.data, self._levels_buf.data, np.int32(len(self._levels)),
+              *model_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
-                     planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
-                     np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
+              planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
+              np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
+        if self._family == "MODEL_TYPE6":
+            cubes, tets = (int(v) for v in self._counts.get(queue=q))
+            self.stats.update(active_cells=cubes, active_tets=tets)
         hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
         pos_h = pos.get(queue=q).reshape(h, w, 4)
         position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),

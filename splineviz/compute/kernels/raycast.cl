@@ -7,7 +7,13 @@
 //                        the relevant tets from the 27-point data stencil, blossoms of the
 //                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2)
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
-//   SKIP_ACTIVE          skip code of an active cell (see classify.cl)
+//   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
+//
+// Nothing here needs a pass over the volume per isovalue (thesis §6.2.3 "only the work the
+// picture needs"): the skip index of a cell comes from the isovalue-independent min-max octree
+// of classify.cl when a ray reaches the cell, and the tet code of a type-6 cube (§6.1.1) is
+// computed by the first ray that reaches it and cached per cube, stamped with the epoch of the
+// isovalue (an isovalue change bumps the epoch, which invalidates every cached code at once).
 //
 // Rays live in index space (sample data[i,j,k] at (i,j,k)); the ray parameter t is in world
 // units: u(t) = eye_u + t * d_u with d_u = d_world / spacing. For precision, traversal uses
@@ -206,6 +212,37 @@ inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
 
 inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t.z ? 1 : 2); }
 
+// Skip index of `cell` at isovalue iso (thesis §6.2.1): -1 when the cell's value bounds
+// straddle iso (a candidate), else the highest level L whose octree node holding the cell has
+// bounds that exclude iso (an empty macro cube of 2^L cells). A node's bounds contain those of
+// its children, so the empty levels of a cell are 0..L: the walk goes up from level 0 and
+// stops at the first node that may hold the surface.
+inline int skip_level(__global const float2 *bounds, __constant const int4 *levels,
+                      int n_levels, int3 cell, float iso)
+{
+    int L = -1;
+    for (int l = 0; l < n_levels; ++l) {
+        const int4 lv = levels[l];
+        const float2 b = bounds[lv.x + (((cell.x >> l) * lv.z + (cell.y >> l)) * lv.w
+                                        + (cell.z >> l))];
+        if (b.x <= iso && iso <= b.y) break;
+        L = l;
+    }
+    return L;
+}
+
+// Skip codes of all cells (SKIP_ACTIVE or the macro level), for inspection and tests: the
+// same skip_level the ray kernel evaluates on the fly.
+__kernel void skip_codes(__global const float2 *bounds, __constant const int4 *levels,
+                         int n_levels, float iso, __global uchar *skip)
+{
+    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
+    const int4 l0 = levels[0];
+    if (i >= l0.y || j >= l0.z || k >= l0.w) return;
+    const int L = skip_level(bounds, levels, n_levels, (int3)(i, j, k), iso);
+    skip[(i * l0.z + j) * l0.w + k] = L < 0 ? SKIP_ACTIVE : (uchar)L;
+}
+
 #if defined(MODEL_TYPE6) || defined(MODEL_TO)
 // The part [*lo, *hi] of the segment p0 + s d, s in [0, hi], inside the tetrahedron with
 // barycentric rows r0..r3 (its four plane equations, thesis §6.2.2); false if empty.
@@ -298,14 +335,93 @@ inline float type6_cube_root(__global const float *pdata, int base,
     }
     return best;
 }
+
+// The 24-bit tet code of the cube whose stencil starts at `base`: all cube B-coefficients from
+// the 27 stencil values (sparse cube masks, CSR), then bit t set when the coefficients of tet
+// t straddle the isovalue (convex hull property, thesis §6.1.1).
+inline uint type6_tet_code(__global const float *pdata, int base, __constant const int *stencil,
+                           __global const int *cube_ptr, __global const int *cube_cols,
+                           __global const float *cube_w, __constant const int *tet_points,
+                           float iso)
+{
+    float vals[27];
+    for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
+    float coef[NPOINTS];
+    // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows, kept in
+    // global memory (cached) so that constant memory stays small on GPUs (64 KB, 8-9 args)
+    for (int p = 0; p < NPOINTS; ++p) {
+        float acc = 0.0f;
+        for (int e = cube_ptr[p]; e < cube_ptr[p + 1]; ++e) acc += cube_w[e] * vals[cube_cols[e]];
+        coef[p] = acc;
+    }
+    uint code = 0u;
+    for (int t = 0; t < 24; ++t) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (int m = 0; m < NCOEF; ++m) {
+            const float v = coef[tet_points[t * NCOEF + m]];
+            lo = fmin(lo, v);
+            hi = fmax(hi, v);
+        }
+        if (lo <= iso && iso <= hi) code |= 1u << t;
+    }
+    return code;
+}
+
+// Cache entry of a cube: the epoch of the isovalue it was computed for (top 8 bits) and the
+// tet code (low 24 bits); epoch 0 never matches (a cleared cache).
+#define CODE_MASK 0xFFFFFFu
+
+// The tet code of cube `c` at this epoch: from the cache, or computed and published. The
+// first ray to publish a cube's code also counts it (counts[0] cubes with a relevant tet,
+// counts[1] relevant tets); rays that raced it computed the same code and count nothing.
+inline uint type6_cached_code(__global uint *tetcache, int c, uint epoch,
+                              __global const float *pdata, int base,
+                              __constant const int *stencil, __global const int *cube_ptr,
+                              __global const int *cube_cols, __global const float *cube_w,
+                              __constant const int *tet_points, float iso,
+                              __global int *counts)
+{
+    const uint e = tetcache[c];
+    if ((e >> 24) == epoch) return e & CODE_MASK;
+    const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
+                                     tet_points, iso);
+    if (atomic_cmpxchg((volatile __global uint *)&tetcache[c], e, (epoch << 24) | code) == e
+        && code != 0u) {
+        atomic_inc(&counts[0]);
+        atomic_add(&counts[1], (int)popcount(code));
+    }
+    return code;
+}
+
+// Classification of all candidate cubes at once (RayCaster.classify_all): their tet codes,
+// written to the cache at this epoch, and per candidate the code and its relevant tets.
+__kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
+                        __global const int *cubes, __constant const int *stencil,
+                        __global const int *cube_ptr, __global const int *cube_cols,
+                        __global const float *cube_w, __constant const int *tet_points,
+                        float iso, uint epoch, __global uint *tetcache, __global uint *code_out,
+                        __global int *n_relevant)
+{
+    const int a = get_global_id(0);
+    const int cube = cubes[a];
+    const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
+    const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
+    const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
+                                     tet_points, iso);
+    tetcache[cube] = (epoch << 24) | code;
+    code_out[a] = code;
+    n_relevant[a] = popcount(code);
+}
 #endif
 
 #ifdef MODEL_TO
 // First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
-// corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
-// only those with their bit set are tested.
-inline float to_cell_root(__global const float *pdata, int corner, int cls, int slot,
-                          __global const uint *bits, __constant const int *ent_start,
+// corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class. Only
+// the pieces the segment crosses get B-coefficients, and only those whose coefficients
+// straddle the isovalue (convex hull, §6.1.1) a root search: the relevance of a piece is
+// decided by the rays that reach it, not by a pass over the volume.
+inline float to_cell_root(__global const float *pdata, int corner, int cls,
+                          __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
                           __constant const int *ent_tet, __global const int *row_ptr,
                           __global const int *cols, __global const float *weights,
@@ -313,10 +429,7 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, int 
                           float3 p0, float3 d, float len, float iso, float3 *grad)
 {
     float best = -1.0f;
-    const int e0 = ent_start[cls];
-    for (int e = e0; e < ent_start[cls + 1]; ++e) {
-        const int q = e - e0;
-        if (!(bits[slot * NWORDS + (q >> 5)] & (1u << (q & 31)))) continue;
+    for (int e = ent_start[cls]; e < ent_start[cls + 1]; ++e) {
         const int t = ent_tet[e];
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
                      r3 = bary[4 * t + 3];
@@ -328,13 +441,17 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, int 
         // same CSR gather as type6_cube_root, but from __global data: OpenCL C 1.2 has no
         // generic address space, so one helper cannot serve both (private vs global values)
         float c[NCOEF];
+        float cmin = INFINITY, cmax = -INFINITY;
         for (int i = 0; i < NCOEF; ++i) {
             const int r = t * NCOEF + i;
             float acc = 0.0f;
             for (int m = row_ptr[r]; m < row_ptr[r + 1]; ++m)
                 acc += weights[m] * pdata[base + cols[m]];
             c[i] = acc - iso;
+            cmin = fmin(cmin, c[i]);
+            cmax = fmax(cmax, c[i]);
         }
+        if (cmin > 0.0f || cmax < 0.0f) continue;
         float3 g;
         const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g);
         if (sh >= 0.0f && (best < 0.0f || sh < best)) {
@@ -351,16 +468,18 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       int SY, int SZ,                // strides of `data` (i*SY*SZ + j*SZ + k)
                       int CX, int CY, int CZ,        // cells of the skip volume per axis
                       float grid_shift,              // cell c covers [c, c+1) - shift in u
-                      __global const uchar *skip,
+                      __global const float2 *bounds,  // min-max octree (classify.cl)
+                      __constant const int4 *levels, int n_levels,
 #ifdef MODEL_TYPE6
-                      __global const uint *tetcode,
+                      __global uint *tetcache, uint epoch, __global int *counts,
                       __constant const int *stencil, __global const int *row_ptr,
                       __global const int *cols, __global const float *masks,
+                      __global const int *cube_ptr, __global const int *cube_cols,
+                      __global const float *cube_w, __constant const int *tet_points,
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
-                      __global const uint *anycode, __global const int *slots,
-                      __global const uint *bits, __constant const int *ent_start,
+                      __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
                       __constant const int *ent_tet, __global const int *row_ptr,
                       __global const int *cols, __global const float *weights,
@@ -421,8 +540,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
         const int max_steps = 4 * (CX + CY + CZ) + 16;
         for (int step = 0; step < max_steps; ++step) {
             const int c = (cell.x * ncell.y + cell.y) * ncell.z + cell.z;
-            const uchar code = skip[c];
-            if (code == SKIP_ACTIVE) {
+            const int L = skip_level(bounds, levels, n_levels, cell, iso);
+            if (L < 0) {
                 const float3 te = exit_params(we, d, inv_d, cell, cell + 1);
                 const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
                 const float s_end = fmin(s_exit, send);
@@ -440,15 +559,15 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     break;
                 }
 #elif defined(MODEL_TO)
-                if (anycode[c] != 0u) {
+                {
                     const float3 p = we + s * d - convert_float3(cell);
                     const int corner = ((cell.x + GHOST) * SY + (cell.y + GHOST)) * SZ
                                        + (cell.z + GHOST);
                     const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                     float3 g;
-                    const float r = to_cell_root(data, corner, cls, slots[c], bits, ent_start,
-                                                 ent_centre, ent_base, ent_tet, row_ptr, cols,
-                                                 weights, bary, red, p, d, s_end - s, iso, &g);
+                    const float r = to_cell_root(data, corner, cls, ent_start, ent_centre,
+                                                 ent_base, ent_tet, row_ptr, cols, weights,
+                                                 bary, red, p, d, s_end - s, iso, &g);
                     if (r >= 0.0f) {
                         upos = convert_float3(cell) + p + r * d;
                         grad_u = g;
@@ -458,11 +577,13 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     }
                 }
 #else
-                const uint tc = tetcode[c];
+                // cube centred at data point `cell`
+                const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
+                const uint tc = type6_cached_code(tetcache, c, epoch, data, base, stencil,
+                                                  cube_ptr, cube_cols, cube_w, tet_points, iso,
+                                                  counts);
                 if (tc != 0u) {
-                    // cube centred at data point `cell`; p relative to the centre
-                    const float3 p = ue + s * d - convert_float3(cell);
-                    const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
+                    const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
                     const float r = type6_cube_root(data, base, stencil, row_ptr, cols, masks,
                                                     bary, red, tc, p, d, s_end - s, iso, &g);
@@ -482,9 +603,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 else if (a == 1) cell.y += d.y > 0.0f ? 1 : -1;
                 else cell.z += d.z > 0.0f ? 1 : -1;
             } else {
-                // empty-space leaping over the macro cube of 2^code cells (thesis §6.2.1);
+                // empty-space leaping over the macro cube of 2^L cells (thesis §6.2.1);
                 // the next cell comes from integer bounds, not from an epsilon step
-                const int L = code;
                 const int3 lo = (cell >> L) << L;
                 const int3 hi = min(lo + (1 << L), ncell);
                 const float3 te = exit_params(we, d, inv_d, lo, hi);
