@@ -127,7 +127,13 @@ def test_type6_tet_codes_match_core_coefficients(model):
     vol, iso = marschner_lobb(13)
     rc = RayCaster(vol, model=model)
     rc.set_isovalue(iso)
-    codes = rc._tetcode.get(queue=rc._device.queue)
+    cls = rc.classify_all()
+    codes = np.zeros(int(np.prod(rc._cells)), np.uint32)
+    codes[cls.cells] = cls.codes
+    # classify_all fills the per-cube cache that the frames read, at the current epoch
+    cache = rc._tetcache.get(queue=rc._device.queue)
+    np.testing.assert_array_equal(cache[cls.cells] >> 24, rc._epoch)
+    np.testing.assert_array_equal(cache[cls.cells] & 0xFFFFFF, cls.codes)
     spline = rc.spline
     cubes = spline.all_cubes()
     bits = np.zeros((len(cubes), 24), dtype=bool)
@@ -154,8 +160,8 @@ def test_classification_compaction_and_skip_volume():
     rc.set_isovalue(0.6)
     vmin, vmax = numpy_cell_bounds(vol.data)
     active = (vmin <= np.float32(0.6)) & (np.float32(0.6) <= vmax)
+    np.testing.assert_array_equal(rc.active_cells(), np.flatnonzero(active.ravel()))
     assert rc.stats["active_cells"] == active.sum() > 0
-    np.testing.assert_array_equal(np.sort(rc.active_cells()), np.flatnonzero(active.ravel()))
     skip = rc.skip_volume()
     np.testing.assert_array_equal(skip == 255, active)
     top = int(np.ceil(np.log2(max(active.shape))))
@@ -173,8 +179,10 @@ def test_classification_compaction_and_skip_volume():
             assert big.any()
     # a new isovalue reclassifies; a new volume rebuilds the octree
     rc.set_isovalue(10.0)
-    assert rc.stats["active_cells"] == 0
+    assert len(rc.active_cells()) == 0 and rc.stats["active_cells"] == 0
+    assert (rc.skip_volume() != 255).all()
     rc.set_volume(Volume(vol.data * 10))
+    rc.classify_all()
     assert rc.stats["active_cells"] == np.sum((vmin * 10 <= 10) & (10 <= vmax * 10))
 
 
@@ -187,7 +195,12 @@ def test_empty_space_leaping_changes_nothing():
     cam = cameras(vol)[1]
     leaped = rc.render(cam, (80, 60))
     assert (rc.skip_volume() != 255).any()
-    rc._skip.fill(np.uint8(255), queue=rc._device.queue)
+    # octree bounds that hold every isovalue: every cell a candidate, nothing leaped
+    q = rc._device.queue
+    b = rc._bounds.get(queue=q)
+    b[0::2], b[1::2] = -np.inf, np.inf
+    rc._bounds.set(b, queue=q)
+    assert (rc.skip_volume() == 255).all()
     dense = rc.render(cam, (80, 60))
     np.testing.assert_array_equal(leaped.hit, dense.hit)
     np.testing.assert_allclose(leaped.position[leaped.hit], dense.position[dense.hit], atol=1e-4)
@@ -219,10 +232,8 @@ def test_to_relevance_bits_match_core_coefficients():
     vol, iso = marschner_lobb(9)
     rc = RayCaster(vol, model="to-quadratic")
     rc.set_isovalue(iso)
-    q = rc._device.queue
-    anycode = rc._tetcode.get(queue=q)
-    slots = rc._slots.get(queue=q)
-    bits = rc._bits.get(queue=q).reshape(-1, 5)
+    result = rc.classify_all()
+    slot = dict(zip(result.cells.tolist(), range(len(result.cells)), strict=True))
     start, centre, tet = cell_classes()
     spline = rc.spline
     cells = np.argwhere(np.ones(rc._cells, bool))
@@ -233,8 +244,8 @@ def test_to_relevance_bits_match_core_coefficients():
         base = np.rint(centre[ents] + (i, j, k) - 0.5).astype(np.int64) + 3
         c = to_quadratic.coefficients(spline._padded, base, tet[ents], spline.k)
         want = (c.min(axis=1) <= iso) & (iso <= c.max(axis=1))
-        if anycode[flat]:
-            words = bits[slots[flat]]
+        if flat in slot:
+            words = result.codes[slot[flat]]
             got = np.array([(words[e >> 5] >> (e & 31)) & 1 for e in range(len(ents))], bool)
         else:
             got = np.zeros(len(ents), bool)
