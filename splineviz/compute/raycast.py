@@ -62,8 +62,13 @@ TO_WORDS = 5
 TET_SLACK = 1e-6
 #: skip code of a candidate cell (raycast.cl skip_codes)
 SKIP_ACTIVE = 255
-#: epochs of the per-cube tet-code cache: 8 bits beside the 24-bit code, 0 = never valid
+#: epochs of the per-cell classification caches: 8 bits beside 24 bits of code or pool
+#: index, 0 = never valid
 MAX_EPOCH = 255
+#: largest pool of cached TO bit sets (24-bit indices; 0xFFFFFF means "no relevant piece")
+MAX_POOL = 2**24 - 2
+#: families whose per-cell classification the rays cache
+CACHED = ("MODEL_TYPE6", "MODEL_TO")
 
 
 class RayCastError(SplinevizError, ValueError):
@@ -239,10 +244,13 @@ class RayCaster:
         """
         ghost = {"MODEL_TYPE6": 1, "MODEL_TO": GHOSTS["MODEL_TO"]}.get(self._family, 0)
         levels = _octree_levels(cells)
+        ncell = int(np.prod(cells))
         out = {"samples": 4 * int(np.prod([n + 2 * ghost for n in shape])),
                "octree": 8 * (levels[-1][0] + int(np.prod(levels[-1][1:])))}
-        if self._family == "MODEL_TYPE6":
-            out["tet code cache"] = 4 * int(np.prod(cells))
+        if self._family in CACHED:
+            out["classification cache"] = 4 * ncell
+        if self._family == "MODEL_TO":
+            out["piece pool"] = 4 * TO_WORDS * _initial_pool(ncell)
         return out
 
     def _check_device_memory(self, shape, cells) -> None:
@@ -268,11 +276,12 @@ class RayCaster:
             d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK,
                      NPOINTS=len(self.spline.scheme.cube_points))
         elif self._family == "MODEL_TO":
-            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"])
+            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS,
+                     NUNION=self._nunion)
         return d
 
     def _upload(self):
-        """Samples, min-max octree and (type-6) the cleared tet-code cache on the device."""
+        """Samples, min-max octree and the cleared classification cache on the device."""
         import pyopencl.array as cla
 
         dev = self._device
@@ -311,9 +320,15 @@ class RayCaster:
             k_reduce(q, (dz, dy, dx), None, self._bounds.data,
                      *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
         self._epoch = 0
-        if self._family == "MODEL_TYPE6":
-            self._tetcache = cla.zeros(q, int(np.prod(self._cells)), np.uint32)
-            self._counts = cla.zeros(q, 2, np.int32)
+        ncell = int(np.prod(self._cells))
+        if self._family in CACHED:
+            # per cell: (epoch << 24) | (type-6 tet code or TO pool index); counts: cells and
+            # tets classified at this epoch, TO pool entries asked for
+            self._cache = cla.zeros(q, ncell, np.uint32)
+            self._counts = cla.zeros(q, 3, np.int32)
+        if self._family == "MODEL_TO":
+            self._pool_cap = _initial_pool(ncell)
+            self._pool = cla.empty(q, self._pool_cap * TO_WORDS, np.uint32)
         q.finish()
 
     def _to_tables(self) -> dict:
@@ -453,21 +468,21 @@ class RayCaster:
 
     def _new_epoch(self) -> None:
         """Invalidate every cached classification (new isovalue or new data)."""
-        visible = 0 if self._family == "MODEL_TYPE6" else None
+        visible = 0 if self._family in CACHED else None
         if self._device is None:
             visible = None
             if self.model == "trilinear":
                 vmin, vmax = numpy_cell_bounds(self._volume.data)
                 iso = np.float32(self._isovalue)
                 visible = int(np.count_nonzero((vmin <= iso) & (iso <= vmax)))
-        elif self._family == "MODEL_TYPE6":
+        elif self._family in CACHED:
             q = self._device.queue
             self._epoch += 1
             if self._epoch > MAX_EPOCH:
                 # the 8-bit stamp wraps: clear once every MAX_EPOCH isovalues
-                self._tetcache.fill(np.uint32(0), queue=q)
+                self._cache.fill(np.uint32(0), queue=q)
                 self._epoch = 1
-            self._counts.fill(np.int32(0), queue=q)
+            self._counts.fill(np.int32(0), queue=q)  # the TO pool is refilled from entry 0
         self.stats.update(active_cells=visible, active_tets=visible, classified="visible")
         if self.model == "trilinear":
             self.stats["active_tets"] = None
@@ -477,7 +492,8 @@ class RayCaster:
 
         Candidate cells (value bounds straddle the isovalue) by a prefix-scan compaction
         (thesis Fig. 6.3); for the tetrahedral models the relevant tets of each candidate. The
-        type-6 tet codes go into the cache, so the next frames use them. Sets
+        type-6 tet codes go into the cache, so the next frames use them (TO bit sets do not:
+        they would need a pool entry per candidate). Sets
         ``stats["active_cells"]`` (cells with a relevant tet; trilinear: candidates) and
         ``stats["active_tets"]``. Seconds on big volumes: frames do not need it.
         """
@@ -509,19 +525,19 @@ class RayCaster:
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
                     self._stencil.data, *(a.data for a in self._cube_csr),
-                    self._tet_points.data, iso, np.uint32(self._epoch), self._tetcache.data,
+                    self._tet_points.data, iso, np.uint32(self._epoch), self._cache.data,
                     code_buf.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
             # the cache is complete: later frames count nothing new
-            self._counts.set(np.array([np.count_nonzero(relevant), relevant.sum()], np.int32),
-                             queue=q)
+            self._counts[:2].set(
+                np.array([np.count_nonzero(relevant), relevant.sum()], np.int32), queue=q)
         elif self._family == "MODEL_TO":
             relevant, codes = np.zeros(n, np.int32), np.zeros((n, TO_WORDS), np.uint32)
             if n:
                 nrel = cla.empty(q, n, np.int32)
                 bits = cla.empty(q, n * TO_WORDS, np.uint32)
                 _, cy, cz = self._cells
-                get_kernel(ctx, "classify", "to_codes", self._cls_defines)(
+                get_kernel(ctx, "raycast", "to_codes", self._defines())(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
                     self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
@@ -589,6 +605,22 @@ class RayCaster:
         self.stats["render_s"] = time.perf_counter() - t
         return frame
 
+    def _grow_pool(self, asked: int) -> None:
+        """A larger TO pool, its cached entries kept (their indices stay valid); the cells a
+        full pool could not take are cached by the next frames."""
+        import pyopencl as cl
+        import pyopencl.array as cla
+
+        q = self._device.queue
+        old = self._pool_cap
+        cap = min(MAX_POOL, max(2 * old, asked * 5 // 4))
+        if cap > old:
+            pool = cla.empty(q, cap * TO_WORDS, np.uint32)
+            cl.enqueue_copy(q, pool.data, self._pool.data, byte_count=self._pool.nbytes)
+            self._pool, self._pool_cap = pool, cap
+        # the entries asked for past the old end were never written: hand them out again
+        self._counts[2:3].set(np.array([old], np.int32), queue=q)
+
     def _render_cl(self, camera, w, h, planes) -> ref.Frame:
         import pyopencl.array as cla
         from pyopencl import cltypes
@@ -624,13 +656,16 @@ class RayCaster:
         nx, ny, nz = vol.shape
         model_args = []
         if self._family == "MODEL_TYPE6":
-            model_args = [self._tetcache.data, np.uint32(self._epoch), self._counts.data,
+            model_args = [self._cache.data, np.uint32(self._epoch), self._counts.data,
                           self._stencil.data, *(a.data for a in self._tet_csr),
                           *(a.data for a in self._cube_csr), self._tet_points.data,
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
-            model_args = [e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
+            model_args = [self._cache.data, self._pool.data, np.int32(self._pool_cap),
+                          np.uint32(self._epoch), self._counts.data, self._cls_start.data,
+                          self._cls_offsets.data, *(a.data for a in self._union_csr),
+                          e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
@@ -641,9 +676,12 @@ class RayCaster:
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
               planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
               np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
-        if self._family == "MODEL_TYPE6":
-            cubes, tets = (int(v) for v in self._counts.get(queue=q))
-            self.stats.update(active_cells=cubes, active_tets=tets)
+        if self._family in CACHED:
+            cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
+            if self.stats.get("classified") == "visible":
+                self.stats.update(active_cells=cells, active_tets=tets)
+            if self._family == "MODEL_TO" and asked > self._pool_cap:
+                self._grow_pool(asked)
         hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
         pos_h = pos.get(queue=q).reshape(h, w, 4)
         position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
@@ -651,6 +689,11 @@ class RayCaster:
         normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
                          color.get(queue=q).reshape(h, w, 4))
+
+
+def _initial_pool(ncell: int) -> int:
+    """Entries of a new TO pool: enough for a view of a typical surface; it grows on demand."""
+    return int(min(MAX_POOL, max(4096, ncell // 64)))
 
 
 def _reduction_table(degree: int) -> np.ndarray:

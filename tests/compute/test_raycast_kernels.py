@@ -131,7 +131,7 @@ def test_type6_tet_codes_match_core_coefficients(model):
     codes = np.zeros(int(np.prod(rc._cells)), np.uint32)
     codes[cls.cells] = cls.codes
     # classify_all fills the per-cube cache that the frames read, at the current epoch
-    cache = rc._tetcache.get(queue=rc._device.queue)
+    cache = rc._cache.get(queue=rc._device.queue)
     np.testing.assert_array_equal(cache[cls.cells] >> 24, rc._epoch)
     np.testing.assert_array_equal(cache[cls.cells] & 0xFFFFFF, cls.codes)
     spline = rc.spline

@@ -107,6 +107,28 @@ def test_isovalue_changes_leave_no_stale_cubes(ml):
 
 
 @needs_cl
+def test_full_to_pool_grows_and_frames_stay_exact(ml):
+    # a pool too small for one frame: rays that find it full use their own bit sets, the
+    # pool grows after the frame keeping its entries, and later frames fill it
+    import pyopencl.array as cla
+
+    vol, iso = ml
+    rc = RayCaster(vol, model="to-quadratic")
+    rc._pool_cap = 16
+    rc._pool = cla.empty(rc._device.queue, 16 * 5, np.uint32)
+    full = RayCaster(vol, model="to-quadratic")
+    for cam, value in _path(vol, iso)[3:6]:
+        rc.set_isovalue(value)
+        full.set_isovalue(value)
+        full.classify_all()
+        _assert_same(rc.render(cam, SIZE), full.render(cam, SIZE))
+        _assert_same(rc.render(cam, SIZE), full.render(cam, SIZE))  # from the cache
+    assert rc._pool_cap > 1000
+    cells, _, used = rc._counts.get(queue=rc._device.queue)
+    assert 0 < cells <= used <= rc._pool_cap
+
+
+@needs_cl
 def test_set_isovalue_does_no_volume_pass(ml):
     vol, iso = ml
     rc = RayCaster(vol, model="cubic-c1")
@@ -121,7 +143,7 @@ def test_volume_too_big_for_the_device_is_refused(ml):
     vol, _ = ml
     rc = RayCaster(vol, model="cubic-c1")
     need = rc.device_bytes((4096, 4096, 4096), (4097, 4097, 4097))
-    assert need["samples"] > 2**38 and need["tet code cache"] > 2**38
+    assert need["samples"] > 2**38 and need["classification cache"] > 2**38
     with pytest.raises(RayCastError, match="GiB of device memory"):
         rc._check_device_memory((4096, 4096, 4096), (4097, 4097, 4097))
     rc._check_device_memory(vol.shape, rc._cells)  # what it already holds fits

@@ -105,46 +105,4 @@ __kernel void to_bounds(__global const float *pdata, int PY, int PZ, int CX, int
     bounds[(i * CY + j) * CZ + k] = (float2)(lo - w, hi + w);
 }
 
-// Per candidate cell: B-coefficients of every (TO, tet) piece meeting it, and a bit set of the
-// relevant ones (NWORDS x 32 bits; the thesis' tet code for the 144 tets of a TO), for
-// RayCaster.classify_all (the ray kernel tests the pieces along each ray itself). The data a
-// cell's pieces read (the class union, at most NUNION values) are gathered once; the piece
-// stencils (CSR per entry and coefficient) index into that private copy.
-__kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int CZ,
-                       __global const int *cells, __constant const int *cls_start,
-                       __constant const int *cls_offsets, __constant const int *ent_start,
-                       __global const int *row_ptr, __global const ushort *cols,
-                       __global const float *weights, float iso, __global uint *bits,
-                       __global int *n_relevant)
-{
-    const int a = get_global_id(0);
-    const int cell = cells[a];
-    const int k = cell % CZ, j = (cell / CZ) % CY, i = cell / (CY * CZ);
-    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
-    const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
-    float vals[NUNION];
-    const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
-    for (int u = 0; u < nu; ++u) vals[u] = pdata[corner + cls_offsets[u0 + u]];
-    uint words[NWORDS];
-    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
-    int count = 0;
-    const int e0 = ent_start[cls];
-    for (int e = e0; e < ent_start[cls + 1]; ++e) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (int m = 0; m < NCOEF; ++m) {
-            const int r = e * NCOEF + m;
-            float acc = 0.0f;
-            for (int q = row_ptr[r]; q < row_ptr[r + 1]; ++q) acc += weights[q] * vals[cols[q]];
-            lo = fmin(lo, acc);
-            hi = fmax(hi, acc);
-        }
-        if (lo <= iso && iso <= hi) {
-            words[(e - e0) >> 5] |= 1u << ((e - e0) & 31);
-            ++count;
-        }
-    }
-    for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
-    n_relevant[a] = count;
-}
-
 #endif

@@ -2,7 +2,8 @@
 // pixel. Specialised by -D options:
 //   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
 //   MODEL_TO, GHOST      the truncated-octahedral spline Q_k (DEGREE 2): unit cells of the
-//                        grid with per-parity-class (TO, tet) tables and per-cell bit sets
+//   NUNION, NWORDS       grid with per-parity-class (TO, tet) tables and per-cell bit sets of
+//                        the relevant pieces (cached in a pool, like the type-6 tet codes)
 //   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
 //                        the relevant tets from the 27-point data stencil, blossoms of the
 //                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2)
@@ -11,15 +12,18 @@
 //
 // Nothing here needs a pass over the volume per isovalue (thesis §6.2.3 "only the work the
 // picture needs"): the skip index of a cell comes from the isovalue-independent min-max octree
-// of classify.cl when a ray reaches the cell, and the tet code of a type-6 cube (§6.1.1) is
-// computed by the first ray that reaches it and cached per cube, stamped with the epoch of the
-// isovalue (an isovalue change bumps the epoch, which invalidates every cached code at once).
+// of classify.cl when a ray reaches the cell, and the tet code of a type-6 cube (§6.1.1; TO:
+// the cell's bit set of relevant pieces) is computed by the first ray that reaches it and
+// cached, stamped with the epoch of the isovalue (an isovalue change bumps the epoch, which
+// invalidates every cached code at once).
 //
 // Rays live in index space (sample data[i,j,k] at (i,j,k)); the ray parameter t is in world
 // units: u(t) = eye_u + t * d_u with d_u = d_world / spacing. For precision, traversal uses
 // s = t - t0 measured from the entry point into the (box ∩ clip planes) interval.
 
 #define BISECT_STEPS 40
+// low 24 bits of a cache entry (the top 8 bits hold the epoch of its isovalue)
+#define CODE_MASK 0xFFFFFFu
 
 typedef struct {
     float c[8];  // corners c[4 di + 2 dj + dk]
@@ -368,8 +372,7 @@ inline uint type6_tet_code(__global const float *pdata, int base, __constant con
 }
 
 // Cache entry of a cube: the epoch of the isovalue it was computed for (top 8 bits) and the
-// tet code (low 24 bits); epoch 0 never matches (a cleared cache).
-#define CODE_MASK 0xFFFFFFu
+// tet code (low 24 bits, CODE_MASK); epoch 0 never matches (a cleared cache).
 
 // The tet code of cube `c` at this epoch: from the cache, or computed and published. The
 // first ray to publish a cube's code also counts it (counts[0] cubes with a relevant tet,
@@ -415,12 +418,102 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
 #endif
 
 #ifdef MODEL_TO
+// pool index of a cell without any relevant piece (it takes no pool entry)
+#define NO_PIECES CODE_MASK
+
+// Relevance bit set of the (TO, tet) pieces of a cell (bit e - ent_start[cls]: the piece's
+// B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO);
+// returns the number of relevant pieces. The data a cell's pieces read (the class union, at
+// most NUNION values) are gathered once; the piece stencils (CSR per entry and coefficient)
+// index into that private copy.
+inline int to_relevance(__global const float *pdata, int corner, int cls,
+                        __constant const int *cls_start, __constant const int *cls_offsets,
+                        __constant const int *ent_start, __global const int *u_rows,
+                        __global const ushort *u_cols, __global const float *u_w, float iso,
+                        uint *words)
+{
+    float vals[NUNION];
+    const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
+    for (int u = 0; u < nu; ++u) vals[u] = pdata[corner + cls_offsets[u0 + u]];
+    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+    int count = 0;
+    const int e0 = ent_start[cls];
+    for (int e = e0; e < ent_start[cls + 1]; ++e) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (int m = 0; m < NCOEF; ++m) {
+            const int r = e * NCOEF + m;
+            float acc = 0.0f;
+            for (int q = u_rows[r]; q < u_rows[r + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
+            lo = fmin(lo, acc);
+            hi = fmax(hi, acc);
+        }
+        if (lo <= iso && iso <= hi) {
+            words[(e - e0) >> 5] |= 1u << ((e - e0) & 31);
+            ++count;
+        }
+    }
+    return count;
+}
+
+// The bit set of cell c at this epoch: from the pool, or computed by this ray, stored in a new
+// pool entry and published in slots[c] ((epoch << 24) | pool index; the entry is written
+// before the slot). Cells without a relevant piece take no entry. When the pool is full the
+// bits serve this ray only; counts[2] (entries asked for) tells the host to grow the pool.
+// The first ray to publish a cell counts it (counts[0] cells, counts[1] relevant pieces).
+inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap, int c,
+                           uint epoch, __global const float *pdata, int corner, int cls,
+                           __constant const int *cls_start, __constant const int *cls_offsets,
+                           __constant const int *ent_start, __global const int *u_rows,
+                           __global const ushort *u_cols, __global const float *u_w,
+                           float iso, __global int *counts, uint *words)
+{
+    const uint e = slots[c];
+    if ((e >> 24) == epoch) {
+        const uint idx = e & CODE_MASK;
+        for (int w = 0; w < NWORDS; ++w) words[w] = idx == NO_PIECES ? 0u : pool[idx * NWORDS + w];
+        return;
+    }
+    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, u_rows,
+                               u_cols, u_w, iso, words);
+    uint idx = NO_PIECES;
+    if (n > 0) {
+        const int a = atomic_inc(&counts[2]);
+        if (a >= pool_cap) return;
+        for (int w = 0; w < NWORDS; ++w) pool[a * NWORDS + w] = words[w];
+        mem_fence(CLK_GLOBAL_MEM_FENCE);
+        idx = (uint)a;
+    }
+    if (atomic_cmpxchg((volatile __global uint *)&slots[c], e, (epoch << 24) | idx) == e
+        && n > 0) {
+        atomic_inc(&counts[0]);
+        atomic_add(&counts[1], n);
+    }
+}
+
+// Classification of all candidate cells at once (RayCaster.classify_all): the bit set and
+// the number of relevant pieces per candidate.
+__kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int CZ,
+                       __global const int *cells, __constant const int *cls_start,
+                       __constant const int *cls_offsets, __constant const int *ent_start,
+                       __global const int *u_rows, __global const ushort *u_cols,
+                       __global const float *u_w, float iso, __global uint *bits,
+                       __global int *n_relevant)
+{
+    const int a = get_global_id(0);
+    const int cell = cells[a];
+    const int k = cell % CZ, j = (cell / CZ) % CY, i = cell / (CY * CZ);
+    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
+    const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
+    uint words[NWORDS];
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, u_rows,
+                                 u_cols, u_w, iso, words);
+    for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
+}
+
 // First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
-// corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class. Only
-// the pieces the segment crosses get B-coefficients, and only those whose coefficients
-// straddle the isovalue (convex hull, §6.1.1) a root search: the relevance of a piece is
-// decided by the rays that reach it, not by a pass over the volume.
-inline float to_cell_root(__global const float *pdata, int corner, int cls,
+// corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
+// only those with their bit set in `words` are tested.
+inline float to_cell_root(__global const float *pdata, int corner, int cls, const uint *words,
                           __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
                           __constant const int *ent_tet, __global const int *row_ptr,
@@ -429,7 +522,10 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls,
                           float3 p0, float3 d, float len, float iso, float3 *grad)
 {
     float best = -1.0f;
-    for (int e = ent_start[cls]; e < ent_start[cls + 1]; ++e) {
+    const int e0 = ent_start[cls];
+    for (int e = e0; e < ent_start[cls + 1]; ++e) {
+        const int q = e - e0;
+        if (!(words[q >> 5] & (1u << (q & 31)))) continue;
         const int t = ent_tet[e];
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
                      r3 = bary[4 * t + 3];
@@ -441,17 +537,13 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls,
         // same CSR gather as type6_cube_root, but from __global data: OpenCL C 1.2 has no
         // generic address space, so one helper cannot serve both (private vs global values)
         float c[NCOEF];
-        float cmin = INFINITY, cmax = -INFINITY;
         for (int i = 0; i < NCOEF; ++i) {
             const int r = t * NCOEF + i;
             float acc = 0.0f;
             for (int m = row_ptr[r]; m < row_ptr[r + 1]; ++m)
                 acc += weights[m] * pdata[base + cols[m]];
             c[i] = acc - iso;
-            cmin = fmin(cmin, c[i]);
-            cmax = fmax(cmax, c[i]);
         }
-        if (cmin > 0.0f || cmax < 0.0f) continue;
         float3 g;
         const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g);
         if (sh >= 0.0f && (best < 0.0f || sh < best)) {
@@ -479,6 +571,10 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
+                      __global uint *slots, __global uint *pool, int pool_cap, uint epoch,
+                      __global int *counts, __constant const int *cls_start,
+                      __constant const int *cls_offsets, __global const int *u_rows,
+                      __global const ushort *u_cols, __global const float *u_w,
                       __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
                       __constant const int *ent_tet, __global const int *row_ptr,
@@ -559,15 +655,20 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     break;
                 }
 #elif defined(MODEL_TO)
-                {
+                const int corner = ((cell.x + GHOST) * SY + (cell.y + GHOST)) * SZ
+                                   + (cell.z + GHOST);
+                const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
+                uint words[NWORDS];
+                to_cached_bits(slots, pool, pool_cap, c, epoch, data, corner, cls, cls_start,
+                               cls_offsets, ent_start, u_rows, u_cols, u_w, iso, counts, words);
+                uint any_bit = 0u;
+                for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
+                if (any_bit != 0u) {
                     const float3 p = we + s * d - convert_float3(cell);
-                    const int corner = ((cell.x + GHOST) * SY + (cell.y + GHOST)) * SZ
-                                       + (cell.z + GHOST);
-                    const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                     float3 g;
-                    const float r = to_cell_root(data, corner, cls, ent_start, ent_centre,
-                                                 ent_base, ent_tet, row_ptr, cols, weights,
-                                                 bary, red, p, d, s_end - s, iso, &g);
+                    const float r = to_cell_root(data, corner, cls, words, ent_start,
+                                                 ent_centre, ent_base, ent_tet, row_ptr, cols,
+                                                 weights, bary, red, p, d, s_end - s, iso, &g);
                     if (r >= 0.0f) {
                         upos = convert_float3(cell) + p + r * d;
                         grad_u = g;
