@@ -114,16 +114,55 @@ def _shading_defines() -> dict:
 
 
 def _octree_levels(cells: tuple[int, int, int]) -> list[tuple[int, int, int, int]]:
-    """(offset, nx, ny, nz) of each min-max octree level, level 0 = the cells."""
+    """(offset, nx, ny, nz) of the stored min-max octree levels 1, 2, ... (nodes of 2^L
+    cells; level 0, the cells, is not stored: see classify.cl)."""
     levels = []
     off = 0
     dims = tuple(cells)
     while True:
+        dims = tuple((n + 1) // 2 for n in dims)
         levels.append((off, *dims))
         off += int(np.prod(dims))
         if max(dims) == 1:
             return levels
-        dims = tuple((n + 1) // 2 for n in dims)
+
+
+def _octree_nodes(levels) -> int:
+    """Nodes of all stored octree levels."""
+    return levels[-1][0] + int(np.prod(levels[-1][1:]))
+
+
+def pad_linear_into(data: np.ndarray, layers: int, out: np.ndarray) -> None:
+    """:func:`splineviz.core.splines.boundary.pad_linear` written into a float32 array.
+
+    The ghost samples are computed one slab at a time in float64 (as the core does, up to a
+    rounding of the ghosts of earlier axes), so no float64 copy of the volume is made.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) array
+    layers : int >= 1
+    out : (nx + 2 layers, ny + 2 layers, nz + 2 layers) float32, written
+    """
+    g = layers
+    n = data.shape
+    out[g:g + n[0], g:g + n[1], g:g + n[2]] = data
+    for axis in range(3):
+        # as the core: axes before `axis` are already padded, the later ones not yet
+        region = [slice(None) if ax < axis else slice(g, g + n[ax]) for ax in range(3)]
+
+        def at(i, region=region, axis=axis):
+            r = list(region)
+            r[axis] = i
+            return tuple(r)
+
+        lo = out[at(g)].astype(np.float64), out[at(g + min(1, n[axis] - 1))].astype(np.float64)
+        hi = (out[at(g + n[axis] - 1)].astype(np.float64),
+              out[at(g + max(n[axis] - 2, 0))].astype(np.float64))
+        for m in range(1, g + 1):
+            # a single sample is repeated (its "neighbour" is itself, so the slope is 0)
+            out[at(g - m)] = (1 + m) * lo[0] - m * lo[1]
+            out[at(g + n[axis] - 1 + m)] = (1 + m) * hi[0] - m * hi[1]
 
 
 def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -246,7 +285,7 @@ class RayCaster:
         levels = _octree_levels(cells)
         ncell = int(np.prod(cells))
         out = {"samples": 4 * int(np.prod([n + 2 * ghost for n in shape])),
-               "octree": 8 * (levels[-1][0] + int(np.prod(levels[-1][1:])))}
+               "octree": 8 * _octree_nodes(levels)}
         if self._family in CACHED:
             out["classification cache"] = 4 * ncell
         if self._family == "MODEL_TO":
@@ -288,34 +327,22 @@ class RayCaster:
         q = dev.queue
         ctx = dev.context
         levels = _octree_levels(self._cells)
-        total = levels[-1][0] + int(np.prod(levels[-1][1:]))
         self._levels = levels
         self._levels_buf = cla.to_device(q, np.array(levels, dtype=np.int32).reshape(-1, 4))
-        self._bounds = cla.empty(q, 2 * total, np.float32)  # float2 (lo, hi) per node
-        nx, ny, nz = self._volume.shape
-        cx, cy, cz = self._cells
+        # float2 (lo, hi) per node
+        self._bounds = cla.empty(q, 2 * _octree_nodes(levels), np.float32)
         if self.model == "trilinear":
-            cls_defines = None
+            self._cls_defines = None
             self._data = cla.to_device(q, self._volume.data)
-            self._strides = (ny, nz)
-            k_minmax = get_kernel(ctx, "classify", "cell_minmax")
-            k_minmax(q, (cz, cy, cx), None, self._data.data, self._bounds.data,
-                     np.int32(nx), np.int32(ny), np.int32(nz))
+            self._strides = self._volume.shape[1:]
+            self._negmass = 0.0
         elif self._family == "MODEL_TO":
-            cls_defines = self._to_tables()
-            k_bounds = get_kernel(ctx, "classify", "to_bounds", cls_defines)
-            k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
-                     np.int32(self._strides[1]), np.int32(cx), np.int32(cy), np.int32(cz),
-                     self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass),
-                     self._bounds.data)
+            self._cls_defines = self._to_tables()
         else:
-            cls_defines = self._type6_tables()
-            k_bounds = get_kernel(ctx, "classify", "stencil_bounds", cls_defines)
-            k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
-                     np.int32(self._strides[1]), np.int32(nx), np.int32(ny), np.int32(nz),
-                     np.float32(self._negmass), self._bounds.data)
-        self._cls_defines = cls_defines
-        k_reduce = get_kernel(ctx, "classify", "reduce_level", cls_defines)
+            self._cls_defines = self._type6_tables()
+        get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
+            q, levels[0][:0:-1], None, *self._cell_args(), self._bounds.data)
+        k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
         for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
             k_reduce(q, (dz, dy, dx), None, self._bounds.data,
                      *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
@@ -331,6 +358,37 @@ class RayCaster:
             self._pool = cla.empty(q, self._pool_cap * TO_WORDS, np.uint32)
         q.finish()
 
+    def _cell_args(self) -> list:
+        """Leading arguments of the per-cell kernels of classify.cl: data, strides, cells,
+        negative mass (and the TO class tables)."""
+        args = [self._data.data, *(np.int32(v) for v in self._strides),
+                *(np.int32(c) for c in self._cells), np.float32(self._negmass)]
+        if self._family == "MODEL_TO":
+            args += [self._cls_start.data, self._cls_offsets.data]
+        return args
+
+    def _padded_samples(self, ghost: int):
+        """The samples with ``ghost`` linearly extrapolated layers, written straight into a
+        device buffer (no host copy of the padded volume).
+
+        Returns
+        -------
+        pyopencl.array.Array of shape (nx + 2 ghost, ny + 2 ghost, nz + 2 ghost), float32
+        """
+        import pyopencl as cl
+        import pyopencl.array as cla
+
+        q = self._device.queue
+        shape = tuple(n + 2 * ghost for n in self._volume.shape)
+        mf = cl.mem_flags
+        buf = cl.Buffer(self._device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
+                        4 * int(np.prod(shape)))
+        host, _ = cl.enqueue_map_buffer(q, buf, cl.map_flags.WRITE_INVALIDATE_REGION, 0,
+                                        shape, np.float32)
+        pad_linear_into(self._volume.data, ghost, host)
+        host.base.release(q)
+        return cla.Array(q, shape, np.float32, data=buf)
+
     def _to_tables(self) -> dict:
         """Upload the padded samples and the tables of the truncated-octahedral model.
 
@@ -344,17 +402,15 @@ class RayCaster:
         from splineviz.compute.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
-        from splineviz.core.splines.boundary import pad_linear
 
         q = self._device.queue
         spline = self.spline
         ghost = GHOSTS["MODEL_TO"]
         if ghost != to_quadratic.GHOST_LAYERS:
             raise AssertionError("TO ghost layers differ from the core model")  # a bug
-        padded = np.ascontiguousarray(pad_linear(self._volume.data, ghost), dtype=np.float32)
-        _, py, pz = padded.shape
+        self._data = self._padded_samples(ghost)
+        _, py, pz = self._data.shape
         strides = np.array([py * pz, pz, 1], dtype=np.int64)
-        self._data = cla.to_device(q, padded)
         self._strides = (py, pz)
         rows = []
         for offsets, w in to_quadratic.stencils(spline.k):
@@ -422,15 +478,13 @@ class RayCaster:
         from splineviz.core import bform
         from splineviz.core.partitions import type6
         from splineviz.core.splines import type6_rules
-        from splineviz.core.splines.boundary import pad_linear
 
         q = self._device.queue
         spline = self.spline
         scheme = spline.scheme
         ghost = 1
-        padded = np.ascontiguousarray(pad_linear(self._volume.data, ghost), dtype=np.float32)
-        _, py, pz = padded.shape
-        self._data = cla.to_device(q, padded)
+        self._data = self._padded_samples(ghost)
+        _, py, pz = self._data.shape
         self._strides = (py, pz)
         stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
         self._stencil = cla.to_device(q, stencil)
@@ -507,7 +561,7 @@ class RayCaster:
         ncell = int(np.prod(self._cells))
         flags = cla.empty(q, ncell, np.int32)
         get_kernel(ctx, "classify", "candidates", self._cls_defines)(
-            q, (ncell,), None, self._bounds.data, np.int32(ncell), iso, flags.data)
+            q, self._cells[::-1], None, *self._cell_args(), iso, flags.data)
         listed = cla.empty(q, ncell, np.int32)
         count = cla.empty(q, 1, np.int32)
         _compaction_kernel(ctx)(flags, listed, count, queue=q)
@@ -525,7 +579,8 @@ class RayCaster:
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
                     self._stencil.data, *(a.data for a in self._cube_csr),
-                    self._tet_points.data, iso, np.uint32(self._epoch), self._cache.data,
+                    self._tet_points.data, np.float32(self._negmass), iso,
+                    np.uint32(self._epoch), self._cache.data,
                     code_buf.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
             # the cache is complete: later frames count nothing new
@@ -541,7 +596,8 @@ class RayCaster:
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
                     self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
-                    *(a.data for a in self._union_csr), iso, bits.data, nrel.data)
+                    *(a.data for a in self._union_csr), np.float32(self._negmass), iso,
+                    bits.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
         if relevant is None:
             self.stats.update(active_cells=n, active_tets=None)
@@ -573,7 +629,8 @@ class RayCaster:
         cx, cy, cz = self._cells
         get_kernel(self._device.context, "raycast", "skip_codes", self._defines())(
             q, (cz, cy, cx), None, self._bounds.data, self._levels_buf.data,
-            np.int32(len(self._levels)), np.float32(self._isovalue), skip.data)
+            np.int32(len(self._levels)), np.int32(cx), np.int32(cy), np.int32(cz),
+            np.float32(self._isovalue), skip.data)
         return skip.get(queue=q).reshape(self._cells)
 
     # -- rendering -----------------------------------------------------------------------
@@ -657,13 +714,15 @@ class RayCaster:
         model_args = []
         if self._family == "MODEL_TYPE6":
             model_args = [self._cache.data, np.uint32(self._epoch), self._counts.data,
+                          np.float32(self._negmass),
                           self._stencil.data, *(a.data for a in self._tet_csr),
                           *(a.data for a in self._cube_csr), self._tet_points.data,
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
             model_args = [self._cache.data, self._pool.data, np.int32(self._pool_cap),
-                          np.uint32(self._epoch), self._counts.data, self._cls_start.data,
+                          np.uint32(self._epoch), self._counts.data,
+                          np.float32(self._negmass), self._cls_start.data,
                           self._cls_offsets.data, *(a.data for a in self._union_csr),
                           e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]

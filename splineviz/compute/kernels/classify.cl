@@ -1,29 +1,81 @@
 // Isovalue-independent structures of the ray caster (thesis §6.1.1, §6.2.1), built once per
 // data change, and the classification of every cell at once (RayCaster.classify_all).
+// Specialised by -D options: MODEL_TYPE6 (cubes centred at the samples, padded samples with
+// one ghost layer), MODEL_TO with GHOST (unit cells, parity-class tables), else trilinear.
 //
-// Layout: samples data[(i*NY + j)*NZ + k]; cells (i, j, k) with 0 <= i < NX-1 etc. are
-// numbered (i*(NY-1) + j)*(NZ-1) + k. Level 0 of the min-max octree holds per-cell value
-// bounds (lo, hi) as float2; level L+1 node (a, b, c) covers the level-L nodes 2a..2a+1 x
-// 2b..2b+1 x 2c..2c+1. All levels are stored one after the other; `levels` holds
-// (offset, nx, ny, nz) per level. The skip index of a cell for an isovalue follows from these
-// bounds alone (raycast.cl, skip_level), so nothing here is redone when the isovalue changes.
+// Cells (i, j, k) of the traversal grid (CX x CY x CZ) are numbered (i*CY + j)*CZ + k; the
+// samples are data[(i*SY + j)*SZ + k]. The min-max octree holds value bounds (lo, hi) as
+// float2 from level 1 up: level 1 node (a, b, c) covers the cells 2a..2a+1 x 2b..2b+1 x
+// 2c..2c+1, level L+1 the level-L nodes likewise. Per-cell bounds (level 0) are not stored
+// (they would be 8 bytes per cell): the rays get them, or better, from the cells' data. All
+// stored levels lie one after the other; `levels` holds (offset, nx, ny, nz) from level 1.
+// The skip index of a cell for an isovalue follows from these bounds alone (raycast.cl,
+// skip_level), so nothing here is redone when the isovalue changes.
 
-__kernel void cell_minmax(__global const float *data, __global float2 *bounds,
-                          int NX, int NY, int NZ)
+#ifdef MODEL_TO
+// the TO bounds read the data offsets of the cell's parity class
+#define CLASS_ARGS , __constant const int *cls_start, __constant const int *cls_offsets
+#define CLASS_PASS , cls_start, cls_offsets
+#else
+#define CLASS_ARGS
+#define CLASS_PASS
+#endif
+
+// Conservative value bounds of the model on cell (i, j, k).
+//   trilinear: the values lie between the min and max of the cell's 8 corners (exact).
+//   type-6: every B-coefficient of the cube is an affine combination sum w_q f_q
+//   (sum w_q = 1) of the 27 stencil values, so it lies in [min - N (max - min),
+//   max + N (max - min)] with N = negmass, the largest negative weight mass.
+//   TO: the same, over the union of the data the cell's (TO, tet) pieces use.
+inline float2 cell_bounds(__global const float *data, int SY, int SZ, int i, int j, int k,
+                          float negmass CLASS_ARGS)
 {
-    // trilinear model: the values on a cell lie between the min and max of its 8 corners
-    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
-    const int cx = NX - 1, cy = NY - 1, cz = NZ - 1;
-    if (i >= cx || j >= cy || k >= cz) return;
     float lo = INFINITY, hi = -INFINITY;
-    for (int di = 0; di < 2; ++di)
-        for (int dj = 0; dj < 2; ++dj)
-            for (int dk = 0; dk < 2; ++dk) {
-                const float v = data[((i + di) * NY + (j + dj)) * NZ + (k + dk)];
+#if defined(MODEL_TYPE6)
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+            for (int c = 0; c < 3; ++c) {
+                const float v = data[((i + a) * SY + (j + b)) * SZ + (k + c)];
                 lo = fmin(lo, v);
                 hi = fmax(hi, v);
             }
-    bounds[(i * cy + j) * cz + k] = (float2)(lo, hi);
+#elif defined(MODEL_TO)
+    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
+    const int base = ((i + GHOST) * SY + (j + GHOST)) * SZ + (k + GHOST);
+    for (int e = cls_start[cls]; e < cls_start[cls + 1]; ++e) {
+        const float v = data[base + cls_offsets[e]];
+        lo = fmin(lo, v);
+        hi = fmax(hi, v);
+    }
+#else
+    for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+            for (int c = 0; c < 2; ++c) {
+                const float v = data[((i + a) * SY + (j + b)) * SZ + (k + c)];
+                lo = fmin(lo, v);
+                hi = fmax(hi, v);
+            }
+#endif
+    const float w = negmass * (hi - lo);
+    return (float2)(lo - w, hi + w);
+}
+
+// Level 1 of the octree: the bounds of the (up to) 8 cells of each node.
+__kernel void brick_bounds(__global const float *data, int SY, int SZ, int CX, int CY, int CZ,
+                           float negmass CLASS_ARGS, __global float2 *bounds)
+{
+    const int c = get_global_id(0), b = get_global_id(1), a = get_global_id(2);
+    const int dx = (CX + 1) / 2, dy = (CY + 1) / 2, dz = (CZ + 1) / 2;
+    if (a >= dx || b >= dy || c >= dz) return;
+    float lo = INFINITY, hi = -INFINITY;
+    for (int i = 2 * a; i < min(2 * a + 2, CX); ++i)
+        for (int j = 2 * b; j < min(2 * b + 2, CY); ++j)
+            for (int k = 2 * c; k < min(2 * c + 2, CZ); ++k) {
+                const float2 v = cell_bounds(data, SY, SZ, i, j, k, negmass CLASS_PASS);
+                lo = fmin(lo, v.x);
+                hi = fmax(hi, v.y);
+            }
+    bounds[(a * dy + b) * dz + c] = (float2)(lo, hi);
 }
 
 __kernel void reduce_level(__global float2 *bounds,
@@ -38,71 +90,21 @@ __kernel void reduce_level(__global float2 *bounds,
             for (int dc = 0; dc < 2; ++dc) {
                 const int i = 2 * a + da, j = 2 * b + db, k = 2 * c + dc;
                 if (i < sx && j < sy && k < sz) {
-                    const float2 b = bounds[src_off + (i * sy + j) * sz + k];
-                    lo = fmin(lo, b.x);
-                    hi = fmax(hi, b.y);
+                    const float2 v = bounds[src_off + (i * sy + j) * sz + k];
+                    lo = fmin(lo, v.x);
+                    hi = fmax(hi, v.y);
                 }
             }
     bounds[dst_off + (a * dy + b) * dz + c] = (float2)(lo, hi);
 }
 
-// Classification of every cell at once (RayCaster.classify_all; the ray kernel does the same
-// test lazily, cell by cell): flag of the cells whose value bounds straddle the isovalue.
-__kernel void candidates(__global const float2 *bounds, int n, float iso, __global int *flag)
-{
-    const int c = get_global_id(0);
-    if (c >= n) return;
-    const float2 b = bounds[c];
-    flag[c] = (b.x <= iso && iso <= b.y) ? 1 : 0;
-}
-
-// ---- type-6 splines (cubes centred at the data points; padded samples, one ghost layer) ----
-#ifdef MODEL_TYPE6
-
-// Conservative value bounds of the spline on each cube: every B-coefficient is an affine
-// combination sum w_q f_q (sum w_q = 1) of the 27 stencil values, so it lies in
-// [min - N (max - min), max + N (max - min)] with N the largest negative weight mass.
-__kernel void stencil_bounds(__global const float *pdata, int PY, int PZ,
-                             int NX, int NY, int NZ, float negmass,
-                             __global float2 *bounds)
-{
-    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
-    if (i >= NX || j >= NY || k >= NZ) return;
-    float lo = INFINITY, hi = -INFINITY;
-    for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b)
-            for (int c = 0; c < 3; ++c) {
-                const float v = pdata[((i + a) * PY + (j + b)) * PZ + (k + c)];
-                lo = fmin(lo, v);
-                hi = fmax(hi, v);
-            }
-    const float w = negmass * (hi - lo);
-    bounds[(i * NY + j) * NZ + k] = (float2)(lo - w, hi + w);
-}
-
-#endif
-
-// ---- truncated-octahedral spline Q_k: unit cells of the data grid, parity-class tables ----
-#ifdef MODEL_TO
-
-// Conservative bounds per cell from the union of the data its pieces use (offsets per parity
-// class, relative to the cell corner in the padded array), widened by the negative mass.
-__kernel void to_bounds(__global const float *pdata, int PY, int PZ, int CX, int CY, int CZ,
-                        __constant const int *cls_start, __constant const int *cls_offsets,
-                        float negmass, __global float2 *bounds)
+// Classification of every cell at once (RayCaster.classify_all): flag of the candidate
+// cells, whose value bounds straddle the isovalue.
+__kernel void candidates(__global const float *data, int SY, int SZ, int CX, int CY, int CZ,
+                         float negmass CLASS_ARGS, float iso, __global int *flag)
 {
     const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
     if (i >= CX || j >= CY || k >= CZ) return;
-    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
-    const int base = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
-    float lo = INFINITY, hi = -INFINITY;
-    for (int e = cls_start[cls]; e < cls_start[cls + 1]; ++e) {
-        const float v = pdata[base + cls_offsets[e]];
-        lo = fmin(lo, v);
-        hi = fmax(hi, v);
-    }
-    const float w = negmass * (hi - lo);
-    bounds[(i * CY + j) * CZ + k] = (float2)(lo - w, hi + w);
+    const float2 v = cell_bounds(data, SY, SZ, i, j, k, negmass CLASS_PASS);
+    flag[(i * CY + j) * CZ + k] = (v.x <= iso && iso <= v.y) ? 1 : 0;
 }
-
-#endif

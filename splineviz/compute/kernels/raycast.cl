@@ -216,17 +216,18 @@ inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
 
 inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t.z ? 1 : 2); }
 
-// Skip index of `cell` at isovalue iso (thesis §6.2.1): -1 when the cell's value bounds
-// straddle iso (a candidate), else the highest level L whose octree node holding the cell has
-// bounds that exclude iso (an empty macro cube of 2^L cells). A node's bounds contain those of
-// its children, so the empty levels of a cell are 0..L: the walk goes up from level 0 and
-// stops at the first node that may hold the surface.
+// Skip index of `cell` at isovalue iso (thesis §6.2.1): -1 when the bounds of its level-1
+// node (2^3 cells) straddle iso (the cell is a candidate; its own bounds are not stored, the
+// cell's classification decides), else the highest level L whose octree node holding the cell
+// has bounds that exclude iso (an empty macro cube of 2^L cells). A node's bounds contain
+// those of its children, so the empty levels of a cell are 1..L: the walk goes up from level
+// 1 and stops at the first node that may hold the surface. levels[l - 1] is level l.
 inline int skip_level(__global const float2 *bounds, __constant const int4 *levels,
                       int n_levels, int3 cell, float iso)
 {
     int L = -1;
-    for (int l = 0; l < n_levels; ++l) {
-        const int4 lv = levels[l];
+    for (int l = 1; l <= n_levels; ++l) {
+        const int4 lv = levels[l - 1];
         const float2 b = bounds[lv.x + (((cell.x >> l) * lv.z + (cell.y >> l)) * lv.w
                                         + (cell.z >> l))];
         if (b.x <= iso && iso <= b.y) break;
@@ -235,16 +236,15 @@ inline int skip_level(__global const float2 *bounds, __constant const int4 *leve
     return L;
 }
 
-// Skip codes of all cells (SKIP_ACTIVE or the macro level), for inspection and tests: the
-// same skip_level the ray kernel evaluates on the fly.
+// Skip codes of all CX x CY x CZ cells (SKIP_ACTIVE or the macro level), for inspection and
+// tests: the same skip_level the ray kernel evaluates on the fly.
 __kernel void skip_codes(__global const float2 *bounds, __constant const int4 *levels,
-                         int n_levels, float iso, __global uchar *skip)
+                         int n_levels, int CX, int CY, int CZ, float iso, __global uchar *skip)
 {
     const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
-    const int4 l0 = levels[0];
-    if (i >= l0.y || j >= l0.z || k >= l0.w) return;
+    if (i >= CX || j >= CY || k >= CZ) return;
     const int L = skip_level(bounds, levels, n_levels, (int3)(i, j, k), iso);
-    skip[(i * l0.z + j) * l0.w + k] = L < 0 ? SKIP_ACTIVE : (uchar)L;
+    skip[(i * CY + j) * CZ + k] = L < 0 ? SKIP_ACTIVE : (uchar)L;
 }
 
 #if defined(MODEL_TYPE6) || defined(MODEL_TO)
@@ -342,14 +342,23 @@ inline float type6_cube_root(__global const float *pdata, int base,
 
 // The 24-bit tet code of the cube whose stencil starts at `base`: all cube B-coefficients from
 // the 27 stencil values (sparse cube masks, CSR), then bit t set when the coefficients of tet
-// t straddle the isovalue (convex hull property, thesis §6.1.1).
+// t straddle the isovalue (convex hull property, thesis §6.1.1). First the cheap cube bounds
+// of classify.cl (stencil range widened by the negative weight mass): most cubes the rays
+// reach end there.
 inline uint type6_tet_code(__global const float *pdata, int base, __constant const int *stencil,
                            __global const int *cube_ptr, __global const int *cube_cols,
                            __global const float *cube_w, __constant const int *tet_points,
-                           float iso)
+                           float negmass, float iso)
 {
     float vals[27];
-    for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
+    float vlo = INFINITY, vhi = -INFINITY;
+    for (int q = 0; q < 27; ++q) {
+        vals[q] = pdata[base + stencil[q]];
+        vlo = fmin(vlo, vals[q]);
+        vhi = fmax(vhi, vals[q]);
+    }
+    const float w = negmass * (vhi - vlo);
+    if (!(vlo - w <= iso && iso <= vhi + w)) return 0u;
     float coef[NPOINTS];
     // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows, kept in
     // global memory (cached) so that constant memory stays small on GPUs (64 KB, 8-9 args)
@@ -381,13 +390,13 @@ inline uint type6_cached_code(__global uint *tetcache, int c, uint epoch,
                               __global const float *pdata, int base,
                               __constant const int *stencil, __global const int *cube_ptr,
                               __global const int *cube_cols, __global const float *cube_w,
-                              __constant const int *tet_points, float iso,
+                              __constant const int *tet_points, float negmass, float iso,
                               __global int *counts)
 {
     const uint e = tetcache[c];
     if ((e >> 24) == epoch) return e & CODE_MASK;
     const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
-                                     tet_points, iso);
+                                     tet_points, negmass, iso);
     if (atomic_cmpxchg((volatile __global uint *)&tetcache[c], e, (epoch << 24) | code) == e
         && code != 0u) {
         atomic_inc(&counts[0]);
@@ -402,7 +411,8 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
                         __global const int *cubes, __constant const int *stencil,
                         __global const int *cube_ptr, __global const int *cube_cols,
                         __global const float *cube_w, __constant const int *tet_points,
-                        float iso, uint epoch, __global uint *tetcache, __global uint *code_out,
+                        float negmass, float iso, uint epoch, __global uint *tetcache,
+                        __global uint *code_out,
                         __global int *n_relevant)
 {
     const int a = get_global_id(0);
@@ -410,7 +420,7 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
     const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
     const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
     const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
-                                     tet_points, iso);
+                                     tet_points, negmass, iso);
     tetcache[cube] = (epoch << 24) | code;
     code_out[a] = code;
     n_relevant[a] = popcount(code);
@@ -425,17 +435,25 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
 // B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO);
 // returns the number of relevant pieces. The data a cell's pieces read (the class union, at
 // most NUNION values) are gathered once; the piece stencils (CSR per entry and coefficient)
-// index into that private copy.
+// index into that private copy. First the cheap cell bounds of classify.cl (their range
+// widened by the negative weight mass): most cells the rays reach end there.
 inline int to_relevance(__global const float *pdata, int corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
                         __constant const int *ent_start, __global const int *u_rows,
-                        __global const ushort *u_cols, __global const float *u_w, float iso,
-                        uint *words)
+                        __global const ushort *u_cols, __global const float *u_w,
+                        float negmass, float iso, uint *words)
 {
     float vals[NUNION];
     const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
-    for (int u = 0; u < nu; ++u) vals[u] = pdata[corner + cls_offsets[u0 + u]];
+    float vlo = INFINITY, vhi = -INFINITY;
+    for (int u = 0; u < nu; ++u) {
+        vals[u] = pdata[corner + cls_offsets[u0 + u]];
+        vlo = fmin(vlo, vals[u]);
+        vhi = fmax(vhi, vals[u]);
+    }
     for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+    const float wid = negmass * (vhi - vlo);
+    if (!(vlo - wid <= iso && iso <= vhi + wid)) return 0;
     int count = 0;
     const int e0 = ent_start[cls];
     for (int e = e0; e < ent_start[cls + 1]; ++e) {
@@ -465,7 +483,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
                            __constant const int *cls_start, __constant const int *cls_offsets,
                            __constant const int *ent_start, __global const int *u_rows,
                            __global const ushort *u_cols, __global const float *u_w,
-                           float iso, __global int *counts, uint *words)
+                           float negmass, float iso, __global int *counts, uint *words)
 {
     const uint e = slots[c];
     if ((e >> 24) == epoch) {
@@ -474,7 +492,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
         return;
     }
     const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, u_rows,
-                               u_cols, u_w, iso, words);
+                               u_cols, u_w, negmass, iso, words);
     uint idx = NO_PIECES;
     if (n > 0) {
         const int a = atomic_inc(&counts[2]);
@@ -496,8 +514,8 @@ __kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int 
                        __global const int *cells, __constant const int *cls_start,
                        __constant const int *cls_offsets, __constant const int *ent_start,
                        __global const int *u_rows, __global const ushort *u_cols,
-                       __global const float *u_w, float iso, __global uint *bits,
-                       __global int *n_relevant)
+                       __global const float *u_w, float negmass, float iso,
+                       __global uint *bits, __global int *n_relevant)
 {
     const int a = get_global_id(0);
     const int cell = cells[a];
@@ -506,7 +524,7 @@ __kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int 
     const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
     n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, u_rows,
-                                 u_cols, u_w, iso, words);
+                                 u_cols, u_w, negmass, iso, words);
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
@@ -563,7 +581,7 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __global const float2 *bounds,  // min-max octree (classify.cl)
                       __constant const int4 *levels, int n_levels,
 #ifdef MODEL_TYPE6
-                      __global uint *tetcache, uint epoch, __global int *counts,
+                      __global uint *tetcache, uint epoch, __global int *counts, float negmass,
                       __constant const int *stencil, __global const int *row_ptr,
                       __global const int *cols, __global const float *masks,
                       __global const int *cube_ptr, __global const int *cube_cols,
@@ -572,7 +590,7 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
 #endif
 #ifdef MODEL_TO
                       __global uint *slots, __global uint *pool, int pool_cap, uint epoch,
-                      __global int *counts, __constant const int *cls_start,
+                      __global int *counts, float negmass, __constant const int *cls_start,
                       __constant const int *cls_offsets, __global const int *u_rows,
                       __global const ushort *u_cols, __global const float *u_w,
                       __constant const int *ent_start,
@@ -660,7 +678,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                 uint words[NWORDS];
                 to_cached_bits(slots, pool, pool_cap, c, epoch, data, corner, cls, cls_start,
-                               cls_offsets, ent_start, u_rows, u_cols, u_w, iso, counts, words);
+                               cls_offsets, ent_start, u_rows, u_cols, u_w, negmass, iso, counts,
+                               words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
@@ -681,8 +700,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 // cube centred at data point `cell`
                 const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
                 const uint tc = type6_cached_code(tetcache, c, epoch, data, base, stencil,
-                                                  cube_ptr, cube_cols, cube_w, tet_points, iso,
-                                                  counts);
+                                                  cube_ptr, cube_cols, cube_w, tet_points,
+                                                  negmass, iso, counts);
                 if (tc != 0u) {
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
