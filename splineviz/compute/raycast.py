@@ -469,9 +469,9 @@ class RayCaster:
         """Upload the padded samples and the constant tables of a type-6 model.
 
         All tables come from the core model (``self.spline.scheme``), so the kernel computes
-        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), the cube point
-        of each tet coefficient (24, n_d), barycentric matrices (24, 4, 4) and the
-        de Casteljau reduction tables of :mod:`splineviz.core.bform`.
+        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), per cube point
+        the tets whose B-net holds it (from ``tet_points``, (24, n_d)), barycentric matrices
+        (24, 4, 4) and the de Casteljau reduction tables of :mod:`splineviz.core.bform`.
         """
         import pyopencl.array as cla
 
@@ -490,7 +490,11 @@ class RayCaster:
         self._stencil = cla.to_device(q, stencil)
         self._tet_csr = [cla.to_device(q, a) for a in _csr(scheme.tet_masks.reshape(-1, 27))]
         self._cube_csr = [cla.to_device(q, a) for a in _csr(scheme.cube_masks)]
-        self._tet_points = cla.to_device(q, np.ascontiguousarray(scheme.tet_points, np.int32))
+        # per cube point, the bit set of the tets whose B-net holds it (the tet-code test)
+        point_tets = np.zeros(len(scheme.cube_points), np.uint32)
+        for t, points in enumerate(scheme.tet_points):
+            point_tets[points] |= np.uint32(1 << t)
+        self._point_tets = cla.to_device(q, point_tets)
         self._bary = cla.to_device(
             q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
         red = [_reduction_table(k) for k in range(scheme.degree, 0, -1)]
@@ -579,7 +583,7 @@ class RayCaster:
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
                     self._stencil.data, *(a.data for a in self._cube_csr),
-                    self._tet_points.data, np.float32(self._negmass), iso,
+                    self._point_tets.data, np.float32(self._negmass), iso,
                     np.uint32(self._epoch), self._cache.data,
                     code_buf.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
@@ -716,7 +720,7 @@ class RayCaster:
             model_args = [self._cache.data, np.uint32(self._epoch), self._counts.data,
                           np.float32(self._negmass),
                           self._stencil.data, *(a.data for a in self._tet_csr),
-                          *(a.data for a in self._cube_csr), self._tet_points.data,
+                          *(a.data for a in self._cube_csr), self._point_tets.data,
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent

@@ -347,7 +347,7 @@ inline float type6_cube_root(__global const float *pdata, int base,
 // reach end there.
 inline uint type6_tet_code(__global const float *pdata, int base, __constant const int *stencil,
                            __global const int *cube_ptr, __global const int *cube_cols,
-                           __global const float *cube_w, __constant const int *tet_points,
+                           __global const float *cube_w, __constant const uint *point_tets,
                            float negmass, float iso)
 {
     float vals[27];
@@ -359,25 +359,18 @@ inline uint type6_tet_code(__global const float *pdata, int base, __constant con
     }
     const float w = negmass * (vhi - vlo);
     if (!(vlo - w <= iso && iso <= vhi + w)) return 0u;
-    float coef[NPOINTS];
+    // min <= iso <= max over a tet's coefficients iff one is <= iso and one is >= iso: each
+    // cube point marks the tets whose B-net holds it (point_tets) in two masks
+    uint below = 0u, above = 0u;
     // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows, kept in
     // global memory (cached) so that constant memory stays small on GPUs (64 KB, 8-9 args)
     for (int p = 0; p < NPOINTS; ++p) {
         float acc = 0.0f;
         for (int e = cube_ptr[p]; e < cube_ptr[p + 1]; ++e) acc += cube_w[e] * vals[cube_cols[e]];
-        coef[p] = acc;
+        below |= acc <= iso ? point_tets[p] : 0u;
+        above |= acc >= iso ? point_tets[p] : 0u;
     }
-    uint code = 0u;
-    for (int t = 0; t < 24; ++t) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (int m = 0; m < NCOEF; ++m) {
-            const float v = coef[tet_points[t * NCOEF + m]];
-            lo = fmin(lo, v);
-            hi = fmax(hi, v);
-        }
-        if (lo <= iso && iso <= hi) code |= 1u << t;
-    }
-    return code;
+    return below & above;
 }
 
 // Cache entry of a cube: the epoch of the isovalue it was computed for (top 8 bits) and the
@@ -390,13 +383,13 @@ inline uint type6_cached_code(__global uint *tetcache, int c, uint epoch,
                               __global const float *pdata, int base,
                               __constant const int *stencil, __global const int *cube_ptr,
                               __global const int *cube_cols, __global const float *cube_w,
-                              __constant const int *tet_points, float negmass, float iso,
+                              __constant const uint *point_tets, float negmass, float iso,
                               __global int *counts)
 {
     const uint e = tetcache[c];
     if ((e >> 24) == epoch) return e & CODE_MASK;
     const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
-                                     tet_points, negmass, iso);
+                                     point_tets, negmass, iso);
     if (atomic_cmpxchg((volatile __global uint *)&tetcache[c], e, (epoch << 24) | code) == e
         && code != 0u) {
         atomic_inc(&counts[0]);
@@ -410,7 +403,7 @@ inline uint type6_cached_code(__global uint *tetcache, int c, uint epoch,
 __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
                         __global const int *cube_ptr, __global const int *cube_cols,
-                        __global const float *cube_w, __constant const int *tet_points,
+                        __global const float *cube_w, __constant const uint *point_tets,
                         float negmass, float iso, uint epoch, __global uint *tetcache,
                         __global uint *code_out,
                         __global int *n_relevant)
@@ -420,7 +413,7 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
     const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
     const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
     const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
-                                     tet_points, negmass, iso);
+                                     point_tets, negmass, iso);
     tetcache[cube] = (epoch << 24) | code;
     code_out[a] = code;
     n_relevant[a] = popcount(code);
@@ -585,7 +578,7 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __constant const int *stencil, __global const int *row_ptr,
                       __global const int *cols, __global const float *masks,
                       __global const int *cube_ptr, __global const int *cube_cols,
-                      __global const float *cube_w, __constant const int *tet_points,
+                      __global const float *cube_w, __constant const uint *point_tets,
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
@@ -700,7 +693,7 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 // cube centred at data point `cell`
                 const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
                 const uint tc = type6_cached_code(tetcache, c, epoch, data, base, stencil,
-                                                  cube_ptr, cube_cols, cube_w, tet_points,
+                                                  cube_ptr, cube_cols, cube_w, point_tets,
                                                   negmass, iso, counts);
                 if (tc != 0u) {
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
