@@ -404,7 +404,7 @@ class RayCaster:
         from splineviz.core.splines import to_quadratic
 
         q = self._device.queue
-        spline = self.spline
+        k = _to_k(self._model_kwargs)  # the core spline itself is not built (a float64 copy)
         ghost = GHOSTS["MODEL_TO"]
         if ghost != to_quadratic.GHOST_LAYERS:
             raise AssertionError("TO ghost layers differ from the core model")  # a bug
@@ -413,7 +413,7 @@ class RayCaster:
         strides = np.array([py * pz, pz, 1], dtype=np.int64)
         self._strides = (py, pz)
         rows = []
-        for offsets, w in to_quadratic.stencils(spline.k):
+        for offsets, w in to_quadratic.stencils(k):
             flat = offsets @ strides
             rows.extend((flat, w[i]) for i in range(w.shape[0]))
         row_ptr = np.concatenate([[0], np.cumsum([np.count_nonzero(w) for _, w in rows])])
@@ -434,31 +434,42 @@ class RayCaster:
         if np.diff(start).max() > 32 * TO_WORDS:
             raise AssertionError("more pieces per cell than the bit set holds")  # a bug
         # union of the data offsets read by each class (for the conservative cell bounds and
-        # the private data copy of the classification), and per entry the stencils as
-        # indices into that union
-        tables = to_quadratic.stencils(spline.k)
-        cls_offsets, cls_start = [], [0]
-        u_rows, u_cols, u_w = [0], [], []
+        # the private data copy of the classification); the distinct B-net points of the
+        # class's pieces (pieces of one TO share points: each is computed once) as stencils
+        # into that union, and per point the bit set of the pieces whose B-net holds it
+        tables = to_quadratic.stencils(k)
+        cls_offsets, cls_start, pt_start = [], [0], [0]
+        u_rows, u_cols, u_w, pt_pieces = [0], [], [], []
         for c in range(8):
             pts = sorted({p for e in range(start[c], start[c + 1])
                           for p in map(tuple, tables[tet[e]][0] + base_off[e])})
             where = {p: n for n, p in enumerate(pts)}
             cls_offsets.extend(np.array(pts) @ strides)
             cls_start.append(len(cls_offsets))
+            points = {}  # stencil (union index, weight) pairs -> point of the class
             for e in range(start[c], start[c + 1]):
                 offsets, w = tables[tet[e]]
                 idx = [where[tuple(o)] for o in offsets + base_off[e]]
                 for i in range(w.shape[0]):
                     nz = np.flatnonzero(w[i])
-                    u_cols.extend(idx[n] for n in nz)
-                    u_w.extend(w[i, nz])
-                    u_rows.append(len(u_cols))
+                    key = tuple((idx[n], float(w[i, n])) for n in nz)
+                    if key not in points:
+                        points[key] = len(points)
+                        u_cols.extend(idx[n] for n in nz)
+                        u_w.extend(w[i, nz])
+                        u_rows.append(len(u_cols))
+                        pt_pieces.append(np.zeros(TO_WORDS, np.uint32))
+                    bit = e - start[c]
+                    pt_pieces[pt_start[-1] + points[key]][bit >> 5] |= np.uint32(1 << (bit & 31))
+            pt_start.append(pt_start[-1] + len(points))
         self._nunion = int(np.diff(cls_start).max())
         self._cls_start = cla.to_device(q, np.array(cls_start, np.int32))
         self._cls_offsets = cla.to_device(q, np.array(cls_offsets, np.int32))
-        self._union_csr = [cla.to_device(q, np.array(u_rows, np.int32)),
+        self._union_csr = [cla.to_device(q, np.array(pt_start, np.int32)),
+                           cla.to_device(q, np.array(u_rows, np.int32)),
                            cla.to_device(q, np.array(u_cols, np.uint16)),
-                           cla.to_device(q, np.array(u_w, np.float32))]
+                           cla.to_device(q, np.array(u_w, np.float32)),
+                           cla.to_device(q, np.concatenate(pt_pieces))]
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
@@ -599,7 +610,7 @@ class RayCaster:
                 get_kernel(ctx, "raycast", "to_codes", self._defines())(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
-                    self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
+                    self._cls_start.data, self._cls_offsets.data,
                     *(a.data for a in self._union_csr), np.float32(self._negmass), iso,
                     bits.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
@@ -752,6 +763,19 @@ class RayCaster:
         normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
                          color.get(queue=q).reshape(h, w, 4))
+
+
+def _to_k(model_kwargs: dict) -> float:
+    """The ``k`` of Q_k from the model options, with the core model's default and check."""
+    import inspect
+
+    from splineviz.core.splines.to_quadratic import TOQuadraticSpline
+
+    default = inspect.signature(TOQuadraticSpline).parameters["k"].default
+    k = float(model_kwargs.get("k", default))
+    if not k >= 1:
+        raise RayCastError(f"Q_k needs k >= 1, got {k}")
+    return k
 
 
 def _initial_pool(ncell: int) -> int:

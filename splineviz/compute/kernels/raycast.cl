@@ -427,14 +427,16 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
 // Relevance bit set of the (TO, tet) pieces of a cell (bit e - ent_start[cls]: the piece's
 // B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO);
 // returns the number of relevant pieces. The data a cell's pieces read (the class union, at
-// most NUNION values) are gathered once; the piece stencils (CSR per entry and coefficient)
-// index into that private copy. First the cheap cell bounds of classify.cl (their range
-// widened by the negative weight mass): most cells the rays reach end there.
+// most NUNION values) are gathered once. First the cheap cell bounds of classify.cl (their
+// range widened by the negative weight mass): most cells the rays reach end there. Then each
+// distinct B-net point of the class's pieces (stencils into the union, pt_start per class) is
+// computed once: min <= iso <= max over a piece's coefficients iff one is <= iso and one is
+// >= iso, so each point marks the pieces whose B-net holds it (pt_pieces) in two masks.
 inline int to_relevance(__global const float *pdata, int corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
-                        __constant const int *ent_start, __global const int *u_rows,
+                        __global const int *pt_start, __global const int *u_rows,
                         __global const ushort *u_cols, __global const float *u_w,
-                        float negmass, float iso, uint *words)
+                        __global const uint *pt_pieces, float negmass, float iso, uint *words)
 {
     float vals[NUNION];
     const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
@@ -447,21 +449,20 @@ inline int to_relevance(__global const float *pdata, int corner, int cls,
     for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
     const float wid = negmass * (vhi - vlo);
     if (!(vlo - wid <= iso && iso <= vhi + wid)) return 0;
+    uint below[NWORDS];
+    for (int w = 0; w < NWORDS; ++w) below[w] = 0u;
+    for (int p = pt_start[cls]; p < pt_start[cls + 1]; ++p) {
+        float acc = 0.0f;
+        for (int q = u_rows[p]; q < u_rows[p + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
+        if (acc <= iso)
+            for (int w = 0; w < NWORDS; ++w) below[w] |= pt_pieces[p * NWORDS + w];
+        if (acc >= iso)
+            for (int w = 0; w < NWORDS; ++w) words[w] |= pt_pieces[p * NWORDS + w];
+    }
     int count = 0;
-    const int e0 = ent_start[cls];
-    for (int e = e0; e < ent_start[cls + 1]; ++e) {
-        float lo = INFINITY, hi = -INFINITY;
-        for (int m = 0; m < NCOEF; ++m) {
-            const int r = e * NCOEF + m;
-            float acc = 0.0f;
-            for (int q = u_rows[r]; q < u_rows[r + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
-            lo = fmin(lo, acc);
-            hi = fmax(hi, acc);
-        }
-        if (lo <= iso && iso <= hi) {
-            words[(e - e0) >> 5] |= 1u << ((e - e0) & 31);
-            ++count;
-        }
+    for (int w = 0; w < NWORDS; ++w) {
+        words[w] &= below[w];
+        count += popcount(words[w]);
     }
     return count;
 }
@@ -474,9 +475,10 @@ inline int to_relevance(__global const float *pdata, int corner, int cls,
 inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap, int c,
                            uint epoch, __global const float *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
-                           __constant const int *ent_start, __global const int *u_rows,
+                           __global const int *pt_start, __global const int *u_rows,
                            __global const ushort *u_cols, __global const float *u_w,
-                           float negmass, float iso, __global int *counts, uint *words)
+                           __global const uint *pt_pieces, float negmass, float iso,
+                           __global int *counts, uint *words)
 {
     const uint e = slots[c];
     if ((e >> 24) == epoch) {
@@ -484,8 +486,8 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
         for (int w = 0; w < NWORDS; ++w) words[w] = idx == NO_PIECES ? 0u : pool[idx * NWORDS + w];
         return;
     }
-    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, u_rows,
-                               u_cols, u_w, negmass, iso, words);
+    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, pt_start, u_rows,
+                               u_cols, u_w, pt_pieces, negmass, iso, words);
     uint idx = NO_PIECES;
     if (n > 0) {
         const int a = atomic_inc(&counts[2]);
@@ -505,9 +507,10 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
 // the number of relevant pieces per candidate.
 __kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int CZ,
                        __global const int *cells, __constant const int *cls_start,
-                       __constant const int *cls_offsets, __constant const int *ent_start,
+                       __constant const int *cls_offsets, __global const int *pt_start,
                        __global const int *u_rows, __global const ushort *u_cols,
-                       __global const float *u_w, float negmass, float iso,
+                       __global const float *u_w, __global const uint *pt_pieces,
+                       float negmass, float iso,
                        __global uint *bits, __global int *n_relevant)
 {
     const int a = get_global_id(0);
@@ -516,8 +519,8 @@ __kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int 
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
     const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
-    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, u_rows,
-                                 u_cols, u_w, negmass, iso, words);
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, pt_start, u_rows,
+                                 u_cols, u_w, pt_pieces, negmass, iso, words);
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
@@ -584,8 +587,9 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
 #ifdef MODEL_TO
                       __global uint *slots, __global uint *pool, int pool_cap, uint epoch,
                       __global int *counts, float negmass, __constant const int *cls_start,
-                      __constant const int *cls_offsets, __global const int *u_rows,
-                      __global const ushort *u_cols, __global const float *u_w,
+                      __constant const int *cls_offsets, __global const int *pt_start,
+                      __global const int *u_rows, __global const ushort *u_cols,
+                      __global const float *u_w, __global const uint *pt_pieces,
                       __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
                       __constant const int *ent_tet, __global const int *row_ptr,
@@ -671,8 +675,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                 uint words[NWORDS];
                 to_cached_bits(slots, pool, pool_cap, c, epoch, data, corner, cls, cls_start,
-                               cls_offsets, ent_start, u_rows, u_cols, u_w, negmass, iso, counts,
-                               words);
+                               cls_offsets, pt_start, u_rows, u_cols, u_w, pt_pieces, negmass,
+                               iso, counts, words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
