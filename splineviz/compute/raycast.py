@@ -65,8 +65,8 @@ SKIP_ACTIVE = 255
 #: epochs of the per-cell classification caches: 8 bits beside 24 bits of code or pool
 #: index, 0 = never valid
 MAX_EPOCH = 255
-#: largest pool of cached TO bit sets (24-bit indices; 0xFFFFFF means "no relevant piece")
-MAX_POOL = 2**24 - 2
+#: largest pool of the classification cache (24-bit entry indices beside the epoch)
+MAX_POOL = 2**24 - 1
 #: families whose per-cell classification the rays cache
 CACHED = ("MODEL_TYPE6", "MODEL_TO")
 
@@ -283,14 +283,18 @@ class RayCaster:
         """
         ghost = {"MODEL_TYPE6": 1, "MODEL_TO": GHOSTS["MODEL_TO"]}.get(self._family, 0)
         levels = _octree_levels(cells)
-        ncell = int(np.prod(cells))
         out = {"samples": 4 * int(np.prod([n + 2 * ghost for n in shape])),
                "octree": 8 * _octree_nodes(levels)}
         if self._family in CACHED:
-            out["classification cache"] = 4 * ncell
-        if self._family == "MODEL_TO":
-            out["piece pool"] = 4 * TO_WORDS * _initial_pool(ncell)
+            bricks = int(np.prod(levels[0][1:]))
+            out["classification cache"] = 4 * (bricks + self._entry_words()
+                                               * _initial_pool(bricks))
         return out
+
+    def _entry_words(self) -> int:
+        """32-bit words of a pool entry of the classification cache (8 cells of a brick):
+        type-6 one tet code per cell, TO a bit set and a written flag per cell."""
+        return 8 * (1 if self._family == "MODEL_TYPE6" else TO_WORDS + 1)
 
     def _check_device_memory(self, shape, cells) -> None:
         """Refuse, before allocating anything, a volume the device cannot hold."""
@@ -347,15 +351,14 @@ class RayCaster:
             k_reduce(q, (dz, dy, dx), None, self._bounds.data,
                      *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
         self._epoch = 0
-        ncell = int(np.prod(self._cells))
         if self._family in CACHED:
-            # per cell: (epoch << 24) | (type-6 tet code or TO pool index); counts: cells and
-            # tets classified at this epoch, TO pool entries asked for
-            self._cache = cla.zeros(q, ncell, np.uint32)
+            # the classification cache (raycast.cl): per level-1 brick a slot, (epoch << 24) |
+            # pool entry; counts: cells and tets classified at this epoch, entries asked for
+            bricks = int(np.prod(levels[0][1:]))
+            self._slots = cla.zeros(q, bricks, np.uint32)
             self._counts = cla.zeros(q, 3, np.int32)
-        if self._family == "MODEL_TO":
-            self._pool_cap = _initial_pool(ncell)
-            self._pool = cla.empty(q, self._pool_cap * TO_WORDS, np.uint32)
+            self._pool_cap = _initial_pool(bricks)
+            self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
         q.finish()
 
     def _cell_args(self) -> list:
@@ -549,9 +552,9 @@ class RayCaster:
             self._epoch += 1
             if self._epoch > MAX_EPOCH:
                 # the 8-bit stamp wraps: clear once every MAX_EPOCH isovalues
-                self._cache.fill(np.uint32(0), queue=q)
+                self._slots.fill(np.uint32(0), queue=q)
                 self._epoch = 1
-            self._counts.fill(np.int32(0), queue=q)  # the TO pool is refilled from entry 0
+            self._counts.fill(np.int32(0), queue=q)  # the pool is refilled from entry 0
         self.stats.update(active_cells=visible, active_tets=visible, classified="visible")
         if self.model == "trilinear":
             self.stats["active_tets"] = None
@@ -590,13 +593,16 @@ class RayCaster:
                 nrel = cla.empty(q, n, np.int32)
                 code_buf = cla.empty(q, n, np.uint32)
                 _, ny, nz = self._volume.shape
+                # room in the pool for every candidate brick
+                ijk = np.stack(np.unravel_index(cells, self._cells))
+                bricks = len(np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:])))
+                self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + bricks)
                 get_kernel(ctx, "raycast", "tet_codes", self._defines())(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
                     self._stencil.data, *(a.data for a in self._cube_csr),
                     self._point_tets.data, np.float32(self._negmass), iso,
-                    np.uint32(self._epoch), self._cache.data,
-                    code_buf.data, nrel.data)
+                    *self._cache_args()[:-1], code_buf.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
             # the cache is complete: later frames count nothing new
             self._counts[:2].set(
@@ -677,21 +683,32 @@ class RayCaster:
         self.stats["render_s"] = time.perf_counter() - t
         return frame
 
+    def _cache_args(self) -> list:
+        """Kernel arguments of the classification cache: slots, pool, capacity, epoch, the
+        level-1 strides, counts and the negative weight mass of the cheap bounds."""
+        _, _, by, bz = self._levels[0]
+        return [self._slots.data, self._pool.data, np.int32(self._pool_cap),
+                np.uint32(self._epoch), np.int32(by), np.int32(bz), self._counts.data,
+                np.float32(self._negmass)]
+
     def _grow_pool(self, asked: int) -> None:
-        """A larger TO pool, its cached entries kept (their indices stay valid); the cells a
-        full pool could not take are cached by the next frames."""
+        """Make the pool hold ``asked`` entries, its cached entries kept (their indices stay
+        valid); the bricks a full pool could not take are cached by the next frames."""
         import pyopencl as cl
         import pyopencl.array as cla
 
         q = self._device.queue
         old = self._pool_cap
+        if asked <= old:
+            return
         cap = min(MAX_POOL, max(2 * old, asked * 5 // 4))
         if cap > old:
-            pool = cla.empty(q, cap * TO_WORDS, np.uint32)
+            pool = cla.empty(q, cap * self._entry_words(), np.uint32)
             cl.enqueue_copy(q, pool.data, self._pool.data, byte_count=self._pool.nbytes)
             self._pool, self._pool_cap = pool, cap
-        # the entries asked for past the old end were never written: hand them out again
-        self._counts[2:3].set(np.array([old], np.int32), queue=q)
+        # entries asked for past the old end were never written: hand them out again
+        used = int(self._counts[2:3].get(queue=q)[0])
+        self._counts[2:3].set(np.array([min(used, old)], np.int32), queue=q)
 
     def _render_cl(self, camera, w, h, planes) -> ref.Frame:
         import pyopencl.array as cla
@@ -728,16 +745,12 @@ class RayCaster:
         nx, ny, nz = vol.shape
         model_args = []
         if self._family == "MODEL_TYPE6":
-            model_args = [self._cache.data, np.uint32(self._epoch), self._counts.data,
-                          np.float32(self._negmass),
-                          self._stencil.data, *(a.data for a in self._tet_csr),
+            model_args = [*self._cache_args(), self._stencil.data, *(a.data for a in self._tet_csr),
                           *(a.data for a in self._cube_csr), self._point_tets.data,
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
-            model_args = [self._cache.data, self._pool.data, np.int32(self._pool_cap),
-                          np.uint32(self._epoch), self._counts.data,
-                          np.float32(self._negmass), self._cls_start.data,
+            model_args = [*self._cache_args(), self._cls_start.data,
                           self._cls_offsets.data, *(a.data for a in self._union_csr),
                           e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
@@ -754,8 +767,7 @@ class RayCaster:
             cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
             if self.stats.get("classified") == "visible":
                 self.stats.update(active_cells=cells, active_tets=tets)
-            if self._family == "MODEL_TO" and asked > self._pool_cap:
-                self._grow_pool(asked)
+            self._grow_pool(asked)
         hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
         pos_h = pos.get(queue=q).reshape(h, w, 4)
         position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
@@ -778,9 +790,9 @@ def _to_k(model_kwargs: dict) -> float:
     return k
 
 
-def _initial_pool(ncell: int) -> int:
-    """Entries of a new TO pool: enough for a view of a typical surface; it grows on demand."""
-    return int(min(MAX_POOL, max(4096, ncell // 64)))
+def _initial_pool(bricks: int) -> int:
+    """Entries of a new pool: enough for a view of a typical surface; it grows on demand."""
+    return int(min(MAX_POOL, max(4096, bricks // 32)))
 
 
 def _reduction_table(degree: int) -> np.ndarray:

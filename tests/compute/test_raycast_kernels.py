@@ -130,10 +130,16 @@ def test_type6_tet_codes_match_core_coefficients(model):
     cls = rc.classify_all()
     codes = np.zeros(int(np.prod(rc._cells)), np.uint32)
     codes[cls.cells] = cls.codes
-    # classify_all fills the per-cube cache that the frames read, at the current epoch
-    cache = rc._cache.get(queue=rc._device.queue)
-    np.testing.assert_array_equal(cache[cls.cells] >> 24, rc._epoch)
-    np.testing.assert_array_equal(cache[cls.cells] & 0xFFFFFF, cls.codes)
+    # classify_all fills the brick cache that the frames read, at the current epoch: per
+    # level-1 brick a slot (epoch << 24 | pool entry), per cube of it VALID | tet code
+    q = rc._device.queue
+    slots, pool = rc._slots.get(queue=q), rc._pool.get(queue=q)
+    i, j, k = np.unravel_index(cls.cells, rc._cells)
+    _, _, by, bz = rc._levels[0]
+    slot = slots[((i >> 1) * by + (j >> 1)) * bz + (k >> 1)]
+    np.testing.assert_array_equal(slot >> 24, rc._epoch)
+    entry = pool[(slot & 0xFFFFFF) * 8 + (((i & 1) << 2) | ((j & 1) << 1) | (k & 1))]
+    np.testing.assert_array_equal(entry, cls.codes | np.uint32(0x80000000))
     spline = rc.spline
     cubes = spline.all_cubes()
     bits = np.zeros((len(cubes), 24), dtype=bool)

@@ -108,14 +108,14 @@ def test_isovalue_changes_leave_no_stale_cubes(ml):
 
 @needs_cl
 def test_full_to_pool_grows_and_frames_stay_exact(ml):
-    # a pool too small for one frame: rays that find it full use their own bit sets, the
-    # pool grows after the frame keeping its entries, and later frames fill it
+    # a pool too small for one frame: rays that find it full work uncached, the pool grows
+    # after the frame keeping its entries, and later frames fill it
     import pyopencl.array as cla
 
     vol, iso = ml
     rc = RayCaster(vol, model="to-quadratic")
     rc._pool_cap = 16
-    rc._pool = cla.empty(rc._device.queue, 16 * 5, np.uint32)
+    rc._pool = cla.empty(rc._device.queue, 16 * rc._entry_words(), np.uint32)
     full = RayCaster(vol, model="to-quadratic")
     for cam, value in _path(vol, iso)[3:6]:
         rc.set_isovalue(value)
@@ -123,9 +123,9 @@ def test_full_to_pool_grows_and_frames_stay_exact(ml):
         full.classify_all()
         _assert_same(rc.render(cam, SIZE), full.render(cam, SIZE))
         _assert_same(rc.render(cam, SIZE), full.render(cam, SIZE))  # from the cache
-    assert rc._pool_cap > 1000
+    assert rc._pool_cap > 200
     cells, _, used = rc._counts.get(queue=rc._device.queue)
-    assert 0 < cells <= used <= rc._pool_cap
+    assert 0 < used <= rc._pool_cap and cells > used  # 8 cells per brick entry
 
 
 @needs_cl
@@ -143,7 +143,8 @@ def test_volume_too_big_for_the_device_is_refused(ml):
     vol, _ = ml
     rc = RayCaster(vol, model="cubic-c1")
     need = rc.device_bytes((4096, 4096, 4096), (4097, 4097, 4097))
-    assert need["samples"] > 2**38 and need["classification cache"] > 2**38
+    # the brick cache (a slot per 2^3 cubes and a pool for the reached ones) is small
+    assert need["samples"] > 2**38 and 0 < need["classification cache"] < need["samples"] / 4
     with pytest.raises(RayCastError, match="GiB of device memory"):
         rc._check_device_memory((4096, 4096, 4096), (4097, 4097, 4097))
     rc._check_device_memory(vol.shape, rc._cells)  # what it already holds fits

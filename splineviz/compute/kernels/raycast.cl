@@ -301,6 +301,47 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
 }
 #endif
 
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
+// ---- the classification cache (visible-first classification, thesis §6.1.1, §6.2.3) ----
+// Per level-1 node of the octree (a brick of 2^3 cells) one slot: (epoch << 24) | pool
+// entry; a slot of an older epoch (another isovalue) is invalid. A pool entry holds
+// CELL_WORDS words for each of the brick's 8 cells: type-6: VALID | the 24-bit tet code;
+// TO: the NWORDS words of the relevance bit set, then a word that is 1 once they are written.
+// Only the bricks the rays reach take pool entries.
+#ifdef MODEL_TYPE6
+#define CELL_WORDS 1
+#else
+#define CELL_WORDS (NWORDS + 1)
+#endif
+#define VALID 0x80000000u
+
+// Pool entry of the brick holding `cell` at this epoch, allocated (zeroed) and published by
+// the first ray that needs it; -1 when the pool is full (the caller then works uncached;
+// counts[2], the entries asked for, tells the host to grow the pool).
+inline int brick_entry(__global uint *slots, __global uint *pool, int pool_cap, uint epoch,
+                       int3 cell, int BY, int BZ, __global int *counts)
+{
+    const int b = ((cell.x >> 1) * BY + (cell.y >> 1)) * BZ + (cell.z >> 1);
+    const uint e = slots[b];
+    if ((e >> 24) == epoch) return (int)(e & CODE_MASK);
+    const int a = atomic_inc(&counts[2]);
+    if (a >= pool_cap) return -1;
+    for (int w = 0; w < 8 * CELL_WORDS; ++w) pool[a * 8 * CELL_WORDS + w] = 0u;
+    mem_fence(CLK_GLOBAL_MEM_FENCE);  // the zeroed entry before its slot
+    const uint old = atomic_cmpxchg((volatile __global uint *)&slots[b], e,
+                                    (epoch << 24) | (uint)a);
+    if (old == e) return a;
+    // another ray published the brick first: its entry holds the brick (ours is unused)
+    return (old >> 24) == epoch ? (int)(old & CODE_MASK) : -1;
+}
+
+// First word of `cell`'s part of pool entry a.
+inline int cell_word(int a, int3 cell)
+{
+    return (a * 8 + (((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1))) * CELL_WORDS;
+}
+#endif
+
 #ifdef MODEL_TYPE6
 // First root of the type-6 spline - iso on the ray segment p0 + s d, s in [0, len], inside the
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
@@ -373,24 +414,26 @@ inline uint type6_tet_code(__global const float *pdata, int base, __constant con
     return below & above;
 }
 
-// Cache entry of a cube: the epoch of the isovalue it was computed for (top 8 bits) and the
-// tet code (low 24 bits, CODE_MASK); epoch 0 never matches (a cleared cache).
-
-// The tet code of cube `c` at this epoch: from the cache, or computed and published. The
-// first ray to publish a cube's code also counts it (counts[0] cubes with a relevant tet,
+// The tet code of `cube` at this epoch: from the brick cache, or computed and stored. The
+// first ray to store a cube's code also counts it (counts[0] cubes with a relevant tet,
 // counts[1] relevant tets); rays that raced it computed the same code and count nothing.
-inline uint type6_cached_code(__global uint *tetcache, int c, uint epoch,
+inline uint type6_cached_code(__global uint *slots, __global uint *pool, int pool_cap,
+                              uint epoch, int3 cube, int BY, int BZ,
                               __global const float *pdata, int base,
                               __constant const int *stencil, __global const int *cube_ptr,
                               __global const int *cube_cols, __global const float *cube_w,
                               __constant const uint *point_tets, float negmass, float iso,
                               __global int *counts)
 {
-    const uint e = tetcache[c];
-    if ((e >> 24) == epoch) return e & CODE_MASK;
+    const int a = brick_entry(slots, pool, pool_cap, epoch, cube, BY, BZ, counts);
+    const int at = a >= 0 ? cell_word(a, cube) : 0;
+    if (a >= 0) {
+        const uint v = pool[at];
+        if (v & VALID) return v & CODE_MASK;
+    }
     const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
                                      point_tets, negmass, iso);
-    if (atomic_cmpxchg((volatile __global uint *)&tetcache[c], e, (epoch << 24) | code) == e
+    if (a >= 0 && atomic_cmpxchg((volatile __global uint *)&pool[at], 0u, VALID | code) == 0u
         && code != 0u) {
         atomic_inc(&counts[0]);
         atomic_add(&counts[1], (int)popcount(code));
@@ -399,31 +442,31 @@ inline uint type6_cached_code(__global uint *tetcache, int c, uint epoch,
 }
 
 // Classification of all candidate cubes at once (RayCaster.classify_all): their tet codes,
-// written to the cache at this epoch, and per candidate the code and its relevant tets.
+// written to the brick cache at this epoch (the host makes the pool big enough), and per
+// candidate the code and its relevant tets.
 __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
                         __global const int *cube_ptr, __global const int *cube_cols,
                         __global const float *cube_w, __constant const uint *point_tets,
-                        float negmass, float iso, uint epoch, __global uint *tetcache,
-                        __global uint *code_out,
-                        __global int *n_relevant)
+                        float negmass, float iso, __global uint *slots, __global uint *pool,
+                        int pool_cap, uint epoch, int BY, int BZ, __global int *counts,
+                        __global uint *code_out, __global int *n_relevant)
 {
-    const int a = get_global_id(0);
-    const int cube = cubes[a];
+    const int g = get_global_id(0);
+    const int cube = cubes[g];
     const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
     const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
     const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
                                      point_tets, negmass, iso);
-    tetcache[cube] = (epoch << 24) | code;
-    code_out[a] = code;
-    n_relevant[a] = popcount(code);
+    const int3 c3 = (int3)(i, j, k);
+    const int a = brick_entry(slots, pool, pool_cap, epoch, c3, BY, BZ, counts);
+    if (a >= 0) pool[cell_word(a, c3)] = VALID | code;
+    code_out[g] = code;
+    n_relevant[g] = popcount(code);
 }
 #endif
 
 #ifdef MODEL_TO
-// pool index of a cell without any relevant piece (it takes no pool entry)
-#define NO_PIECES CODE_MASK
-
 // Relevance bit set of the (TO, tet) pieces of a cell (bit e - ent_start[cls]: the piece's
 // B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO);
 // returns the number of relevant pieces. The data a cell's pieces read (the class union, at
@@ -467,37 +510,30 @@ inline int to_relevance(__global const float *pdata, int corner, int cls,
     return count;
 }
 
-// The bit set of cell c at this epoch: from the pool, or computed by this ray, stored in a new
-// pool entry and published in slots[c] ((epoch << 24) | pool index; the entry is written
-// before the slot). Cells without a relevant piece take no entry. When the pool is full the
-// bits serve this ray only; counts[2] (entries asked for) tells the host to grow the pool.
-// The first ray to publish a cell counts it (counts[0] cells, counts[1] relevant pieces).
-inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap, int c,
-                           uint epoch, __global const float *pdata, int corner, int cls,
+// The bit set of `cell` at this epoch: from the brick cache, or computed by this ray and
+// stored (words first, then the written flag). The first ray to store a cell counts it
+// (counts[0] cells with a relevant piece, counts[1] relevant pieces).
+inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap,
+                           uint epoch, int3 cell, int BY, int BZ,
+                           __global const float *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
                            __global const int *pt_start, __global const int *u_rows,
                            __global const ushort *u_cols, __global const float *u_w,
                            __global const uint *pt_pieces, float negmass, float iso,
                            __global int *counts, uint *words)
 {
-    const uint e = slots[c];
-    if ((e >> 24) == epoch) {
-        const uint idx = e & CODE_MASK;
-        for (int w = 0; w < NWORDS; ++w) words[w] = idx == NO_PIECES ? 0u : pool[idx * NWORDS + w];
+    const int a = brick_entry(slots, pool, pool_cap, epoch, cell, BY, BZ, counts);
+    const int at = a >= 0 ? cell_word(a, cell) : 0;
+    if (a >= 0 && pool[at + NWORDS] != 0u) {
+        for (int w = 0; w < NWORDS; ++w) words[w] = pool[at + w];
         return;
     }
     const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, pt_start, u_rows,
                                u_cols, u_w, pt_pieces, negmass, iso, words);
-    uint idx = NO_PIECES;
-    if (n > 0) {
-        const int a = atomic_inc(&counts[2]);
-        if (a >= pool_cap) return;
-        for (int w = 0; w < NWORDS; ++w) pool[a * NWORDS + w] = words[w];
-        mem_fence(CLK_GLOBAL_MEM_FENCE);
-        idx = (uint)a;
-    }
-    if (atomic_cmpxchg((volatile __global uint *)&slots[c], e, (epoch << 24) | idx) == e
-        && n > 0) {
+    if (a < 0) return;
+    for (int w = 0; w < NWORDS; ++w) pool[at + w] = words[w];
+    mem_fence(CLK_GLOBAL_MEM_FENCE);  // the words before their flag
+    if (atomic_cmpxchg((volatile __global uint *)&pool[at + NWORDS], 0u, 1u) == 0u && n > 0) {
         atomic_inc(&counts[0]);
         atomic_add(&counts[1], n);
     }
@@ -576,8 +612,11 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       float grid_shift,              // cell c covers [c, c+1) - shift in u
                       __global const float2 *bounds,  // min-max octree (classify.cl)
                       __constant const int4 *levels, int n_levels,
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
+                      __global uint *slots, __global uint *pool, int pool_cap, uint epoch,
+                      int BY, int BZ, __global int *counts, float negmass,
+#endif
 #ifdef MODEL_TYPE6
-                      __global uint *tetcache, uint epoch, __global int *counts, float negmass,
                       __constant const int *stencil, __global const int *row_ptr,
                       __global const int *cols, __global const float *masks,
                       __global const int *cube_ptr, __global const int *cube_cols,
@@ -585,8 +624,7 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
-                      __global uint *slots, __global uint *pool, int pool_cap, uint epoch,
-                      __global int *counts, float negmass, __constant const int *cls_start,
+                      __constant const int *cls_start,
                       __constant const int *cls_offsets, __global const int *pt_start,
                       __global const int *u_rows, __global const ushort *u_cols,
                       __global const float *u_w, __global const uint *pt_pieces,
@@ -650,7 +688,6 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
         float s = 0.0f;
         const int max_steps = 4 * (CX + CY + CZ) + 16;
         for (int step = 0; step < max_steps; ++step) {
-            const int c = (cell.x * ncell.y + cell.y) * ncell.z + cell.z;
             const int L = skip_level(bounds, levels, n_levels, cell, iso);
             if (L < 0) {
                 const float3 te = exit_params(we, d, inv_d, cell, cell + 1);
@@ -674,9 +711,9 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                                    + (cell.z + GHOST);
                 const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                 uint words[NWORDS];
-                to_cached_bits(slots, pool, pool_cap, c, epoch, data, corner, cls, cls_start,
-                               cls_offsets, pt_start, u_rows, u_cols, u_w, pt_pieces, negmass,
-                               iso, counts, words);
+                to_cached_bits(slots, pool, pool_cap, epoch, cell, BY, BZ, data, corner, cls,
+                               cls_start, cls_offsets, pt_start, u_rows, u_cols, u_w, pt_pieces,
+                               negmass, iso, counts, words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
@@ -696,9 +733,9 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
 #else
                 // cube centred at data point `cell`
                 const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
-                const uint tc = type6_cached_code(tetcache, c, epoch, data, base, stencil,
-                                                  cube_ptr, cube_cols, cube_w, point_tets,
-                                                  negmass, iso, counts);
+                const uint tc = type6_cached_code(slots, pool, pool_cap, epoch, cell, BY, BZ,
+                                                  data, base, stencil, cube_ptr, cube_cols,
+                                                  cube_w, point_tets, negmass, iso, counts);
                 if (tc != 0u) {
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
