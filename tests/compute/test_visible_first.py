@@ -148,3 +148,24 @@ def test_volume_too_big_for_the_device_is_refused(ml):
     with pytest.raises(RayCastError, match="GiB of device memory"):
         rc._check_device_memory((4096, 4096, 4096), (4097, 4097, 4097))
     rc._check_device_memory(vol.shape, rc._cells)  # what it already holds fits
+
+
+@pytest.mark.parametrize("model", ["cubic-c1", "super-quadratic"])
+def test_cube_program_is_determining_set_plus_rules(model):
+    # the kernel's ordered program gives the cube coefficients of the core masks (and of
+    # apply_rules) from the 27 stencil values, with fewer multiply-adds than the masks
+    from splineviz.compute.raycast import _cube_program
+    from splineviz.core.splines import type6_rules
+
+    scheme = type6_rules.scheme(model)
+    (ptr, cols, w), order = _cube_program(scheme)
+    vals = np.random.default_rng(1).standard_normal(27)
+    work = np.concatenate([vals, np.zeros(len(order))])
+    for r in range(len(order)):
+        work[27 + r] = work[cols[ptr[r]:ptr[r + 1]]] @ w[ptr[r]:ptr[r + 1]]
+    got = np.empty(len(order))
+    got[order] = work[27:]
+    np.testing.assert_allclose(got, scheme.cube_masks @ vals, atol=1e-5)
+    b_m = (scheme.determining_masks @ vals)[None]
+    np.testing.assert_allclose(got, type6_rules.apply_rules(b_m, scheme)[0], atol=1e-5)
+    assert len(cols) < 0.65 * np.count_nonzero(scheme.cube_masks)

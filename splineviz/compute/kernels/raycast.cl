@@ -381,17 +381,20 @@ inline float type6_cube_root(__global const float *pdata, int base,
     return best;
 }
 
-// The 24-bit tet code of the cube whose stencil starts at `base`: all cube B-coefficients from
-// the 27 stencil values (sparse cube masks, CSR), then bit t set when the coefficients of tet
-// t straddle the isovalue (convex hull property, thesis §6.1.1). First the cheap cube bounds
-// of classify.cl (stencil range widened by the negative weight mass): most cubes the rays
-// reach end there.
+// The 24-bit tet code of the cube whose stencil starts at `base`: bit t set when the
+// B-coefficients of tet t straddle the isovalue (convex hull property, thesis §6.1.1). First
+// the cheap cube bounds of classify.cl (stencil range widened by the negative weight mass):
+// most cubes the rays reach end there. Then all cube coefficients by the cube program: the
+// determining set from the 27 stencil values, every other coefficient by the smoothness
+// (averaging) rules from already computed ones (thesis §5.1-5.2, eq. (5.2);
+// type6_rules.apply_rules is the NumPy reference). Row r of the program (CSR over the
+// stencil values, then the coefficients of rows before r at 27 + row) is the r-th point.
 inline uint type6_tet_code(__global const float *pdata, int base, __constant const int *stencil,
-                           __global const int *cube_ptr, __global const int *cube_cols,
-                           __global const float *cube_w, __constant const uint *point_tets,
+                           __global const int *prog_ptr, __global const int *prog_cols,
+                           __global const float *prog_w, __constant const uint *point_tets,
                            float negmass, float iso)
 {
-    float vals[27];
+    float vals[27 + NPOINTS];
     float vlo = INFINITY, vhi = -INFINITY;
     for (int q = 0; q < 27; ++q) {
         vals[q] = pdata[base + stencil[q]];
@@ -403,13 +406,14 @@ inline uint type6_tet_code(__global const float *pdata, int base, __constant con
     // min <= iso <= max over a tet's coefficients iff one is <= iso and one is >= iso: each
     // cube point marks the tets whose B-net holds it (point_tets) in two masks
     uint below = 0u, above = 0u;
-    // the cube masks are sparse (about 12 of 27 weights per coefficient): CSR rows, kept in
-    // global memory (cached) so that constant memory stays small on GPUs (64 KB, 8-9 args)
-    for (int p = 0; p < NPOINTS; ++p) {
+    // the program lives in global memory (cached) so that constant memory stays small on
+    // GPUs (64 KB, 8-9 args)
+    for (int r = 0; r < NPOINTS; ++r) {
         float acc = 0.0f;
-        for (int e = cube_ptr[p]; e < cube_ptr[p + 1]; ++e) acc += cube_w[e] * vals[cube_cols[e]];
-        below |= acc <= iso ? point_tets[p] : 0u;
-        above |= acc >= iso ? point_tets[p] : 0u;
+        for (int e = prog_ptr[r]; e < prog_ptr[r + 1]; ++e) acc += prog_w[e] * vals[prog_cols[e]];
+        vals[27 + r] = acc;
+        below |= acc <= iso ? point_tets[r] : 0u;
+        above |= acc >= iso ? point_tets[r] : 0u;
     }
     return below & above;
 }
@@ -420,8 +424,8 @@ inline uint type6_tet_code(__global const float *pdata, int base, __constant con
 inline uint type6_cached_code(__global uint *slots, __global uint *pool, int pool_cap,
                               uint epoch, int3 cube, int BY, int BZ,
                               __global const float *pdata, int base,
-                              __constant const int *stencil, __global const int *cube_ptr,
-                              __global const int *cube_cols, __global const float *cube_w,
+                              __constant const int *stencil, __global const int *prog_ptr,
+                              __global const int *prog_cols, __global const float *prog_w,
                               __constant const uint *point_tets, float negmass, float iso,
                               __global int *counts)
 {
@@ -431,7 +435,7 @@ inline uint type6_cached_code(__global uint *slots, __global uint *pool, int poo
         const uint v = pool[at];
         if (v & VALID) return v & CODE_MASK;
     }
-    const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
+    const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
                                      point_tets, negmass, iso);
     if (a >= 0 && atomic_cmpxchg((volatile __global uint *)&pool[at], 0u, VALID | code) == 0u
         && code != 0u) {
@@ -446,8 +450,8 @@ inline uint type6_cached_code(__global uint *slots, __global uint *pool, int poo
 // candidate the code and its relevant tets.
 __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
-                        __global const int *cube_ptr, __global const int *cube_cols,
-                        __global const float *cube_w, __constant const uint *point_tets,
+                        __global const int *prog_ptr, __global const int *prog_cols,
+                        __global const float *prog_w, __constant const uint *point_tets,
                         float negmass, float iso, __global uint *slots, __global uint *pool,
                         int pool_cap, uint epoch, int BY, int BZ, __global int *counts,
                         __global uint *code_out, __global int *n_relevant)
@@ -456,7 +460,7 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
     const int cube = cubes[g];
     const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
     const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
-    const uint code = type6_tet_code(pdata, base, stencil, cube_ptr, cube_cols, cube_w,
+    const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
                                      point_tets, negmass, iso);
     const int3 c3 = (int3)(i, j, k);
     const int a = brick_entry(slots, pool, pool_cap, epoch, c3, BY, BZ, counts);
@@ -619,8 +623,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
 #ifdef MODEL_TYPE6
                       __constant const int *stencil, __global const int *row_ptr,
                       __global const int *cols, __global const float *masks,
-                      __global const int *cube_ptr, __global const int *cube_cols,
-                      __global const float *cube_w, __constant const uint *point_tets,
+                      __global const int *prog_ptr, __global const int *prog_cols,
+                      __global const float *prog_w, __constant const uint *point_tets,
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
@@ -734,8 +738,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 // cube centred at data point `cell`
                 const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
                 const uint tc = type6_cached_code(slots, pool, pool_cap, epoch, cell, BY, BZ,
-                                                  data, base, stencil, cube_ptr, cube_cols,
-                                                  cube_w, point_tets, negmass, iso, counts);
+                                                  data, base, stencil, prog_ptr, prog_cols,
+                                                  prog_w, point_tets, negmass, iso, counts);
                 if (tc != 0u) {
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
