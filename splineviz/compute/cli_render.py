@@ -101,8 +101,10 @@ def run(args) -> int:
     frame = rc.render(cam, size, clip_planes=planes)
     write_png(args.output, frame.color)
     s = rc.stats
+    # the frame classifies the cells its rays reach (visible-first): counts of those
+    active = "" if s["active_cells"] is None else f", {s['active_cells']} active cells reached"
     print(f"{args.output}: {size[0]}x{size[1]}, iso {iso:g}, model {args.model}, "
-          f"{int(frame.hit.sum())} hit pixels, active cells {s['active_cells']}, "
+          f"{int(frame.hit.sum())} hit pixels{active}, "
           f"classify {s['classify_s']:.3f} s, render {s['render_s']:.3f} s on {s['device']}")
     return 0
 
