@@ -2,14 +2,16 @@
 
 Pipeline on the device, without a CPU round trip of the volume:
 
-* on a data change (isovalue-independent, thesis §6.1.1, §6.2.1): per-cell value bounds (the
-  convex-hull/min-max test) and the levels of a min-max octree, reduced level by level;
-* on an isovalue change: nothing but a new cache epoch. The work the picture needs is done by
-  the rays that need it (§6.2.3 "only what the picture needs"): the skip index of a cell comes
-  from the octree when a ray reaches the cell, and a type-6 cube's tet code is computed by the
-  first ray that reaches the cube and cached per cube for later frames at the same isovalue
-  (visible-first classification). :meth:`RayCaster.classify_all` classifies every cell at
-  once (prefix-scan compaction of the candidates, Fig. 6.3) for counts and checks;
+* on a data change (isovalue-independent, thesis §6.1.1, §6.2.1): the samples (padded with
+  ghost layers where the model needs them, written straight into a device buffer) and a
+  min-max octree of conservative value bounds, stored from level 1 (bricks of 2^3 cells);
+* on an isovalue change: nothing but a new cache epoch (constant time, nothing uploaded).
+  The work the picture needs is done by the rays that need it (§6.2.3): the skip index of a
+  cell comes from the octree when a ray reaches the cell, and the relevance of a candidate
+  cell's tetrahedra (its tet code, §6.1.1) is computed by the first ray that reaches it and
+  cached per brick for later frames at the same isovalue (visible-first classification; only
+  the bricks the rays reach take memory). :meth:`RayCaster.classify_all` classifies every
+  cell at once (prefix-scan compaction of the candidates, Fig. 6.3) for counts and checks;
 * per frame: one work-item per pixel; macro-cell leaping with the Heaviside plane choice,
   cell traversal, the exact restriction of the model to the ray in each candidate cell, first
   root, gradient, Phong headlight shading and OpenGL window depth.
@@ -18,20 +20,18 @@ Models with an OpenCL kernel:
 
 * ``"trilinear"``: cells between samples; the restriction to the ray in a cell is an exact
   cubic (split at its critical points, so no root is missed).
-* ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Data
-  change: conservative per-cube bounds from the 27-point stencil (every coefficient is an
-  affine combination of it). In a candidate cube a ray reads the cube's cached 24-bit tet code
-  (all cube B-coefficients, convex hull test per tet, §6.1.1) or computes and caches it; the
-  ray part inside each relevant tet comes from the tet's four
+* ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Cube
+  bounds from the 27-point stencil (every coefficient is an affine combination of it, widened
+  by the negative weight mass). A cube's tet code comes from its determining set and the
+  averaging rules (§5.1-5.2). The ray part inside each relevant tet comes from the tet's four
   barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
   model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
   root by the same monotone-piece cubic solver, the gradient from the last de Casteljau step.
   Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
   the neighbour table (same result, no special cases at cube faces).
-
-* ``"to-quadratic"`` (truncated octahedra, §5.2): unit cells of the grid; in a candidate
-  cell the ray gets B-coefficients only for the (TO, tet) pieces it crosses, and a root search
-  only where they straddle the isovalue.
+* ``"to-quadratic"`` (truncated octahedra, §5.2): unit cells of the grid with per-parity-class
+  tables of the (TO, tet) pieces meeting a cell; a cell's relevance bit set computes each
+  distinct B-net point of its pieces once, and the ray tests only the relevant pieces.
 
 Other models render through the NumPy reference ray caster
 (:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.

@@ -3,10 +3,11 @@
 //   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
 //   MODEL_TO, GHOST      the truncated-octahedral spline Q_k (DEGREE 2): unit cells of the
 //   NUNION, NWORDS       grid with per-parity-class (TO, tet) tables and per-cell bit sets of
-//                        the relevant pieces (cached in a pool, like the type-6 tet codes)
+//                        the relevant pieces
 //   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
-//                        the relevant tets from the 27-point data stencil, blossoms of the
-//                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2)
+//   NPOINTS              the relevant tets from the 27-point data stencil, blossoms of the
+//                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2); tet
+//                        codes from the NPOINTS cube coefficients
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
 //   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
 //
@@ -14,8 +15,8 @@
 // picture needs"): the skip index of a cell comes from the isovalue-independent min-max octree
 // of classify.cl when a ray reaches the cell, and the tet code of a type-6 cube (§6.1.1; TO:
 // the cell's bit set of relevant pieces) is computed by the first ray that reaches it and
-// cached, stamped with the epoch of the isovalue (an isovalue change bumps the epoch, which
-// invalidates every cached code at once).
+// cached per brick of 2^3 cells, stamped with the epoch of the isovalue (an isovalue change
+// bumps the epoch, which invalidates every cached code at once).
 //
 // Rays live in index space (sample data[i,j,k] at (i,j,k)); the ray parameter t is in world
 // units: u(t) = eye_u + t * d_u with d_u = d_world / spacing. For precision, traversal uses
@@ -24,10 +25,6 @@
 #define BISECT_STEPS 40
 // low 24 bits of a cache entry (the top 8 bits hold the epoch of its isovalue)
 #define CODE_MASK 0xFFFFFFu
-
-typedef struct {
-    float c[8];  // corners c[4 di + 2 dj + dk]
-} Cell;
 
 // Monomial coefficients of the trilinear interpolant on [0,1]^3:
 // f = a + bx x + by y + bz z + bxy xy + bxz xz + byz yz + bxyz xyz
@@ -612,7 +609,7 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, cons
 __kernel void raycast(__global const float *data,   // samples; type-6: the padded samples
                       int NX, int NY, int NZ,        // sample counts (data box [0, n-1])
                       int SY, int SZ,                // strides of `data` (i*SY*SZ + j*SZ + k)
-                      int CX, int CY, int CZ,        // cells of the skip volume per axis
+                      int CX, int CY, int CZ,        // cells of the traversal grid per axis
                       float grid_shift,              // cell c covers [c, c+1) - shift in u
                       __global const float2 *bounds,  // min-max octree (classify.cl)
                       __constant const int4 *levels, int n_levels,
