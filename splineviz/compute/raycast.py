@@ -132,8 +132,43 @@ def _octree_nodes(levels) -> int:
     return levels[-1][0] + int(np.prod(levels[-1][1:]))
 
 
+#: device sample types tried in order (numpy type, OpenCL C type) for integer-valued data
+SAMPLE_TYPES = ((np.uint8, "uchar"), (np.int16, "short"), (np.uint16, "ushort"))
+
+
+def sample_type_for(data: np.ndarray, ghost: int) -> tuple[type, str]:
+    """The device type of the samples: the smallest integer type that holds them exactly with
+    ``ghost`` linearly extrapolated layers (uint8/uint16 data, which :class:`Volume` keeps as
+    float32: 4x/2x less device memory and bandwidth), else float32.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) float32
+    ghost : ghost layers (each axis' extrapolation widens the value range by ``2 ghost``
+        times its width, and integers stay integers)
+
+    Returns
+    -------
+    (numpy type, OpenCL C type name)
+    """
+    flat = data.reshape(len(data), -1)
+    step = max(1, 2**24 // flat.shape[1])  # slabs of about 16 M samples: no big temporaries
+    lo, hi = np.inf, -np.inf
+    for i in range(0, len(flat), step):
+        s = flat[i:i + step]
+        if not np.array_equal(s, np.rint(s)):  # fractions, NaN or inf
+            return np.float32, "float"
+        lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
+    grow = (hi - lo) * ghost * sum((1 + 2 * ghost) ** a for a in range(3))
+    for np_type, cl_type in SAMPLE_TYPES:
+        info = np.iinfo(np_type)
+        if info.min <= lo - grow and hi + grow <= info.max:
+            return np_type, cl_type
+    return np.float32, "float"
+
+
 def pad_linear_into(data: np.ndarray, layers: int, out: np.ndarray) -> None:
-    """:func:`splineviz.core.splines.boundary.pad_linear` written into a float32 array.
+    """:func:`splineviz.core.splines.boundary.pad_linear` written into a smaller array type.
 
     The ghost samples are computed one slab at a time in float64 (as the core does, up to a
     rounding of the ghosts of earlier axes), so no float64 copy of the volume is made.
@@ -142,7 +177,8 @@ def pad_linear_into(data: np.ndarray, layers: int, out: np.ndarray) -> None:
     ----------
     data : (nx, ny, nz) array
     layers : int >= 1
-    out : (nx + 2 layers, ny + 2 layers, nz + 2 layers) float32, written
+    out : (nx + 2 layers, ny + 2 layers, nz + 2 layers), written; float32, or an integer
+        type that holds the padded values exactly (:func:`sample_type_for`)
     """
     g = layers
     n = data.shape
@@ -264,7 +300,9 @@ class RayCaster:
         shift = 1 if self._family == "MODEL_TYPE6" else 0
         cells = tuple(n - 1 + shift for n in volume.shape)
         if self._device is not None:
-            self._check_device_memory(volume.shape, cells)
+            sample_type = sample_type_for(volume.data, self._ghost())
+            self._check_device_memory(volume.shape, cells, np.dtype(sample_type[0]).itemsize)
+            self._sample_type = sample_type
         self._volume = volume
         self._spline = None
         self._cells = cells
@@ -273,17 +311,22 @@ class RayCaster:
         if self._isovalue is not None:
             self._new_epoch()
 
-    def device_bytes(self, shape, cells) -> dict:
+    def _ghost(self) -> int:
+        """Ghost layers of the device samples."""
+        return GHOSTS.get(self._family, 0)
+
+    def device_bytes(self, shape, cells, itemsize: int = 4) -> dict:
         """Bytes of the device buffers kept for a volume of ``shape`` (per buffer name).
 
         Parameters
         ----------
         shape : (3,) samples per axis
         cells : (3,) cells of the traversal grid per axis
+        itemsize : bytes per device sample (see :func:`sample_type_for`)
         """
-        ghost = {"MODEL_TYPE6": 1, "MODEL_TO": GHOSTS["MODEL_TO"]}.get(self._family, 0)
+        ghost = self._ghost()
         levels = _octree_levels(cells)
-        out = {"samples": 4 * int(np.prod([n + 2 * ghost for n in shape])),
+        out = {"samples": itemsize * int(np.prod([n + 2 * ghost for n in shape])),
                "octree": 8 * _octree_nodes(levels)}
         if self._family in CACHED:
             bricks = int(np.prod(levels[0][1:]))
@@ -296,10 +339,10 @@ class RayCaster:
         type-6 one tet code per cell, TO a bit set and a written flag per cell."""
         return 8 * (1 if self._family == "MODEL_TYPE6" else TO_WORDS + 1)
 
-    def _check_device_memory(self, shape, cells) -> None:
+    def _check_device_memory(self, shape, cells, itemsize: int = 4) -> None:
         """Refuse, before allocating anything, a volume the device cannot hold."""
         dev = self._device.device
-        need = self.device_bytes(shape, cells)
+        need = self.device_bytes(shape, cells, itemsize)
         gib = 2.0**30
         total = sum(need.values())
         # the frame buffers and the compaction of classify_all need room beside the volume
@@ -314,7 +357,7 @@ class RayCaster:
 
     def _defines(self) -> dict:
         """-D options of this model's programs."""
-        d = {self._family: 1, **_shading_defines()}
+        d = {self._family: 1, "DATA_T": self._sample_type[1], **_shading_defines()}
         if self._family == "MODEL_TYPE6":
             d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK,
                      NPOINTS=len(self.spline.scheme.cube_points))
@@ -336,14 +379,15 @@ class RayCaster:
         # float2 (lo, hi) per node
         self._bounds = cla.empty(q, 2 * _octree_nodes(levels), np.float32)
         if self.model == "trilinear":
-            self._cls_defines = None
-            self._data = cla.to_device(q, self._volume.data)
+            tables = {}
+            self._data = cla.to_device(q, self._volume.data.astype(self._sample_type[0]))
             self._strides = self._volume.shape[1:]
             self._negmass = 0.0
         elif self._family == "MODEL_TO":
-            self._cls_defines = self._to_tables()
+            tables = self._to_tables()
         else:
-            self._cls_defines = self._type6_tables()
+            tables = self._type6_tables()
+        self._cls_defines = {**tables, "DATA_T": self._sample_type[1]}
         get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
             q, levels[0][:0:-1], None, *self._cell_args(), self._bounds.data)
         k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
@@ -371,26 +415,27 @@ class RayCaster:
         return args
 
     def _padded_samples(self, ghost: int):
-        """The samples with ``ghost`` linearly extrapolated layers, written straight into a
-        device buffer (no host copy of the padded volume).
+        """The samples with ``ghost`` linearly extrapolated layers in their device type,
+        written straight into a device buffer (no host copy of the padded volume).
 
         Returns
         -------
-        pyopencl.array.Array of shape (nx + 2 ghost, ny + 2 ghost, nz + 2 ghost), float32
+        pyopencl.array.Array of shape (nx + 2 ghost, ny + 2 ghost, nz + 2 ghost)
         """
         import pyopencl as cl
         import pyopencl.array as cla
 
         q = self._device.queue
         shape = tuple(n + 2 * ghost for n in self._volume.shape)
+        dtype = np.dtype(self._sample_type[0])
         mf = cl.mem_flags
         buf = cl.Buffer(self._device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
-                        4 * int(np.prod(shape)))
+                        dtype.itemsize * int(np.prod(shape)))
         host, _ = cl.enqueue_map_buffer(q, buf, cl.map_flags.WRITE_INVALIDATE_REGION, 0,
-                                        shape, np.float32)
+                                        shape, dtype)
         pad_linear_into(self._volume.data, ghost, host)
         host.base.release(q)
-        return cla.Array(q, shape, np.float32, data=buf)
+        return cla.Array(q, shape, dtype, data=buf)
 
     def _to_tables(self) -> dict:
         """Upload the padded samples and the tables of the truncated-octahedral model.

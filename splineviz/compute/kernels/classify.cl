@@ -1,7 +1,8 @@
 // Isovalue-independent structures of the ray caster (thesis §6.1.1, §6.2.1), built once per
 // data change, and the classification of every cell at once (RayCaster.classify_all).
 // Specialised by -D options: MODEL_TYPE6 (cubes centred at the samples, padded samples with
-// one ghost layer), MODEL_TO with GHOST (unit cells, parity-class tables), else trilinear.
+// one ghost layer), MODEL_TO with GHOST (unit cells, parity-class tables), else trilinear;
+// DATA_T the device type of the samples (uchar/short/ushort for integer data, else float).
 //
 // Cells (i, j, k) of the traversal grid (CX x CY x CZ) are numbered (i*CY + j)*CZ + k; the
 // samples are data[(i*SY + j)*SZ + k]. The min-max octree holds value bounds (lo, hi) as
@@ -11,6 +12,10 @@
 // stored levels lie one after the other; `levels` holds (offset, nx, ny, nz) from level 1.
 // The skip index of a cell for an isovalue follows from these bounds alone (raycast.cl,
 // skip_level), so nothing here is redone when the isovalue changes.
+
+#ifndef DATA_T
+#define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
+#endif
 
 #ifdef MODEL_TO
 // the TO bounds read the data offsets of the cell's parity class
@@ -27,7 +32,7 @@
 //   (sum w_q = 1) of the 27 stencil values, so it lies in [min - N (max - min),
 //   max + N (max - min)] with N = negmass, the largest negative weight mass.
 //   TO: the same, over the union of the data the cell's (TO, tet) pieces use.
-inline float2 cell_bounds(__global const float *data, int SY, int SZ, int i, int j, int k,
+inline float2 cell_bounds(__global const DATA_T *data, int SY, int SZ, int i, int j, int k,
                           float negmass CLASS_ARGS)
 {
     float lo = INFINITY, hi = -INFINITY;
@@ -61,7 +66,7 @@ inline float2 cell_bounds(__global const float *data, int SY, int SZ, int i, int
 }
 
 // Level 1 of the octree: the bounds of the (up to) 8 cells of each node.
-__kernel void brick_bounds(__global const float *data, int SY, int SZ, int CX, int CY, int CZ,
+__kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, int CY, int CZ,
                            float negmass CLASS_ARGS, __global float2 *bounds)
 {
     const int c = get_global_id(0), b = get_global_id(1), a = get_global_id(2);
@@ -100,7 +105,7 @@ __kernel void reduce_level(__global float2 *bounds,
 
 // Classification of every cell at once (RayCaster.classify_all): flag of the candidate
 // cells, whose value bounds straddle the isovalue.
-__kernel void candidates(__global const float *data, int SY, int SZ, int CX, int CY, int CZ,
+__kernel void candidates(__global const DATA_T *data, int SY, int SZ, int CX, int CY, int CZ,
                          float negmass CLASS_ARGS, float iso, __global int *flag)
 {
     const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);

@@ -10,6 +10,8 @@
 //                        codes from the NPOINTS cube coefficients
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
 //   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
+//   DATA_T               device type of the samples (uchar/short/ushort: integer data kept
+//                        in a small type, converted to float when read; else float)
 //
 // Nothing here needs a pass over the volume per isovalue (thesis §6.2.3 "only the work the
 // picture needs"): the skip index of a cell comes from the isovalue-independent min-max octree
@@ -22,6 +24,9 @@
 // units: u(t) = eye_u + t * d_u with d_u = d_world / spacing. For precision, traversal uses
 // s = t - t0 measured from the entry point into the (box ∩ clip planes) interval.
 
+#ifndef DATA_T
+#define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
+#endif
 #define BISECT_STEPS 40
 // low 24 bits of a cache entry (the top 8 bits hold the epoch of its isovalue)
 #define CODE_MASK 0xFFFFFFu
@@ -32,7 +37,7 @@ typedef struct {
     float a, bx, by, bz, bxy, bxz, byz, bxyz;
 } Trilinear;
 
-inline Trilinear trilinear_coeffs(__global const float *data, int3 cell, int NY, int NZ)
+inline Trilinear trilinear_coeffs(__global const DATA_T *data, int3 cell, int NY, int NZ)
 {
     const int base = (cell.x * NY + cell.y) * NZ + cell.z;
     const int sx = NY * NZ, sy = NZ;
@@ -343,7 +348,7 @@ inline int cell_word(int a, int3 cell)
 // First root of the type-6 spline - iso on the ray segment p0 + s d, s in [0, len], inside the
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
-inline float type6_cube_root(__global const float *pdata, int base,
+inline float type6_cube_root(__global const DATA_T *pdata, int base,
                              __constant const int *stencil, __global const int *row_ptr,
                              __global const int *cols, __global const float *masks,
                              __constant const float4 *bary, __constant const int *red,
@@ -386,7 +391,7 @@ inline float type6_cube_root(__global const float *pdata, int base,
 // (averaging) rules from already computed ones (thesis §5.1-5.2, eq. (5.2);
 // type6_rules.apply_rules is the NumPy reference). Row r of the program (CSR over the
 // stencil values, then the coefficients of rows before r at 27 + row) is the r-th point.
-inline uint type6_tet_code(__global const float *pdata, int base, __constant const int *stencil,
+inline uint type6_tet_code(__global const DATA_T *pdata, int base, __constant const int *stencil,
                            __global const int *prog_ptr, __global const int *prog_cols,
                            __global const float *prog_w, __constant const uint *point_tets,
                            float negmass, float iso)
@@ -420,7 +425,7 @@ inline uint type6_tet_code(__global const float *pdata, int base, __constant con
 // counts[1] relevant tets); rays that raced it computed the same code and count nothing.
 inline uint type6_cached_code(__global uint *slots, __global uint *pool, int pool_cap,
                               uint epoch, int3 cube, int BY, int BZ,
-                              __global const float *pdata, int base,
+                              __global const DATA_T *pdata, int base,
                               __constant const int *stencil, __global const int *prog_ptr,
                               __global const int *prog_cols, __global const float *prog_w,
                               __constant const uint *point_tets, float negmass, float iso,
@@ -445,7 +450,7 @@ inline uint type6_cached_code(__global uint *slots, __global uint *pool, int poo
 // Classification of all candidate cubes at once (RayCaster.classify_all): their tet codes,
 // written to the brick cache at this epoch (the host makes the pool big enough), and per
 // candidate the code and its relevant tets.
-__kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int NZ,
+__kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
                         __global const int *prog_ptr, __global const int *prog_cols,
                         __global const float *prog_w, __constant const uint *point_tets,
@@ -476,7 +481,7 @@ __kernel void tet_codes(__global const float *pdata, int PY, int PZ, int NY, int
 // distinct B-net point of the class's pieces (stencils into the union, pt_start per class) is
 // computed once: min <= iso <= max over a piece's coefficients iff one is <= iso and one is
 // >= iso, so each point marks the pieces whose B-net holds it (pt_pieces) in two masks.
-inline int to_relevance(__global const float *pdata, int corner, int cls,
+inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
                         __global const int *pt_start, __global const int *u_rows,
                         __global const ushort *u_cols, __global const float *u_w,
@@ -516,7 +521,7 @@ inline int to_relevance(__global const float *pdata, int corner, int cls,
 // (counts[0] cells with a relevant piece, counts[1] relevant pieces).
 inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap,
                            uint epoch, int3 cell, int BY, int BZ,
-                           __global const float *pdata, int corner, int cls,
+                           __global const DATA_T *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
                            __global const int *pt_start, __global const int *u_rows,
                            __global const ushort *u_cols, __global const float *u_w,
@@ -542,7 +547,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
 
 // Classification of all candidate cells at once (RayCaster.classify_all): the bit set and
 // the number of relevant pieces per candidate.
-__kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int CZ,
+__kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int CZ,
                        __global const int *cells, __constant const int *cls_start,
                        __constant const int *cls_offsets, __global const int *pt_start,
                        __global const int *u_rows, __global const ushort *u_cols,
@@ -564,7 +569,7 @@ __kernel void to_codes(__global const float *pdata, int PY, int PZ, int CY, int 
 // First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
 // corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
 // only those with their bit set in `words` are tested.
-inline float to_cell_root(__global const float *pdata, int corner, int cls, const uint *words,
+inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, const uint *words,
                           __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
                           __constant const int *ent_tet, __global const int *row_ptr,
@@ -606,7 +611,7 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, cons
 }
 #endif
 
-__kernel void raycast(__global const float *data,   // samples; type-6: the padded samples
+__kernel void raycast(__global const DATA_T *data,   // samples; type-6: the padded samples
                       int NX, int NY, int NZ,        // sample counts (data box [0, n-1])
                       int SY, int SZ,                // strides of `data` (i*SY*SZ + j*SZ + k)
                       int CX, int CY, int CZ,        // cells of the traversal grid per axis
