@@ -662,7 +662,7 @@ class RayCaster:
                 get_kernel(ctx, "raycast", "to_codes", self._defines())(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
-                    self._cls_start.data, self._cls_offsets.data,
+                    self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
                     *(a.data for a in self._union_csr), np.float32(self._negmass), iso,
                     bits.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)

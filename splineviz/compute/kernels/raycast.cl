@@ -483,7 +483,8 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
 // >= iso, so each point marks the pieces whose B-net holds it (pt_pieces) in two masks.
 inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
-                        __global const int *pt_start, __global const int *u_rows,
+                        __constant const int *ent_start, __global const int *pt_start,
+                        __global const int *u_rows,
                         __global const ushort *u_cols, __global const float *u_w,
                         __global const uint *pt_pieces, float negmass, float iso, uint *words)
 {
@@ -500,16 +501,18 @@ inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
     if (!(vlo - wid <= iso && iso <= vhi + wid)) return 0;
     uint below[NWORDS];
     for (int w = 0; w < NWORDS; ++w) below[w] = 0u;
+    // words holding pieces of this class (64 of 144 pieces in most classes: 2 of 5)
+    const int nw = (ent_start[cls + 1] - ent_start[cls] + 31) >> 5;
     for (int p = pt_start[cls]; p < pt_start[cls + 1]; ++p) {
         float acc = 0.0f;
         for (int q = u_rows[p]; q < u_rows[p + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
         if (acc <= iso)
-            for (int w = 0; w < NWORDS; ++w) below[w] |= pt_pieces[p * NWORDS + w];
+            for (int w = 0; w < nw; ++w) below[w] |= pt_pieces[p * NWORDS + w];
         if (acc >= iso)
-            for (int w = 0; w < NWORDS; ++w) words[w] |= pt_pieces[p * NWORDS + w];
+            for (int w = 0; w < nw; ++w) words[w] |= pt_pieces[p * NWORDS + w];
     }
     int count = 0;
-    for (int w = 0; w < NWORDS; ++w) {
+    for (int w = 0; w < nw; ++w) {
         words[w] &= below[w];
         count += popcount(words[w]);
     }
@@ -523,7 +526,8 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
                            uint epoch, int3 cell, int BY, int BZ,
                            __global const DATA_T *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
-                           __global const int *pt_start, __global const int *u_rows,
+                           __constant const int *ent_start, __global const int *pt_start,
+                           __global const int *u_rows,
                            __global const ushort *u_cols, __global const float *u_w,
                            __global const uint *pt_pieces, float negmass, float iso,
                            __global int *counts, uint *words)
@@ -534,8 +538,8 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
         for (int w = 0; w < NWORDS; ++w) words[w] = pool[at + w];
         return;
     }
-    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, pt_start, u_rows,
-                               u_cols, u_w, pt_pieces, negmass, iso, words);
+    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, pt_start,
+                               u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
     if (a < 0) return;
     for (int w = 0; w < NWORDS; ++w) pool[at + w] = words[w];
     mem_fence(CLK_GLOBAL_MEM_FENCE);  // the words before their flag
@@ -549,7 +553,8 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
 // the number of relevant pieces per candidate.
 __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int CZ,
                        __global const int *cells, __constant const int *cls_start,
-                       __constant const int *cls_offsets, __global const int *pt_start,
+                       __constant const int *cls_offsets, __constant const int *ent_start,
+                       __global const int *pt_start,
                        __global const int *u_rows, __global const ushort *u_cols,
                        __global const float *u_w, __global const uint *pt_pieces,
                        float negmass, float iso,
@@ -561,8 +566,8 @@ __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
     const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
-    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, pt_start, u_rows,
-                                 u_cols, u_w, pt_pieces, negmass, iso, words);
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start,
+                                 pt_start, u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
@@ -718,8 +723,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                 uint words[NWORDS];
                 to_cached_bits(slots, pool, pool_cap, epoch, cell, BY, BZ, data, corner, cls,
-                               cls_start, cls_offsets, pt_start, u_rows, u_cols, u_w, pt_pieces,
-                               negmass, iso, counts, words);
+                               cls_start, cls_offsets, ent_start, pt_start, u_rows, u_cols, u_w,
+                               pt_pieces, negmass, iso, counts, words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
