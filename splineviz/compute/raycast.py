@@ -380,7 +380,8 @@ class RayCaster:
         self._bounds = cla.empty(q, 2 * _octree_nodes(levels), np.float32)
         if self.model == "trilinear":
             tables = {}
-            self._data = cla.to_device(q, self._volume.data.astype(self._sample_type[0]))
+            samples = self._volume.data.astype(self._sample_type[0], copy=False)
+            self._data = cla.to_device(q, samples)
             self._strides = self._volume.shape[1:]
             self._negmass = 0.0
         elif self._family == "MODEL_TO":
