@@ -232,6 +232,16 @@ class RayCaster:
     **model_kwargs
         Passed to :func:`splineviz.build_spline` (e.g. ``k`` of ``"to-quadratic"``).
 
+    Notes
+    -----
+    Classification is visible-first: :meth:`set_isovalue` takes constant time and the first
+    frame after it classifies the cells its rays reach (so a reduced-size frame right after
+    a change is a cheap preview). ``stats``: ``active_cells``/``active_tets`` count the
+    relevant cells/tets found so far at this isovalue (type-6 and TO; ``None`` for
+    trilinear) and ``classified`` is ``"visible"``; after :meth:`classify_all` they are the
+    totals and ``classified`` is ``"all"``. ``classify_s`` is the time of the isovalue change.
+    A volume the device cannot hold raises :class:`RayCastError` before anything is allocated.
+
     Examples
     --------
     >>> import numpy as np, splineviz as sv
@@ -259,7 +269,7 @@ class RayCaster:
         self._isovalue = None
         self._spline = None
         self.stats = {"active_cells": None, "active_tets": None, "classify_s": None,
-                      "render_s": None, "device": "numpy", "path": "numpy"}
+                      "render_s": None, "device": "numpy", "path": "numpy", "classified": None}
         if self._device is not None:
             self.stats["device"] = self._device.name
             self.stats["path"] = "opencl"
