@@ -8,7 +8,7 @@
 // samples are data[(i*SY + j)*SZ + k]. The min-max octree holds value bounds (lo, hi) as
 // float2 from level 1 up: level 1 node (a, b, c) covers the cells 2a..2a+1 x 2b..2b+1 x
 // 2c..2c+1, level L+1 the level-L nodes likewise. Per-cell bounds (level 0) are not stored
-// (they would be 8 bytes per cell): the rays get them, or better, from the cells' data. All
+// (8 bytes per cell): where a cell's own bounds are needed they come from its data. All
 // stored levels lie one after the other; `levels` holds (offset, nx, ny, nz) from level 1.
 // The skip index of a cell for an isovalue follows from these bounds alone (raycast.cl,
 // skip_level), so nothing here is redone when the isovalue changes.
