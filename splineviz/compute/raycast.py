@@ -2,39 +2,45 @@
 
 Pipeline on the device, without a CPU round trip of the volume:
 
-* on a data change: per-cell value bounds (the convex-hull/min-max test of §6.1.1) and the
-  levels of a min-max octree (§6.2.1), reduced level by level;
-* on an isovalue change: classification (active flag per cell), prefix-scan compaction of the
-  active cells with pyopencl's scan (Q_class -> Q_scan -> Q_active, Fig. 6.3), and the skip
-  volume (skip index of the largest empty macro cube per cell);
+* on a data change (isovalue-independent, thesis §6.1.1, §6.2.1): the samples (padded with
+  ghost layers where the model needs them, written straight into a device buffer) and a
+  min-max octree of conservative value bounds, stored from level 1 (bricks of 2^3 cells);
+* on an isovalue change: nothing but a new cache epoch (constant time, nothing uploaded).
+  The work the picture needs is done by the rays that need it (§6.2.3): the skip index of a
+  cell comes from the octree when a ray reaches the cell, and the relevance of a candidate
+  cell's tetrahedra (its tet code, §6.1.1) is computed by the first ray that reaches it and
+  cached per brick for later frames at the same isovalue (visible-first classification; only
+  the bricks the rays reach take memory). :meth:`RayCaster.classify_all` classifies every
+  cell at once (prefix-scan compaction of the candidates, Fig. 6.3) for counts and checks;
 * per frame: one work-item per pixel; macro-cell leaping with the Heaviside plane choice,
-  cell traversal, the exact restriction of the model to the ray in each active cell, first
+  cell traversal, the exact restriction of the model to the ray in each candidate cell, first
   root, gradient, Phong headlight shading and OpenGL window depth.
 
 Models with an OpenCL kernel:
 
 * ``"trilinear"``: cells between samples; the restriction to the ray in a cell is an exact
   cubic (split at its critical points, so no root is missed).
-* ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Data
-  change: conservative per-cube bounds from the 27-point stencil (every coefficient is an
-  affine combination of it). Isovalue change: candidate cubes -> scan compaction -> per
-  candidate all cube B-coefficients and the 24-bit tet code (convex hull test per tet,
-  §6.1.1) -> an OR pyramid of the cube activity gives exact skip codes. Per frame: in each
-  relevant cube, the ray part inside each relevant tet comes from the tet's four
+* ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Cube
+  bounds from the 27-point stencil (every coefficient is an affine combination of it, widened
+  by the negative weight mass). A cube's tet code comes from its determining set and the
+  averaging rules (§5.1-5.2). The ray part inside each relevant tet comes from the tet's four
   barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
   model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
   root by the same monotone-piece cubic solver, the gradient from the last de Casteljau step.
   Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
   the neighbour table (same result, no special cases at cube faces).
+* ``"to-quadratic"`` (truncated octahedra, §5.2): unit cells of the grid with per-parity-class
+  tables of the (TO, tet) pieces meeting a cell; a cell's relevance bit set computes each
+  distinct B-net point of its pieces once, and the ray tests only the relevant pieces.
 
-``"to-quadratic"`` renders through the NumPy reference ray caster
-(:mod:`splineviz.core.raycast_reference`) until its kernel exists; ``stats["path"]`` says
-which path made the frame.
+Other models render through the NumPy reference ray caster
+(:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -43,23 +49,57 @@ from splineviz.compute.program import get_kernel
 from splineviz.core import raycast_reference as ref
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.errors import SplinevizError
+from splineviz.core.splines.registry import KERNEL_FAMILIES, MODELS
 from splineviz.core.volume import Volume
 
-#: models with an OpenCL kernel, and their -D define
-KERNEL_MODELS = {"trilinear": "MODEL_TRILINEAR", "cubic-c1": "MODEL_TYPE6",
-                 "super-quadratic": "MODEL_TYPE6", "to-quadratic": "MODEL_TO"}
-#: ghost layers of the padded samples per kernel family (as the core models pad)
-GHOSTS = {"MODEL_TYPE6": 1, "MODEL_TO": 3}
+#: ghost layers of the padded samples per kernel family (the registry's, per family define)
+GHOSTS = {define: max((s.ghost_layers for s in MODELS.values() if s.kernel_define == define),
+                      default=0) for define in KERNEL_FAMILIES.values()}
+
+
+def kernel_define(model: str) -> str | None:
+    """The ``-D`` define of the OpenCL kernel family that ray casts ``model`` (from the model
+    registry), or None when only the NumPy reference renders it."""
+    spec = MODELS.get(model)
+    return None if spec is None else spec.kernel_define
 #: 32-bit words of a cell's bit set of relevant (TO, tet) pieces (<= 144 per cell)
 TO_WORDS = 5
 #: slack of the barycentric inside test of a tetrahedron (rays on shared faces)
 TET_SLACK = 1e-6
-#: skip code of an active cell (classify.cl)
+#: skip code of a candidate cell (raycast.cl skip_codes)
 SKIP_ACTIVE = 255
+#: epochs of the per-cell classification caches: 8 bits beside 24 bits of code or pool
+#: index, 0 = never valid
+MAX_EPOCH = 255
+#: largest pool of the classification cache (24-bit entry indices beside the epoch)
+MAX_POOL = 2**24 - 1
+#: families whose per-cell classification the rays cache
+CACHED = ("MODEL_TYPE6", "MODEL_TO")
 
 
 class RayCastError(SplinevizError, ValueError):
-    """Bad ray-casting input (unknown model, volume too small, no isovalue set)."""
+    """Bad ray-casting input (unknown model, volume too small or too big, no isovalue set)."""
+
+
+@dataclass
+class Classification:
+    """Every cell classified at once (:meth:`RayCaster.classify_all`).
+
+    Attributes
+    ----------
+    cells : (n,) int32
+        Flat indices of the candidate cells (value bounds straddle the isovalue), ascending.
+    relevant : (n,) int32 or None
+        Relevant tetrahedra per candidate (coefficients straddle the isovalue); ``None`` for
+        the trilinear model.
+    codes : (n,) uint32 or (n, TO_WORDS) uint32 or None
+        Type-6: the 24-bit tet code per candidate cube; ``"to-quadratic"``: the bit set of the
+        relevant (TO, tet) pieces of the cell's parity class; ``None`` for trilinear.
+    """
+
+    cells: np.ndarray
+    relevant: np.ndarray | None
+    codes: np.ndarray | None
 
 
 def _shading_defines() -> dict:
@@ -80,16 +120,91 @@ def _shading_defines() -> dict:
 
 
 def _octree_levels(cells: tuple[int, int, int]) -> list[tuple[int, int, int, int]]:
-    """(offset, nx, ny, nz) of each min-max octree level, level 0 = the cells."""
+    """(offset, nx, ny, nz) of the stored min-max octree levels 1, 2, ... (nodes of 2^L
+    cells; level 0, the cells, is not stored: see classify.cl)."""
     levels = []
     off = 0
     dims = tuple(cells)
     while True:
+        dims = tuple((n + 1) // 2 for n in dims)
         levels.append((off, *dims))
         off += int(np.prod(dims))
         if max(dims) == 1:
             return levels
-        dims = tuple((n + 1) // 2 for n in dims)
+
+
+def _octree_nodes(levels) -> int:
+    """Nodes of all stored octree levels."""
+    return levels[-1][0] + int(np.prod(levels[-1][1:]))
+
+
+#: device sample types tried in order (numpy type, OpenCL C type) for integer-valued data
+SAMPLE_TYPES = ((np.uint8, "uchar"), (np.int16, "short"), (np.uint16, "ushort"))
+
+
+def sample_type_for(data: np.ndarray, ghost: int) -> tuple[type, str]:
+    """The device type of the samples: the smallest integer type that holds them exactly with
+    ``ghost`` linearly extrapolated layers (uint8/uint16 data, which :class:`Volume` keeps as
+    float32: 4x/2x less device memory and bandwidth), else float32.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) float32
+    ghost : ghost layers (each axis' extrapolation widens the value range by ``2 ghost``
+        times its width, and integers stay integers)
+
+    Returns
+    -------
+    (numpy type, OpenCL C type name)
+    """
+    flat = data.reshape(len(data), -1)
+    step = max(1, 2**24 // flat.shape[1])  # slabs of about 16 M samples: no big temporaries
+    lo, hi = np.inf, -np.inf
+    for i in range(0, len(flat), step):
+        s = flat[i:i + step]
+        if not np.array_equal(s, np.rint(s)):  # fractions, NaN or inf
+            return np.float32, "float"
+        lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
+    grow = (hi - lo) * ghost * sum((1 + 2 * ghost) ** a for a in range(3))
+    for np_type, cl_type in SAMPLE_TYPES:
+        info = np.iinfo(np_type)
+        if info.min <= lo - grow and hi + grow <= info.max:
+            return np_type, cl_type
+    return np.float32, "float"
+
+
+def pad_linear_into(data: np.ndarray, layers: int, out: np.ndarray) -> None:
+    """:func:`splineviz.core.splines.boundary.pad_linear` written into a smaller array type.
+
+    The ghost samples are computed one slab at a time in float64 (as the core does, up to a
+    rounding of the ghosts of earlier axes), so no float64 copy of the volume is made.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) array
+    layers : int >= 1
+    out : (nx + 2 layers, ny + 2 layers, nz + 2 layers), written; float32, or an integer
+        type that holds the padded values exactly (:func:`sample_type_for`)
+    """
+    g = layers
+    n = data.shape
+    out[g:g + n[0], g:g + n[1], g:g + n[2]] = data
+    for axis in range(3):
+        # as the core: axes before `axis` are already padded, the later ones not yet
+        region = [slice(None) if ax < axis else slice(g, g + n[ax]) for ax in range(3)]
+
+        def at(i, region=region, axis=axis):
+            r = list(region)
+            r[axis] = i
+            return tuple(r)
+
+        lo = out[at(g)].astype(np.float64), out[at(g + min(1, n[axis] - 1))].astype(np.float64)
+        hi = (out[at(g + n[axis] - 1)].astype(np.float64),
+              out[at(g + max(n[axis] - 2, 0))].astype(np.float64))
+        for m in range(1, g + 1):
+            # a single sample is repeated (its "neighbour" is itself, so the slope is 0)
+            out[at(g - m)] = (1 + m) * lo[0] - m * lo[1]
+            out[at(g + n[axis] - 1 + m)] = (1 + m) * hi[0] - m * hi[1]
 
 
 def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -123,6 +238,16 @@ class RayCaster:
     **model_kwargs
         Passed to :func:`splineviz.build_spline` (e.g. ``k`` of ``"to-quadratic"``).
 
+    Notes
+    -----
+    Classification is visible-first: :meth:`set_isovalue` takes constant time and the first
+    frame after it classifies the cells its rays reach (so a reduced-size frame right after
+    a change is a cheap preview). ``stats``: ``active_cells``/``active_tets`` count the
+    relevant cells/tets found so far at this isovalue (type-6 and TO; ``None`` for
+    trilinear) and ``classified`` is ``"visible"``; after :meth:`classify_all` they are the
+    totals and ``classified`` is ``"all"``. ``classify_s`` is the time of the isovalue change.
+    A volume the device cannot hold raises :class:`RayCastError` before anything is allocated.
+
     Examples
     --------
     >>> import numpy as np, splineviz as sv
@@ -137,20 +262,19 @@ class RayCaster:
 
     def __init__(self, volume, model: str = "cubic-c1", device: str | None = None,
                  **model_kwargs):
-        from splineviz.core.splines import MODELS
-
-        if model not in MODELS and model not in KERNEL_MODELS:
-            raise RayCastError(f"unknown spline model {model!r}; choose one of {sorted(MODELS)}")
+        if model not in MODELS:
+            raise RayCastError(f"unknown spline model {model!r}; choose one of "
+                               f"{', '.join(MODELS)}")
         self.model = model
-        self._family = KERNEL_MODELS.get(model)
+        self._family = kernel_define(model)
         self._model_kwargs = model_kwargs
         self._device = None
-        if model in KERNEL_MODELS:
+        if self._family is not None:
             self._device = try_get_device(device)
         self._isovalue = None
         self._spline = None
         self.stats = {"active_cells": None, "active_tets": None, "classify_s": None,
-                      "render_s": None, "device": "numpy", "path": "numpy"}
+                      "render_s": None, "device": "numpy", "path": "numpy", "classified": None}
         if self._device is not None:
             self.stats["device"] = self._device.name
             self.stats["path"] = "opencl"
@@ -176,84 +300,158 @@ class RayCaster:
         return self._spline
 
     def set_volume(self, volume) -> None:
-        """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt."""
+        """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt.
+
+        Raises
+        ------
+        RayCastError
+            When the device cannot hold the volume and its octree.
+        """
         if not isinstance(volume, Volume):
             volume = Volume(volume)
         if min(volume.shape) < 2:
             raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
-        self._volume = volume
-        self._spline = None
         # trilinear and TO: unit cells between samples; type-6: cubes centred at the samples
         shift = 1 if self._family == "MODEL_TYPE6" else 0
-        self._cells = tuple(n - 1 + shift for n in volume.shape)
+        cells = tuple(n - 1 + shift for n in volume.shape)
+        if self._device is not None:
+            sample_type = sample_type_for(volume.data, self._ghost())
+            self._check_device_memory(volume.shape, cells, np.dtype(sample_type[0]).itemsize)
+            self._sample_type = sample_type
+        self._volume = volume
+        self._spline = None
+        self._cells = cells
         if self._device is not None:
             self._upload()
         if self._isovalue is not None:
-            self.set_isovalue(self._isovalue)
+            self._new_epoch()
+
+    def _ghost(self) -> int:
+        """Ghost layers of the device samples."""
+        return GHOSTS.get(self._family, 0)
+
+    def device_bytes(self, shape, cells, itemsize: int = 4) -> dict:
+        """Bytes of the device buffers kept for a volume of ``shape`` (per buffer name).
+
+        Parameters
+        ----------
+        shape : (3,) samples per axis
+        cells : (3,) cells of the traversal grid per axis
+        itemsize : bytes per device sample (see :func:`sample_type_for`)
+        """
+        ghost = self._ghost()
+        levels = _octree_levels(cells)
+        out = {"samples": itemsize * int(np.prod([n + 2 * ghost for n in shape])),
+               "octree": 8 * _octree_nodes(levels)}
+        if self._family in CACHED:
+            bricks = int(np.prod(levels[0][1:]))
+            out["classification cache"] = 4 * (bricks + self._entry_words()
+                                               * _initial_pool(bricks))
+        return out
+
+    def _entry_words(self) -> int:
+        """32-bit words of a pool entry of the classification cache (8 cells of a brick):
+        type-6 one tet code per cell, TO a bit set and a written flag per cell."""
+        return 8 * (1 if self._family == "MODEL_TYPE6" else TO_WORDS + 1)
+
+    def _check_device_memory(self, shape, cells, itemsize: int = 4) -> None:
+        """Refuse, before allocating anything, a volume the device cannot hold."""
+        dev = self._device.device
+        need = self.device_bytes(shape, cells, itemsize)
+        gib = 2.0**30
+        total = sum(need.values())
+        # the frame buffers and the compaction of classify_all need room beside the volume
+        if total > 0.8 * dev.global_mem_size or max(need.values()) > dev.max_mem_alloc_size:
+            big = max(need, key=need.get)
+            raise RayCastError(
+                f"a {'x'.join(map(str, shape))} volume with the {self.model} model needs "
+                f"{total / gib:.2f} GiB of device memory ({big}: {need[big] / gib:.2f} GiB), "
+                f"but {self._device.name} has {dev.global_mem_size / gib:.2f} GiB (at most "
+                f"{dev.max_mem_alloc_size / gib:.2f} GiB per buffer); use a smaller or "
+                f"downsampled volume")
 
     def _defines(self) -> dict:
         """-D options of this model's programs."""
-        d = {self._family: 1, **_shading_defines()}
+        d = {self._family: 1, "DATA_T": self._sample_type[1], **_shading_defines()}
         if self._family == "MODEL_TYPE6":
-            d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK)
+            d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK,
+                     NPOINTS=len(self.spline.scheme.cube_points))
         elif self._family == "MODEL_TO":
-            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS)
+            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS,
+                     NUNION=self._nunion)
         return d
 
     def _upload(self):
+        """Samples, min-max octree and the cleared classification cache on the device."""
         import pyopencl.array as cla
 
         dev = self._device
         q = dev.queue
         ctx = dev.context
         levels = _octree_levels(self._cells)
-        total = levels[-1][0] + int(np.prod(levels[-1][1:]))
         self._levels = levels
         self._levels_buf = cla.to_device(q, np.array(levels, dtype=np.int32).reshape(-1, 4))
-        self._vmin = cla.empty(q, total, np.float32)
-        self._vmax = cla.empty(q, total, np.float32)
-        nx, ny, nz = self._volume.shape
-        cx, cy, cz = self._cells
+        # float2 (lo, hi) per node
+        self._bounds = cla.empty(q, 2 * _octree_nodes(levels), np.float32)
         if self.model == "trilinear":
-            cls_defines = None
-            self._data = cla.to_device(q, self._volume.data)
-            self._strides = (ny, nz)
-            k_minmax = get_kernel(ctx, "classify", "cell_minmax")
-            k_minmax(q, (cz, cy, cx), None, self._data.data, self._vmin.data,
-                     self._vmax.data, np.int32(nx), np.int32(ny), np.int32(nz))
+            tables = {}
+            samples = self._volume.data.astype(self._sample_type[0], copy=False)
+            self._data = cla.to_device(q, samples)
+            self._strides = self._volume.shape[1:]
+            self._negmass = 0.0
         elif self._family == "MODEL_TO":
-            cls_defines = self._to_tables()
-            k_bounds = get_kernel(ctx, "classify", "to_bounds", cls_defines)
-            k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
-                     np.int32(self._strides[1]), np.int32(cx), np.int32(cy), np.int32(cz),
-                     self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass),
-                     self._vmin.data, self._vmax.data)
+            tables = self._to_tables()
         else:
-            cls_defines = self._type6_tables()
-            k_bounds = get_kernel(ctx, "classify", "stencil_bounds", cls_defines)
-            k_bounds(q, (cz, cy, cx), None, self._data.data, np.int32(self._strides[0]),
-                     np.int32(self._strides[1]), np.int32(nx), np.int32(ny), np.int32(nz),
-                     np.float32(self._negmass), self._vmin.data, self._vmax.data)
-        self._cls_defines = cls_defines
-        k_reduce = get_kernel(ctx, "classify", "reduce_level", cls_defines)
+            tables = self._type6_tables()
+        self._cls_defines = {**tables, "DATA_T": self._sample_type[1]}
+        get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
+            q, levels[0][:0:-1], None, *self._cell_args(), self._bounds.data)
+        k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
         for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
-            k_reduce(q, (dz, dy, dx), None, self._vmin.data, self._vmax.data,
+            k_reduce(q, (dz, dy, dx), None, self._bounds.data,
                      *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
-        self._k_skip = get_kernel(ctx, "classify", "skip_codes", cls_defines)
-        ncell = cx * cy * cz
-        self._skip = cla.empty(q, ncell, np.uint8)
-        self._active_flags = cla.empty(q, ncell, np.int32)
-        self._active_list = cla.empty(q, ncell, np.int32)
-        self._count = cla.empty(q, 1, np.int32)
-        self._scan = _compaction_kernel(ctx)
-        if self._family == "MODEL_TO":
-            self._slots = cla.empty(q, ncell, np.int32)
-            self._bits = cla.empty(q, max(1, ncell // 64) * TO_WORDS, np.uint32)
-        if self.model != "trilinear":
-            self._tetcode = cla.zeros(q, ncell, np.uint32)
-            self._n_relevant = cla.empty(q, ncell, np.int32)
-            self._activity = cla.empty(q, total, np.uint8)
+        self._epoch = 0
+        if self._family in CACHED:
+            # the classification cache (raycast.cl): per level-1 brick a slot, (epoch << 24) |
+            # pool entry; counts: cells and tets classified at this epoch, entries asked for
+            bricks = int(np.prod(levels[0][1:]))
+            self._slots = cla.zeros(q, bricks, np.uint32)
+            self._counts = cla.zeros(q, 3, np.int32)
+            self._pool_cap = _initial_pool(bricks)
+            self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
         q.finish()
+
+    def _cell_args(self) -> list:
+        """Leading arguments of the per-cell kernels of classify.cl: data, strides, cells,
+        negative mass (and the TO class tables)."""
+        args = [self._data.data, *(np.int32(v) for v in self._strides),
+                *(np.int32(c) for c in self._cells), np.float32(self._negmass)]
+        if self._family == "MODEL_TO":
+            args += [self._cls_start.data, self._cls_offsets.data]
+        return args
+
+    def _padded_samples(self, ghost: int):
+        """The samples with ``ghost`` linearly extrapolated layers in their device type,
+        written straight into a device buffer (no host copy of the padded volume).
+
+        Returns
+        -------
+        pyopencl.array.Array of shape (nx + 2 ghost, ny + 2 ghost, nz + 2 ghost)
+        """
+        import pyopencl as cl
+        import pyopencl.array as cla
+
+        q = self._device.queue
+        shape = tuple(n + 2 * ghost for n in self._volume.shape)
+        dtype = np.dtype(self._sample_type[0])
+        mf = cl.mem_flags
+        buf = cl.Buffer(self._device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
+                        dtype.itemsize * int(np.prod(shape)))
+        host, _ = cl.enqueue_map_buffer(q, buf, cl.map_flags.WRITE_INVALIDATE_REGION, 0,
+                                        shape, dtype)
+        pad_linear_into(self._volume.data, ghost, host)
+        host.base.release(q)
+        return cla.Array(q, shape, dtype, data=buf)
 
     def _to_tables(self) -> dict:
         """Upload the padded samples and the tables of the truncated-octahedral model.
@@ -268,20 +466,18 @@ class RayCaster:
         from splineviz.compute.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
-        from splineviz.core.splines.boundary import pad_linear
 
         q = self._device.queue
-        spline = self.spline
+        k = _to_k(self._model_kwargs)  # the core spline itself is not built (a float64 copy)
         ghost = GHOSTS["MODEL_TO"]
         if ghost != to_quadratic.GHOST_LAYERS:
             raise AssertionError("TO ghost layers differ from the core model")  # a bug
-        padded = np.ascontiguousarray(pad_linear(self._volume.data, ghost), dtype=np.float32)
-        _, py, pz = padded.shape
+        self._data = self._padded_samples(ghost)
+        _, py, pz = self._data.shape
         strides = np.array([py * pz, pz, 1], dtype=np.int64)
-        self._data = cla.to_device(q, padded)
         self._strides = (py, pz)
         rows = []
-        for offsets, w in to_quadratic.stencils(spline.k):
+        for offsets, w in to_quadratic.stencils(k):
             flat = offsets @ strides
             rows.extend((flat, w[i]) for i in range(w.shape[0]))
         row_ptr = np.concatenate([[0], np.cumsum([np.count_nonzero(w) for _, w in rows])])
@@ -302,31 +498,42 @@ class RayCaster:
         if np.diff(start).max() > 32 * TO_WORDS:
             raise AssertionError("more pieces per cell than the bit set holds")  # a bug
         # union of the data offsets read by each class (for the conservative cell bounds and
-        # the private data copy of the classification), and per entry the stencils as
-        # indices into that union
-        tables = to_quadratic.stencils(spline.k)
-        cls_offsets, cls_start = [], [0]
-        u_rows, u_cols, u_w = [0], [], []
+        # the private data copy of the classification); the distinct B-net points of the
+        # class's pieces (pieces of one TO share points: each is computed once) as stencils
+        # into that union, and per point the bit set of the pieces whose B-net holds it
+        tables = to_quadratic.stencils(k)
+        cls_offsets, cls_start, pt_start = [], [0], [0]
+        u_rows, u_cols, u_w, pt_pieces = [0], [], [], []
         for c in range(8):
             pts = sorted({p for e in range(start[c], start[c + 1])
                           for p in map(tuple, tables[tet[e]][0] + base_off[e])})
             where = {p: n for n, p in enumerate(pts)}
             cls_offsets.extend(np.array(pts) @ strides)
             cls_start.append(len(cls_offsets))
+            points = {}  # stencil (union index, weight) pairs -> point of the class
             for e in range(start[c], start[c + 1]):
                 offsets, w = tables[tet[e]]
                 idx = [where[tuple(o)] for o in offsets + base_off[e]]
                 for i in range(w.shape[0]):
                     nz = np.flatnonzero(w[i])
-                    u_cols.extend(idx[n] for n in nz)
-                    u_w.extend(w[i, nz])
-                    u_rows.append(len(u_cols))
+                    key = tuple((idx[n], float(w[i, n])) for n in nz)
+                    if key not in points:
+                        points[key] = len(points)
+                        u_cols.extend(idx[n] for n in nz)
+                        u_w.extend(w[i, nz])
+                        u_rows.append(len(u_cols))
+                        pt_pieces.append(np.zeros(TO_WORDS, np.uint32))
+                    bit = e - start[c]
+                    pt_pieces[pt_start[-1] + points[key]][bit >> 5] |= np.uint32(1 << (bit & 31))
+            pt_start.append(pt_start[-1] + len(points))
         self._nunion = int(np.diff(cls_start).max())
         self._cls_start = cla.to_device(q, np.array(cls_start, np.int32))
         self._cls_offsets = cla.to_device(q, np.array(cls_offsets, np.int32))
-        self._union_csr = [cla.to_device(q, np.array(u_rows, np.int32)),
+        self._union_csr = [cla.to_device(q, np.array(pt_start, np.int32)),
+                           cla.to_device(q, np.array(u_rows, np.int32)),
                            cla.to_device(q, np.array(u_cols, np.uint16)),
-                           cla.to_device(q, np.array(u_w, np.float32))]
+                           cla.to_device(q, np.array(u_w, np.float32)),
+                           cla.to_device(q, np.concatenate(pt_pieces))]
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
@@ -337,30 +544,33 @@ class RayCaster:
         """Upload the padded samples and the constant tables of a type-6 model.
 
         All tables come from the core model (``self.spline.scheme``), so the kernel computes
-        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), the cube point
-        of each tet coefficient (24, n_d), barycentric matrices (24, 4, 4) and the
-        de Casteljau reduction tables of :mod:`splineviz.core.bform`.
+        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), per cube point
+        the tets whose B-net holds it (from ``tet_points``, (24, n_d)), barycentric matrices
+        (24, 4, 4) and the de Casteljau reduction tables of :mod:`splineviz.core.bform`.
         """
         import pyopencl.array as cla
 
         from splineviz.core import bform
         from splineviz.core.partitions import type6
         from splineviz.core.splines import type6_rules
-        from splineviz.core.splines.boundary import pad_linear
 
         q = self._device.queue
         spline = self.spline
         scheme = spline.scheme
         ghost = 1
-        padded = np.ascontiguousarray(pad_linear(self._volume.data, ghost), dtype=np.float32)
-        _, py, pz = padded.shape
-        self._data = cla.to_device(q, padded)
+        self._data = self._padded_samples(ghost)
+        _, py, pz = self._data.shape
         self._strides = (py, pz)
         stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
         self._stencil = cla.to_device(q, stencil)
         self._tet_csr = [cla.to_device(q, a) for a in _csr(scheme.tet_masks.reshape(-1, 27))]
-        self._cube_csr = [cla.to_device(q, a) for a in _csr(scheme.cube_masks)]
-        self._tet_points = cla.to_device(q, np.ascontiguousarray(scheme.tet_points, np.int32))
+        self._cube_program, order = _cube_program(scheme)
+        self._cube_program = [cla.to_device(q, a) for a in self._cube_program]
+        # per program row (cube point), the bit set of the tets whose B-net holds it
+        point_tets = np.zeros(len(scheme.cube_points), np.uint32)
+        for t, points in enumerate(scheme.tet_points):
+            point_tets[points] |= np.uint32(1 << t)
+        self._point_tets = cla.to_device(q, point_tets[order])
         self._bary = cla.to_device(
             q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
         red = [_reduction_table(k) for k in range(scheme.degree, 0, -1)]
@@ -373,103 +583,138 @@ class RayCaster:
     # -- classification ------------------------------------------------------------------
 
     def set_isovalue(self, value) -> None:
-        """Set the isovalue; classifies cells (active flags, compaction, skip volume)."""
+        """Set the isovalue.
+
+        Constant time: cells are classified by the rays that reach them (visible-first), and
+        type-6 tet codes cached for an older isovalue become invalid by a new cache epoch.
+        ``stats["active_cells"]``/``["active_tets"]`` then count, for the type-6 models, the
+        relevant cubes/tets found so far by the frames at this isovalue (``None`` for the
+        other models) until :meth:`classify_all` gives the totals.
+        """
         value = float(value)
         if not np.isfinite(value):
             raise RayCastError(f"the isovalue must be finite, got {value}")
-        self._isovalue = value
         t = time.perf_counter()
-        tets = None
-        if self._device is not None:
-            q = self._device.queue
-            cx, cy, cz = self._cells
-            self._k_skip(q, (cz, cy, cx), None, self._vmin.data, self._vmax.data,
-                         self._levels_buf.data, np.int32(len(self._levels)),
-                         np.float32(value), self._skip.data, self._active_flags.data)
-            self._scan(self._active_flags, self._active_list, self._count, queue=q)
-            count = int(self._count.get(queue=q)[0])
-            if self.model != "trilinear":
-                count, tets = self._classify_tets(value, count)
-        elif self.model == "trilinear":
-            vmin, vmax = numpy_cell_bounds(self._volume.data)
-            count = int(np.count_nonzero((vmin <= np.float32(value)) & (np.float32(value) <= vmax)))
-        else:
-            count = None  # the NumPy path of the tetrahedral models does no classification
+        if value != self._isovalue:
+            self._isovalue = value
+            self._new_epoch()
         self.stats["classify_s"] = time.perf_counter() - t
-        self.stats["active_cells"] = count
-        self.stats["active_tets"] = tets
 
-    def _classify_tets(self, value: float, candidates: int) -> tuple[int, int]:
-        """Tet codes of the candidate cubes, then exact skip codes from the activity pyramid.
+    def _new_epoch(self) -> None:
+        """Invalidate every cached classification (new isovalue or new data)."""
+        visible = 0 if self._family in CACHED else None
+        if self._device is None:
+            visible = None
+            if self.model == "trilinear":
+                vmin, vmax = numpy_cell_bounds(self._volume.data)
+                iso = np.float32(self._isovalue)
+                visible = int(np.count_nonzero((vmin <= iso) & (iso <= vmax)))
+        elif self._family in CACHED:
+            q = self._device.queue
+            self._epoch += 1
+            if self._epoch > MAX_EPOCH:
+                # the 8-bit stamp wraps: clear once every MAX_EPOCH isovalues
+                self._slots.fill(np.uint32(0), queue=q)
+                self._epoch = 1
+            self._counts.fill(np.int32(0), queue=q)  # the pool is refilled from entry 0
+        self.stats.update(active_cells=visible, active_tets=visible, classified="visible")
+        if self.model == "trilinear":
+            self.stats["active_tets"] = None
 
-        Returns (cubes with a relevant tetrahedron, relevant tetrahedra).
+    def classify_all(self) -> Classification:
+        """Classify every cell at the current isovalue (OpenCL path).
+
+        Candidate cells (value bounds straddle the isovalue) by a prefix-scan compaction
+        (thesis Fig. 6.3); for the tetrahedral models the relevant tets of each candidate. The
+        type-6 tet codes go into the cache, so the next frames use them (TO bit sets do not:
+        they would need a pool entry per candidate). Sets
+        ``stats["active_cells"]`` (cells with a relevant tet; trilinear: candidates) and
+        ``stats["active_tets"]``. Seconds on big volumes: frames do not need it.
         """
-        dev = self._device
-        q = dev.queue
-        ctx = dev.context
-        d = self._cls_defines
-        self._tetcode.fill(np.uint32(0), queue=q)
-        relevant_cubes = relevant_tets = 0
-        if candidates and self._family == "MODEL_TO":
-            import pyopencl.array as cla
+        import pyopencl.array as cla
 
-            if self._bits.size < candidates * TO_WORDS:
-                # grow with headroom so that nearby isovalues reuse the buffer
-                self._bits = cla.empty(q, (candidates * 5 // 4 + 1) * TO_WORDS, np.uint32)
-            k_to = get_kernel(ctx, "classify", "to_codes", d)
-            _, cy, cz = self._cells
-            e = self._ent
-            k_to(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
-                 np.int32(self._strides[1]), np.int32(cy), np.int32(cz),
-                 self._active_list.data, self._cls_start.data, self._cls_offsets.data,
-                 e["start"].data, *(a.data for a in self._union_csr), np.float32(value),
-                 self._tetcode.data,
-                 self._slots.data, self._bits.data, self._n_relevant.data)
-            nrel = self._n_relevant[:candidates]
-            relevant_tets = int(cla_sum(nrel, q))
-            relevant_cubes = int(cla_count_nonzero(nrel, q))
-        elif candidates:
-            k_tet = get_kernel(ctx, "classify", "tet_codes", d)
-            _, ny, nz = self._volume.shape
-            k_tet(q, (candidates,), None, self._data.data, np.int32(self._strides[0]),
-                  np.int32(self._strides[1]), np.int32(ny), np.int32(nz),
-                  self._active_list.data, self._stencil.data,
-                  *(a.data for a in self._cube_csr), self._tet_points.data,
-                  np.float32(value), self._tetcode.data, self._n_relevant.data)
-            nrel = self._n_relevant[:candidates]
-            relevant_tets = int(cla_sum(nrel, q))
-            relevant_cubes = int(cla_count_nonzero(nrel, q))
-        # the skip volume from the exact per-cube activity (an OR pyramid, §6.2.1)
+        if self._device is None or self._isovalue is None:
+            raise RayCastError("classify_all needs the OpenCL path and an isovalue")
+        q = self._device.queue
+        ctx = self._device.context
+        iso = np.float32(self._isovalue)
         ncell = int(np.prod(self._cells))
-        get_kernel(ctx, "classify", "activity_level0", d)(
-            q, (ncell,), None, self._tetcode.data, self._activity.data, np.int32(ncell))
-        k_or = get_kernel(ctx, "classify", "reduce_or", d)
-        levels = self._levels
-        for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
-            k_or(q, (dz, dy, dx), None, self._activity.data,
-                 *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
-        cx, cy, cz = self._cells
-        get_kernel(ctx, "classify", "skip_from_activity", d)(
-            q, (cz, cy, cx), None, self._activity.data, self._levels_buf.data,
-            np.int32(len(levels)), self._skip.data)
-        return relevant_cubes, relevant_tets
+        flags = cla.empty(q, ncell, np.int32)
+        get_kernel(ctx, "classify", "candidates", self._cls_defines)(
+            q, self._cells[::-1], None, *self._cell_args(), iso, flags.data)
+        listed = cla.empty(q, ncell, np.int32)
+        count = cla.empty(q, 1, np.int32)
+        _compaction_kernel(ctx)(flags, listed, count, queue=q)
+        del flags
+        n = int(count.get(queue=q)[0])
+        cells = listed[:n].get(queue=q) if n else np.zeros(0, np.int32)
+        relevant = codes = None
+        if self._family == "MODEL_TYPE6":
+            relevant, codes = np.zeros(n, np.int32), np.zeros(n, np.uint32)
+            if n:
+                nrel = cla.empty(q, n, np.int32)
+                code_buf = cla.empty(q, n, np.uint32)
+                _, ny, nz = self._volume.shape
+                # room in the pool for every candidate brick
+                ijk = np.stack(np.unravel_index(cells, self._cells))
+                bricks = len(np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:])))
+                self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + bricks)
+                get_kernel(ctx, "raycast", "tet_codes", self._defines())(
+                    q, (n,), None, self._data.data, np.int32(self._strides[0]),
+                    np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
+                    self._stencil.data, *(a.data for a in self._cube_program),
+                    self._point_tets.data, np.float32(self._negmass), iso,
+                    *self._cache_args()[:-1], code_buf.data, nrel.data)
+                relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
+            # the cache is complete: later frames count nothing new
+            self._counts[:2].set(
+                np.array([np.count_nonzero(relevant), relevant.sum()], np.int32), queue=q)
+        elif self._family == "MODEL_TO":
+            relevant, codes = np.zeros(n, np.int32), np.zeros((n, TO_WORDS), np.uint32)
+            if n:
+                nrel = cla.empty(q, n, np.int32)
+                bits = cla.empty(q, n * TO_WORDS, np.uint32)
+                _, cy, cz = self._cells
+                get_kernel(ctx, "raycast", "to_codes", self._defines())(
+                    q, (n,), None, self._data.data, np.int32(self._strides[0]),
+                    np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
+                    self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
+                    *(a.data for a in self._union_csr), np.float32(self._negmass), iso,
+                    bits.data, nrel.data)
+                relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
+        if relevant is None:
+            self.stats.update(active_cells=n, active_tets=None)
+        else:
+            self.stats.update(active_cells=int(np.count_nonzero(relevant)),
+                              active_tets=int(relevant.sum()))
+        self.stats["classified"] = "all"
+        return Classification(cells, relevant, codes)
 
     def active_cells(self) -> np.ndarray:
-        """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the active cells."""
+        """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the candidate cells."""
         if self._isovalue is None:
             raise RayCastError("set an isovalue before asking for active cells")
         if self._device is None:
             vmin, vmax = numpy_cell_bounds(self._volume.data)
             iso = np.float32(self._isovalue)
             return np.flatnonzero(((vmin <= iso) & (iso <= vmax)).ravel()).astype(np.int32)
-        n = self.stats["active_cells"]
-        return self._active_list[:n].get(queue=self._device.queue)
+        return self.classify_all().cells
 
     def skip_volume(self) -> np.ndarray:
-        """(nx-1, ny-1, nz-1) uint8 skip codes (255 = active, else macro level); OpenCL path."""
+        """(cx, cy, cz) uint8 skip codes (255 = candidate, else the empty macro level) that the
+        ray kernel derives from the min-max octree at the current isovalue; OpenCL path."""
+        import pyopencl.array as cla
+
         if self._device is None or self._isovalue is None:
             raise RayCastError("the skip volume exists on the OpenCL path after set_isovalue")
-        return self._skip.get(queue=self._device.queue).reshape(self._cells)
+        q = self._device.queue
+        skip = cla.empty(q, int(np.prod(self._cells)), np.uint8)
+        cx, cy, cz = self._cells
+        get_kernel(self._device.context, "raycast", "skip_codes", self._defines())(
+            q, (cz, cy, cx), None, self._bounds.data, self._levels_buf.data,
+            np.int32(len(self._levels)), np.int32(cx), np.int32(cy), np.int32(cz),
+            np.float32(self._isovalue), skip.data)
+        return skip.get(queue=q).reshape(self._cells)
 
     # -- rendering -----------------------------------------------------------------------
 
@@ -499,6 +744,33 @@ class RayCaster:
             frame = self._render_cl(camera, w, h, planes)
         self.stats["render_s"] = time.perf_counter() - t
         return frame
+
+    def _cache_args(self) -> list:
+        """Kernel arguments of the classification cache: slots, pool, capacity, epoch, the
+        level-1 strides, counts and the negative weight mass of the cheap bounds."""
+        _, _, by, bz = self._levels[0]
+        return [self._slots.data, self._pool.data, np.int32(self._pool_cap),
+                np.uint32(self._epoch), np.int32(by), np.int32(bz), self._counts.data,
+                np.float32(self._negmass)]
+
+    def _grow_pool(self, asked: int) -> None:
+        """Make the pool hold ``asked`` entries, its cached entries kept (their indices stay
+        valid); the bricks a full pool could not take are cached by the next frames."""
+        import pyopencl as cl
+        import pyopencl.array as cla
+
+        q = self._device.queue
+        old = self._pool_cap
+        if asked <= old:
+            return
+        cap = min(MAX_POOL, max(2 * old, asked * 5 // 4))
+        if cap > old:
+            pool = cla.empty(q, cap * self._entry_words(), np.uint32)
+            cl.enqueue_copy(q, pool.data, self._pool.data, byte_count=self._pool.nbytes)
+            self._pool, self._pool_cap = pool, cap
+        # entries asked for past the old end were never written: hand them out again
+        used = int(self._counts[2:3].get(queue=q)[0])
+        self._counts[2:3].set(np.array([min(used, old)], np.int32), queue=q)
 
     def _render_cl(self, camera, w, h, planes) -> ref.Frame:
         import pyopencl.array as cla
@@ -533,23 +805,31 @@ class RayCaster:
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
         nx, ny, nz = vol.shape
-        type6_args = []
+        model_args = []
         if self._family == "MODEL_TYPE6":
-            type6_args = [self._tetcode.data, self._stencil.data,
-                          *(a.data for a in self._tet_csr), self._bary.data, self._red.data]
+            model_args = [*self._cache_args(), self._stencil.data, *(a.data for a in self._tet_csr),
+                          *(a.data for a in self._cube_program), self._point_tets.data,
+                          self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
-            type6_args = [self._tetcode.data, self._slots.data, self._bits.data,
+            model_args = [*self._cache_args(), self._cls_start.data,
+                          self._cls_offsets.data, *(a.data for a in self._union_csr),
                           e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
               *(np.int32(c) for c in self._cells), np.float32(shift),
-              self._skip.data, *type6_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
+              self._bounds.data, self._levels_buf.data, np.int32(len(self._levels)),
+              *model_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
-                     planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
-                     np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
+              planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
+              np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
+        if self._family in CACHED:
+            cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
+            if self.stats.get("classified") == "visible":
+                self.stats.update(active_cells=cells, active_tets=tets)
+            self._grow_pool(asked)
         hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
         pos_h = pos.get(queue=q).reshape(h, w, 4)
         position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
@@ -557,6 +837,24 @@ class RayCaster:
         normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
                          color.get(queue=q).reshape(h, w, 4))
+
+
+def _to_k(model_kwargs: dict) -> float:
+    """The ``k`` of Q_k from the model options, with the core model's default and check."""
+    import inspect
+
+    from splineviz.core.splines.to_quadratic import TOQuadraticSpline
+
+    default = inspect.signature(TOQuadraticSpline).parameters["k"].default
+    k = float(model_kwargs.get("k", default))
+    if not k >= 1:
+        raise RayCastError(f"Q_k needs k >= 1, got {k}")
+    return k
+
+
+def _initial_pool(bricks: int) -> int:
+    """Entries of a new pool: enough for a view of a typical surface; it grows on demand."""
+    return int(min(MAX_POOL, max(4096, bricks // 32)))
 
 
 def _reduction_table(degree: int) -> np.ndarray:
@@ -573,6 +871,34 @@ def _reduction_table(degree: int) -> np.ndarray:
             beta[m] += 1
             out[a, m] = pos[tuple(beta)]
     return out
+
+
+def _cube_program(scheme):
+    """All cube coefficients of a type-6 scheme as one ordered sparse program (thesis §5.1-5.2).
+
+    Row r computes cube point ``order[r]``: the determining set first, from the 27 stencil
+    values (columns 0..26, weights of ``scheme.determining_masks``), then every other point by
+    its averaging rule in application order, from points of earlier rows (column 27 + row);
+    the same values as :func:`splineviz.core.splines.type6_rules.apply_rules`, with about
+    40 % of the multiply-adds of the full cube masks for cubic-c1 (840 instead of 2061).
+
+    Returns
+    -------
+    (row_ptr int32 (P+1,), cols int32, weights float32), order (P,) int
+    """
+    order = [int(p) for p in scheme.determining] + [int(t) for t, _, _ in scheme.rules]
+    if sorted(order) != list(range(len(scheme.cube_points))):
+        raise AssertionError("the rules do not give every cube point once")  # a bug
+    row = {p: r for r, p in enumerate(order)}
+    rows = [(np.flatnonzero(m), m[m != 0]) for m in scheme.determining_masks]
+    for target, src, w in scheme.rules:
+        if max(row[int(p)] for p in src) >= row[int(target)]:
+            raise AssertionError("a rule reads a point computed after it")  # a bug
+        rows.append((27 + np.array([row[int(p)] for p in src]), np.asarray(w, float)))
+    row_ptr = np.concatenate([[0], np.cumsum([len(c) for c, _ in rows])]).astype(np.int32)
+    cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
+    weights = np.concatenate([w for _, w in rows]).astype(np.float32)
+    return (row_ptr, cols, weights), np.array(order)
 
 
 def _csr(masks: np.ndarray):

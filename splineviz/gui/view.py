@@ -162,8 +162,7 @@ class View3D(QObject):
         if not self.spline_scene.needs_refine():
             return
         view = self.spline_scene.view_state()
-        slow = any(layer.needs_classification() for layer in self.spline_scene.layers)
-        self.busy.emit("classifying cells and ray casting..." if slow else "ray casting...")
+        self.busy.emit("ray casting...")
         self._refine_job = self._refiner.run("rendering", self.spline_scene.refine, view,
                                              on_done=self._refined, on_error=self._failed,
                                              cancellable=False)

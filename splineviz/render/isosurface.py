@@ -271,19 +271,8 @@ class IsosurfaceLayer:
         """``"opencl"`` or ``"numpy"``: how exact frames of this layer are made."""
         return self._casters()[0].stats.get("path", "numpy")
 
-    @property
-    def classify_seconds(self) -> float | None:
-        """Time of the exact caster's last classification (None before the first)."""
-        rc = self._caster
-        return None if rc is None else rc.stats.get("classify_s")
-
-    def needs_classification(self) -> bool:
-        """Whether the next exact frame must classify cells first (a new isovalue/data)."""
-        rc = self._caster
-        return rc is None or rc.isovalue != self._isovalue
-
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
-                blocking: bool = True, classify: bool = True) -> RenderedFrame | None:
+                blocking: bool = True) -> RenderedFrame | None:
         """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
 
         Parameters
@@ -296,9 +285,10 @@ class IsosurfaceLayer:
         blocking : bool
             If False, return None instead of waiting while another thread uses the caster
             or instead of building the casters (the GUI thread's previews).
-        classify : bool
-            If False, return None instead of classifying cells for a new isovalue (seconds
-            on big volumes with the smooth models: the GUI leaves that to a worker).
+
+        A new isovalue costs nothing here: the ray caster classifies only the cells the rays
+        of this frame reach (visible-first), so a reduced-resolution preview of a new
+        isovalue is as cheap as any other preview.
         """
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
@@ -314,8 +304,6 @@ class IsosurfaceLayer:
             if rc is not (self._preview if use_fast else self._caster):
                 return None  # the model changed meanwhile
             if rc.isovalue != self._isovalue:
-                if not classify:
-                    return None
                 rc.set_isovalue(self._isovalue)
             t = time.perf_counter()
             frame = rc.render(view.camera, size=(sw, sh),

@@ -43,12 +43,6 @@ MIN_PREVIEW_SCALE = 1.0 / 16.0
 #: drag step a new size and stalled the window for that long. With these few levels each
 #: size of a window is compiled once (and PoCL keeps it in its disk cache).
 PREVIEW_LEVELS = tuple(2.0 ** (-k / 2.0) for k in range(9))
-#: a preview may classify cells for a new isovalue itself when the last classification took
-#: at most this long (or, before the first, when the volume has at most
-#: :data:`PREVIEW_CLASSIFY_SAMPLES` samples); else the refinement worker classifies and the
-#: window keeps the previous frame meanwhile
-PREVIEW_CLASSIFY_S = 0.05
-PREVIEW_CLASSIFY_SAMPLES = 300_000
 
 
 class SceneError(SplinevizError, ValueError):
@@ -264,11 +258,7 @@ class SplineScene:
                 self._show(layer, layer.compute(view))
             else:
                 scale, fast = self._preview_scale(layer, lv, view)
-                cs = layer.classify_seconds
-                quick = (layer.volume.data.size <= PREVIEW_CLASSIFY_SAMPLES if cs is None
-                         else cs <= PREVIEW_CLASSIFY_S)
-                rf = layer.compute(view, scale=scale, preview=fast, blocking=False,
-                                   classify=quick)
+                rf = layer.compute(view, scale=scale, preview=fast, blocking=False)
                 if rf is not None:  # else a worker holds the caster: keep the old frame
                     size = rf.frame.hit.shape
                     lv.preview_seconds = rf.seconds if size in lv.preview_sizes else None

@@ -127,7 +127,19 @@ def test_type6_tet_codes_match_core_coefficients(model):
     vol, iso = marschner_lobb(13)
     rc = RayCaster(vol, model=model)
     rc.set_isovalue(iso)
-    codes = rc._tetcode.get(queue=rc._device.queue)
+    cls = rc.classify_all()
+    codes = np.zeros(int(np.prod(rc._cells)), np.uint32)
+    codes[cls.cells] = cls.codes
+    # classify_all fills the brick cache that the frames read, at the current epoch: per
+    # level-1 brick a slot (epoch << 24 | pool entry), per cube of it VALID | tet code
+    q = rc._device.queue
+    slots, pool = rc._slots.get(queue=q), rc._pool.get(queue=q)
+    i, j, k = np.unravel_index(cls.cells, rc._cells)
+    _, _, by, bz = rc._levels[0]
+    slot = slots[((i >> 1) * by + (j >> 1)) * bz + (k >> 1)]
+    np.testing.assert_array_equal(slot >> 24, rc._epoch)
+    entry = pool[(slot & 0xFFFFFF) * 8 + (((i & 1) << 2) | ((j & 1) << 1) | (k & 1))]
+    np.testing.assert_array_equal(entry, cls.codes | np.uint32(0x80000000))
     spline = rc.spline
     cubes = spline.all_cubes()
     bits = np.zeros((len(cubes), 24), dtype=bool)
@@ -154,27 +166,35 @@ def test_classification_compaction_and_skip_volume():
     rc.set_isovalue(0.6)
     vmin, vmax = numpy_cell_bounds(vol.data)
     active = (vmin <= np.float32(0.6)) & (np.float32(0.6) <= vmax)
+    np.testing.assert_array_equal(rc.active_cells(), np.flatnonzero(active.ravel()))
     assert rc.stats["active_cells"] == active.sum() > 0
-    np.testing.assert_array_equal(np.sort(rc.active_cells()), np.flatnonzero(active.ravel()))
+    # skip codes: 255 where the level-1 node (2^3 cells) may hold the surface, else the
+    # largest empty macro cube, from a NumPy min-max octree of the cell bounds
+    iso = np.float32(0.6)
+    lo, hi = vmin, vmax
+    expected = np.full(active.shape, -1)
+    empty_so_far = np.ones(active.shape, bool)
+    idx = np.indices(active.shape)
+    for level in range(1, int(np.ceil(np.log2(max(active.shape)))) + 1):
+        pad = [(0, n % 2) for n in lo.shape]
+        lo = np.pad(lo, pad, constant_values=np.inf)
+        hi = np.pad(hi, pad, constant_values=-np.inf)
+        shape = [n // 2 for n in lo.shape]
+        lo = lo.reshape(shape[0], 2, shape[1], 2, shape[2], 2).min(axis=(1, 3, 5))
+        hi = hi.reshape(shape[0], 2, shape[1], 2, shape[2], 2).max(axis=(1, 3, 5))
+        node = tuple(i >> level for i in idx)
+        empty_so_far &= ~((lo <= iso) & (iso <= hi))[node]
+        expected[empty_so_far] = level
     skip = rc.skip_volume()
-    np.testing.assert_array_equal(skip == 255, active)
-    top = int(np.ceil(np.log2(max(active.shape))))
-    for (i, j, k), code in np.ndenumerate(skip):
-        if code == 255:
-            continue
-        L = int(code)
-        lo = np.array([i, j, k]) >> L << L
-        block = active[lo[0]:lo[0] + 2**L, lo[1]:lo[1] + 2**L, lo[2]:lo[2] + 2**L]
-        assert not block.any()  # the macro cube is empty ...
-        if L < top:  # ... and maximal: the next larger one is not
-            lo2 = np.array([i, j, k]) >> (L + 1) << (L + 1)
-            big = active[lo2[0]:lo2[0] + 2**(L + 1), lo2[1]:lo2[1] + 2**(L + 1),
-                         lo2[2]:lo2[2] + 2**(L + 1)]
-            assert big.any()
+    np.testing.assert_array_equal(skip, np.where(expected < 0, 255, expected))
+    assert (skip == 255).any() and (skip != 255).any() and (skip > 1).any()
+    assert not active[skip != 255].any()  # leaping never skips a candidate cell
     # a new isovalue reclassifies; a new volume rebuilds the octree
     rc.set_isovalue(10.0)
-    assert rc.stats["active_cells"] == 0
+    assert len(rc.active_cells()) == 0 and rc.stats["active_cells"] == 0
+    assert (rc.skip_volume() != 255).all()
     rc.set_volume(Volume(vol.data * 10))
+    rc.classify_all()
     assert rc.stats["active_cells"] == np.sum((vmin * 10 <= 10) & (10 <= vmax * 10))
 
 
@@ -187,7 +207,12 @@ def test_empty_space_leaping_changes_nothing():
     cam = cameras(vol)[1]
     leaped = rc.render(cam, (80, 60))
     assert (rc.skip_volume() != 255).any()
-    rc._skip.fill(np.uint8(255), queue=rc._device.queue)
+    # octree bounds that hold every isovalue: every cell a candidate, nothing leaped
+    q = rc._device.queue
+    b = rc._bounds.get(queue=q)
+    b[0::2], b[1::2] = -np.inf, np.inf
+    rc._bounds.set(b, queue=q)
+    assert (rc.skip_volume() == 255).all()
     dense = rc.render(cam, (80, 60))
     np.testing.assert_array_equal(leaped.hit, dense.hit)
     np.testing.assert_allclose(leaped.position[leaped.hit], dense.position[dense.hit], atol=1e-4)
@@ -219,10 +244,8 @@ def test_to_relevance_bits_match_core_coefficients():
     vol, iso = marschner_lobb(9)
     rc = RayCaster(vol, model="to-quadratic")
     rc.set_isovalue(iso)
-    q = rc._device.queue
-    anycode = rc._tetcode.get(queue=q)
-    slots = rc._slots.get(queue=q)
-    bits = rc._bits.get(queue=q).reshape(-1, 5)
+    result = rc.classify_all()
+    slot = dict(zip(result.cells.tolist(), range(len(result.cells)), strict=True))
     start, centre, tet = cell_classes()
     spline = rc.spline
     cells = np.argwhere(np.ones(rc._cells, bool))
@@ -233,8 +256,8 @@ def test_to_relevance_bits_match_core_coefficients():
         base = np.rint(centre[ents] + (i, j, k) - 0.5).astype(np.int64) + 3
         c = to_quadratic.coefficients(spline._padded, base, tet[ents], spline.k)
         want = (c.min(axis=1) <= iso) & (iso <= c.max(axis=1))
-        if anycode[flat]:
-            words = bits[slots[flat]]
+        if flat in slot:
+            words = result.codes[slot[flat]]
             got = np.array([(words[e >> 5] >> (e & 31)) & 1 for e in range(len(ents))], bool)
         else:
             got = np.zeros(len(ents), bool)

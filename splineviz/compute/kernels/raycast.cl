@@ -2,22 +2,34 @@
 // pixel. Specialised by -D options:
 //   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
 //   MODEL_TO, GHOST      the truncated-octahedral spline Q_k (DEGREE 2): unit cells of the
-//                        grid with per-parity-class (TO, tet) tables and per-cell bit sets
+//   NUNION, NWORDS       grid with per-parity-class (TO, tet) tables and per-cell bit sets of
+//                        the relevant pieces
 //   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
-//                        the relevant tets from the 27-point data stencil, blossoms of the
-//                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2)
+//   NPOINTS              the relevant tets from the 27-point data stencil, blossoms of the
+//                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2); tet
+//                        codes from the NPOINTS cube coefficients
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
-//   SKIP_ACTIVE          skip code of an active cell (see classify.cl)
+//   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
+//   DATA_T               device type of the samples (uchar/short/ushort: integer data kept
+//                        in a small type, converted to float when read; else float)
+//
+// Nothing here needs a pass over the volume per isovalue (thesis §6.2.3 "only the work the
+// picture needs"): the skip index of a cell comes from the isovalue-independent min-max octree
+// of classify.cl when a ray reaches the cell, and the tet code of a type-6 cube (§6.1.1; TO:
+// the cell's bit set of relevant pieces) is computed by the first ray that reaches it and
+// cached per brick of 2^3 cells, stamped with the epoch of the isovalue (an isovalue change
+// bumps the epoch, which invalidates every cached code at once).
 //
 // Rays live in index space (sample data[i,j,k] at (i,j,k)); the ray parameter t is in world
 // units: u(t) = eye_u + t * d_u with d_u = d_world / spacing. For precision, traversal uses
 // s = t - t0 measured from the entry point into the (box ∩ clip planes) interval.
 
+#ifndef DATA_T
+#define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
+#endif
 #define BISECT_STEPS 40
-
-typedef struct {
-    float c[8];  // corners c[4 di + 2 dj + dk]
-} Cell;
+// low 24 bits of a cache entry (the top 8 bits hold the epoch of its isovalue)
+#define CODE_MASK 0xFFFFFFu
 
 // Monomial coefficients of the trilinear interpolant on [0,1]^3:
 // f = a + bx x + by y + bz z + bxy xy + bxz xz + byz yz + bxyz xyz
@@ -25,7 +37,7 @@ typedef struct {
     float a, bx, by, bz, bxy, bxz, byz, bxyz;
 } Trilinear;
 
-inline Trilinear trilinear_coeffs(__global const float *data, int3 cell, int NY, int NZ)
+inline Trilinear trilinear_coeffs(__global const DATA_T *data, int3 cell, int NY, int NZ)
 {
     const int base = (cell.x * NY + cell.y) * NZ + cell.z;
     const int sx = NY * NZ, sy = NZ;
@@ -206,6 +218,37 @@ inline float3 exit_params(float3 ue, float3 d, float3 inv_d, int3 lo, int3 hi)
 
 inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t.z ? 1 : 2); }
 
+// Skip index of `cell` at isovalue iso (thesis §6.2.1): -1 when the bounds of its level-1
+// node (2^3 cells) straddle iso (the cell is a candidate; its own bounds are not stored, the
+// cell's classification decides), else the highest level L whose octree node holding the cell
+// has bounds that exclude iso (an empty macro cube of 2^L cells). A node's bounds contain
+// those of its children, so the empty levels of a cell are 1..L: the walk goes up from level
+// 1 and stops at the first node that may hold the surface. levels[l - 1] is level l.
+inline int skip_level(__global const float2 *bounds, __constant const int4 *levels,
+                      int n_levels, int3 cell, float iso)
+{
+    int L = -1;
+    for (int l = 1; l <= n_levels; ++l) {
+        const int4 lv = levels[l - 1];
+        const float2 b = bounds[lv.x + (((cell.x >> l) * lv.z + (cell.y >> l)) * lv.w
+                                        + (cell.z >> l))];
+        if (b.x <= iso && iso <= b.y) break;
+        L = l;
+    }
+    return L;
+}
+
+// Skip codes of all CX x CY x CZ cells (SKIP_ACTIVE or the macro level), for inspection and
+// tests: the same skip_level the ray kernel evaluates on the fly.
+__kernel void skip_codes(__global const float2 *bounds, __constant const int4 *levels,
+                         int n_levels, int CX, int CY, int CZ, float iso, __global uchar *skip)
+{
+    const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
+    if (i >= CX || j >= CY || k >= CZ) return;
+    const int L = skip_level(bounds, levels, n_levels, (int3)(i, j, k), iso);
+    skip[(i * CY + j) * CZ + k] = L < 0 ? SKIP_ACTIVE : (uchar)L;
+}
+
 #if defined(MODEL_TYPE6) || defined(MODEL_TO)
 // The part [*lo, *hi] of the segment p0 + s d, s in [0, hi], inside the tetrahedron with
 // barycentric rows r0..r3 (its four plane equations, thesis §6.2.2); false if empty.
@@ -260,11 +303,52 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
 }
 #endif
 
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
+// ---- the classification cache (visible-first classification, thesis §6.1.1, §6.2.3) ----
+// Per level-1 node of the octree (a brick of 2^3 cells) one slot: (epoch << 24) | pool
+// entry; a slot of an older epoch (another isovalue) is invalid. A pool entry holds
+// CELL_WORDS words for each of the brick's 8 cells: type-6: VALID | the 24-bit tet code;
+// TO: the NWORDS words of the relevance bit set, then a word that is 1 once they are written.
+// Only the bricks the rays reach take pool entries.
+#ifdef MODEL_TYPE6
+#define CELL_WORDS 1
+#else
+#define CELL_WORDS (NWORDS + 1)
+#endif
+#define VALID 0x80000000u
+
+// Pool entry of the brick holding `cell` at this epoch, allocated (zeroed) and published by
+// the first ray that needs it; -1 when the pool is full (the caller then works uncached;
+// counts[2], the entries asked for, tells the host to grow the pool).
+inline int brick_entry(__global uint *slots, __global uint *pool, int pool_cap, uint epoch,
+                       int3 cell, int BY, int BZ, __global int *counts)
+{
+    const int b = ((cell.x >> 1) * BY + (cell.y >> 1)) * BZ + (cell.z >> 1);
+    const uint e = slots[b];
+    if ((e >> 24) == epoch) return (int)(e & CODE_MASK);
+    const int a = atomic_inc(&counts[2]);
+    if (a >= pool_cap) return -1;
+    for (int w = 0; w < 8 * CELL_WORDS; ++w) pool[a * 8 * CELL_WORDS + w] = 0u;
+    mem_fence(CLK_GLOBAL_MEM_FENCE);  // the zeroed entry before its slot
+    const uint old = atomic_cmpxchg((volatile __global uint *)&slots[b], e,
+                                    (epoch << 24) | (uint)a);
+    if (old == e) return a;
+    // another ray published the brick first: its entry holds the brick (ours is unused)
+    return (old >> 24) == epoch ? (int)(old & CODE_MASK) : -1;
+}
+
+// First word of `cell`'s part of pool entry a.
+inline int cell_word(int a, int3 cell)
+{
+    return (a * 8 + (((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1))) * CELL_WORDS;
+}
+#endif
+
 #ifdef MODEL_TYPE6
 // First root of the type-6 spline - iso on the ray segment p0 + s d, s in [0, len], inside the
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
-inline float type6_cube_root(__global const float *pdata, int base,
+inline float type6_cube_root(__global const DATA_T *pdata, int base,
                              __constant const int *stencil, __global const int *row_ptr,
                              __global const int *cols, __global const float *masks,
                              __constant const float4 *bary, __constant const int *red,
@@ -298,14 +382,200 @@ inline float type6_cube_root(__global const float *pdata, int base,
     }
     return best;
 }
+
+// The 24-bit tet code of the cube whose stencil starts at `base`: bit t set when the
+// B-coefficients of tet t straddle the isovalue (convex hull property, thesis §6.1.1). First
+// the cheap cube bounds of classify.cl (stencil range widened by the negative weight mass):
+// most cubes the rays reach end there. Then all cube coefficients by the cube program: the
+// determining set from the 27 stencil values, every other coefficient by the smoothness
+// (averaging) rules from already computed ones (thesis §5.1-5.2, eq. (5.2);
+// type6_rules.apply_rules is the NumPy reference). Row r of the program (CSR over the
+// stencil values, then the coefficients of rows before r at 27 + row) is the r-th point.
+inline uint type6_tet_code(__global const DATA_T *pdata, int base, __constant const int *stencil,
+                           __global const int *prog_ptr, __global const int *prog_cols,
+                           __global const float *prog_w, __constant const uint *point_tets,
+                           float negmass, float iso)
+{
+    float vals[27 + NPOINTS];
+    float vlo = INFINITY, vhi = -INFINITY;
+    for (int q = 0; q < 27; ++q) {
+        vals[q] = pdata[base + stencil[q]];
+        vlo = fmin(vlo, vals[q]);
+        vhi = fmax(vhi, vals[q]);
+    }
+    const float w = negmass * (vhi - vlo);
+    if (!(vlo - w <= iso && iso <= vhi + w)) return 0u;
+    // min <= iso <= max over a tet's coefficients iff one is <= iso and one is >= iso: each
+    // cube point marks the tets whose B-net holds it (point_tets) in two masks
+    uint below = 0u, above = 0u;
+    // the program lives in global memory (cached) so that constant memory stays small on
+    // GPUs (64 KB, 8-9 args)
+    for (int r = 0; r < NPOINTS; ++r) {
+        float acc = 0.0f;
+        for (int e = prog_ptr[r]; e < prog_ptr[r + 1]; ++e) acc += prog_w[e] * vals[prog_cols[e]];
+        vals[27 + r] = acc;
+        below |= acc <= iso ? point_tets[r] : 0u;
+        above |= acc >= iso ? point_tets[r] : 0u;
+    }
+    return below & above;
+}
+
+// The tet code of `cube` at this epoch: from the brick cache, or computed and stored. The
+// first ray to store a cube's code also counts it (counts[0] cubes with a relevant tet,
+// counts[1] relevant tets); rays that raced it computed the same code and count nothing.
+inline uint type6_cached_code(__global uint *slots, __global uint *pool, int pool_cap,
+                              uint epoch, int3 cube, int BY, int BZ,
+                              __global const DATA_T *pdata, int base,
+                              __constant const int *stencil, __global const int *prog_ptr,
+                              __global const int *prog_cols, __global const float *prog_w,
+                              __constant const uint *point_tets, float negmass, float iso,
+                              __global int *counts)
+{
+    const int a = brick_entry(slots, pool, pool_cap, epoch, cube, BY, BZ, counts);
+    const int at = a >= 0 ? cell_word(a, cube) : 0;
+    if (a >= 0) {
+        const uint v = pool[at];
+        if (v & VALID) return v & CODE_MASK;
+    }
+    const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
+                                     point_tets, negmass, iso);
+    if (a >= 0 && atomic_cmpxchg((volatile __global uint *)&pool[at], 0u, VALID | code) == 0u
+        && code != 0u) {
+        atomic_inc(&counts[0]);
+        atomic_add(&counts[1], (int)popcount(code));
+    }
+    return code;
+}
+
+// Classification of all candidate cubes at once (RayCaster.classify_all): their tet codes,
+// written to the brick cache at this epoch (the host makes the pool big enough), and per
+// candidate the code and its relevant tets.
+__kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, int NZ,
+                        __global const int *cubes, __constant const int *stencil,
+                        __global const int *prog_ptr, __global const int *prog_cols,
+                        __global const float *prog_w, __constant const uint *point_tets,
+                        float negmass, float iso, __global uint *slots, __global uint *pool,
+                        int pool_cap, uint epoch, int BY, int BZ, __global int *counts,
+                        __global uint *code_out, __global int *n_relevant)
+{
+    const int g = get_global_id(0);
+    const int cube = cubes[g];
+    const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
+    const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
+    const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
+                                     point_tets, negmass, iso);
+    const int3 c3 = (int3)(i, j, k);
+    const int a = brick_entry(slots, pool, pool_cap, epoch, c3, BY, BZ, counts);
+    if (a >= 0) pool[cell_word(a, c3)] = VALID | code;
+    code_out[g] = code;
+    n_relevant[g] = popcount(code);
+}
 #endif
 
 #ifdef MODEL_TO
+// Relevance bit set of the (TO, tet) pieces of a cell (bit e - ent_start[cls]: the piece's
+// B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO);
+// returns the number of relevant pieces. The data a cell's pieces read (the class union, at
+// most NUNION values) are gathered once. First the cheap cell bounds of classify.cl (their
+// range widened by the negative weight mass): most cells the rays reach end there. Then each
+// distinct B-net point of the class's pieces (stencils into the union, pt_start per class) is
+// computed once: min <= iso <= max over a piece's coefficients iff one is <= iso and one is
+// >= iso, so each point marks the pieces whose B-net holds it (pt_pieces) in two masks.
+inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
+                        __constant const int *cls_start, __constant const int *cls_offsets,
+                        __constant const int *ent_start, __global const int *pt_start,
+                        __global const int *u_rows,
+                        __global const ushort *u_cols, __global const float *u_w,
+                        __global const uint *pt_pieces, float negmass, float iso, uint *words)
+{
+    float vals[NUNION];
+    const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
+    float vlo = INFINITY, vhi = -INFINITY;
+    for (int u = 0; u < nu; ++u) {
+        vals[u] = pdata[corner + cls_offsets[u0 + u]];
+        vlo = fmin(vlo, vals[u]);
+        vhi = fmax(vhi, vals[u]);
+    }
+    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+    const float wid = negmass * (vhi - vlo);
+    if (!(vlo - wid <= iso && iso <= vhi + wid)) return 0;
+    uint below[NWORDS];
+    for (int w = 0; w < NWORDS; ++w) below[w] = 0u;
+    // words holding pieces of this class (64 of 144 pieces in most classes: 2 of 5)
+    const int nw = (ent_start[cls + 1] - ent_start[cls] + 31) >> 5;
+    for (int p = pt_start[cls]; p < pt_start[cls + 1]; ++p) {
+        float acc = 0.0f;
+        for (int q = u_rows[p]; q < u_rows[p + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
+        if (acc <= iso)
+            for (int w = 0; w < nw; ++w) below[w] |= pt_pieces[p * NWORDS + w];
+        if (acc >= iso)
+            for (int w = 0; w < nw; ++w) words[w] |= pt_pieces[p * NWORDS + w];
+    }
+    int count = 0;
+    for (int w = 0; w < nw; ++w) {
+        words[w] &= below[w];
+        count += popcount(words[w]);
+    }
+    return count;
+}
+
+// The bit set of `cell` at this epoch: from the brick cache, or computed by this ray and
+// stored (words first, then the written flag). The first ray to store a cell counts it
+// (counts[0] cells with a relevant piece, counts[1] relevant pieces).
+inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap,
+                           uint epoch, int3 cell, int BY, int BZ,
+                           __global const DATA_T *pdata, int corner, int cls,
+                           __constant const int *cls_start, __constant const int *cls_offsets,
+                           __constant const int *ent_start, __global const int *pt_start,
+                           __global const int *u_rows,
+                           __global const ushort *u_cols, __global const float *u_w,
+                           __global const uint *pt_pieces, float negmass, float iso,
+                           __global int *counts, uint *words)
+{
+    const int a = brick_entry(slots, pool, pool_cap, epoch, cell, BY, BZ, counts);
+    const int at = a >= 0 ? cell_word(a, cell) : 0;
+    if (a >= 0 && pool[at + NWORDS] != 0u) {
+        for (int w = 0; w < NWORDS; ++w) words[w] = pool[at + w];
+        return;
+    }
+    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, pt_start,
+                               u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
+    if (a < 0) return;
+    for (int w = 0; w < NWORDS; ++w) pool[at + w] = words[w];
+    mem_fence(CLK_GLOBAL_MEM_FENCE);  // the words before their flag
+    if (atomic_cmpxchg((volatile __global uint *)&pool[at + NWORDS], 0u, 1u) == 0u && n > 0) {
+        atomic_inc(&counts[0]);
+        atomic_add(&counts[1], n);
+    }
+}
+
+// Classification of all candidate cells at once (RayCaster.classify_all): the bit set and
+// the number of relevant pieces per candidate.
+__kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int CZ,
+                       __global const int *cells, __constant const int *cls_start,
+                       __constant const int *cls_offsets, __constant const int *ent_start,
+                       __global const int *pt_start,
+                       __global const int *u_rows, __global const ushort *u_cols,
+                       __global const float *u_w, __global const uint *pt_pieces,
+                       float negmass, float iso,
+                       __global uint *bits, __global int *n_relevant)
+{
+    const int a = get_global_id(0);
+    const int cell = cells[a];
+    const int k = cell % CZ, j = (cell / CZ) % CY, i = cell / (CY * CZ);
+    const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
+    const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
+    uint words[NWORDS];
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start,
+                                 pt_start, u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
+    for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
+}
+
 // First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
 // corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
-// only those with their bit set are tested.
-inline float to_cell_root(__global const float *pdata, int corner, int cls, int slot,
-                          __global const uint *bits, __constant const int *ent_start,
+// only those with their bit set in `words` are tested.
+inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, const uint *words,
+                          __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
                           __constant const int *ent_tet, __global const int *row_ptr,
                           __global const int *cols, __global const float *weights,
@@ -316,7 +586,7 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, int 
     const int e0 = ent_start[cls];
     for (int e = e0; e < ent_start[cls + 1]; ++e) {
         const int q = e - e0;
-        if (!(bits[slot * NWORDS + (q >> 5)] & (1u << (q & 31)))) continue;
+        if (!(words[q >> 5] & (1u << (q & 31)))) continue;
         const int t = ent_tet[e];
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
                      r3 = bary[4 * t + 3];
@@ -346,21 +616,30 @@ inline float to_cell_root(__global const float *pdata, int corner, int cls, int 
 }
 #endif
 
-__kernel void raycast(__global const float *data,   // samples; type-6: the padded samples
+__kernel void raycast(__global const DATA_T *data,   // samples; type-6: the padded samples
                       int NX, int NY, int NZ,        // sample counts (data box [0, n-1])
                       int SY, int SZ,                // strides of `data` (i*SY*SZ + j*SZ + k)
-                      int CX, int CY, int CZ,        // cells of the skip volume per axis
+                      int CX, int CY, int CZ,        // cells of the traversal grid per axis
                       float grid_shift,              // cell c covers [c, c+1) - shift in u
-                      __global const uchar *skip,
+                      __global const float2 *bounds,  // min-max octree (classify.cl)
+                      __constant const int4 *levels, int n_levels,
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
+                      __global uint *slots, __global uint *pool, int pool_cap, uint epoch,
+                      int BY, int BZ, __global int *counts, float negmass,
+#endif
 #ifdef MODEL_TYPE6
-                      __global const uint *tetcode,
                       __constant const int *stencil, __global const int *row_ptr,
                       __global const int *cols, __global const float *masks,
+                      __global const int *prog_ptr, __global const int *prog_cols,
+                      __global const float *prog_w, __constant const uint *point_tets,
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
-                      __global const uint *anycode, __global const int *slots,
-                      __global const uint *bits, __constant const int *ent_start,
+                      __constant const int *cls_start,
+                      __constant const int *cls_offsets, __global const int *pt_start,
+                      __global const int *u_rows, __global const ushort *u_cols,
+                      __global const float *u_w, __global const uint *pt_pieces,
+                      __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
                       __constant const int *ent_tet, __global const int *row_ptr,
                       __global const int *cols, __global const float *weights,
@@ -420,9 +699,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
         float s = 0.0f;
         const int max_steps = 4 * (CX + CY + CZ) + 16;
         for (int step = 0; step < max_steps; ++step) {
-            const int c = (cell.x * ncell.y + cell.y) * ncell.z + cell.z;
-            const uchar code = skip[c];
-            if (code == SKIP_ACTIVE) {
+            const int L = skip_level(bounds, levels, n_levels, cell, iso);
+            if (L < 0) {
                 const float3 te = exit_params(we, d, inv_d, cell, cell + 1);
                 const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
                 const float s_end = fmin(s_exit, send);
@@ -440,13 +718,19 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     break;
                 }
 #elif defined(MODEL_TO)
-                if (anycode[c] != 0u) {
+                const int corner = ((cell.x + GHOST) * SY + (cell.y + GHOST)) * SZ
+                                   + (cell.z + GHOST);
+                const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
+                uint words[NWORDS];
+                to_cached_bits(slots, pool, pool_cap, epoch, cell, BY, BZ, data, corner, cls,
+                               cls_start, cls_offsets, ent_start, pt_start, u_rows, u_cols, u_w,
+                               pt_pieces, negmass, iso, counts, words);
+                uint any_bit = 0u;
+                for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
+                if (any_bit != 0u) {
                     const float3 p = we + s * d - convert_float3(cell);
-                    const int corner = ((cell.x + GHOST) * SY + (cell.y + GHOST)) * SZ
-                                       + (cell.z + GHOST);
-                    const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                     float3 g;
-                    const float r = to_cell_root(data, corner, cls, slots[c], bits, ent_start,
+                    const float r = to_cell_root(data, corner, cls, words, ent_start,
                                                  ent_centre, ent_base, ent_tet, row_ptr, cols,
                                                  weights, bary, red, p, d, s_end - s, iso, &g);
                     if (r >= 0.0f) {
@@ -458,11 +742,13 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                     }
                 }
 #else
-                const uint tc = tetcode[c];
+                // cube centred at data point `cell`
+                const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
+                const uint tc = type6_cached_code(slots, pool, pool_cap, epoch, cell, BY, BZ,
+                                                  data, base, stencil, prog_ptr, prog_cols,
+                                                  prog_w, point_tets, negmass, iso, counts);
                 if (tc != 0u) {
-                    // cube centred at data point `cell`; p relative to the centre
-                    const float3 p = ue + s * d - convert_float3(cell);
-                    const int base = ((cell.x + 1) * SY + (cell.y + 1)) * SZ + (cell.z + 1);
+                    const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
                     const float r = type6_cube_root(data, base, stencil, row_ptr, cols, masks,
                                                     bary, red, tc, p, d, s_end - s, iso, &g);
@@ -482,9 +768,8 @@ __kernel void raycast(__global const float *data,   // samples; type-6: the padd
                 else if (a == 1) cell.y += d.y > 0.0f ? 1 : -1;
                 else cell.z += d.z > 0.0f ? 1 : -1;
             } else {
-                // empty-space leaping over the macro cube of 2^code cells (thesis §6.2.1);
+                // empty-space leaping over the macro cube of 2^L cells (thesis §6.2.1);
                 // the next cell comes from integer bounds, not from an epsilon step
-                const int L = code;
                 const int3 lo = (cell >> L) << L;
                 const int3 hi = min(lo + (1 << L), ncell);
                 const float3 te = exit_params(we, d, inv_d, lo, hi);
