@@ -52,6 +52,8 @@ from splineviz.core.errors import SplinevizError
 from splineviz.core.splines.registry import KERNEL_FAMILIES, MODELS
 from splineviz.core.volume import Volume
 
+#: work-group size of the ray-casting kernel (pixels): fixed so the kernel is compiled once
+RAY_GROUP = (8, 8)
 #: ghost layers of the padded samples per kernel family (the registry's, per family define)
 GHOSTS = {define: max((s.ghost_layers for s in MODELS.values() if s.kernel_define == define),
                       default=0) for define in KERNEL_FAMILIES.values()}
@@ -817,14 +819,19 @@ class RayCaster:
                           e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
-        k_ray(q, (w, h), None, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
+        # a fixed work-group size, the launch padded to whole groups: PoCL compiles a kernel
+        # per work-group size, and one chosen from each frame size made every new preview
+        # size a 0.2-0.5 s compile in the middle of a drag
+        gx, gy = RAY_GROUP
+        k_ray(q, (-(-w // gx) * gx, -(-h // gy) * gy), RAY_GROUP, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
               *(np.int32(c) for c in self._cells), np.float32(shift),
               self._bounds.data, self._levels_buf.data, np.int32(len(self._levels)),
               *model_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
               planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
-              np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data)
+              np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data,
+              np.int32(w), np.int32(h))
         if self._family in CACHED:
             cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
             if self.stats.get("classified") == "visible":

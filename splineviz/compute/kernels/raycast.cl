@@ -653,10 +653,11 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                       float depth_a, float depth_b,  // window depth = a - b / z_eye
                       __global uchar *hit_out, __global float4 *pos_out,
                       __global float4 *normal_out, __global float *depth_out,
-                      __global uchar4 *color_out)
+                      __global uchar4 *color_out,
+                      int W, int H)        // frame size; the launch is padded to whole groups
 {
     const int col = get_global_id(0), row = get_global_id(1);
-    const int W = get_global_size(0), H = get_global_size(1);
+    if (col >= W || row >= H) return;
     const int pix = row * W + col;
 
     const float x = 2.0f * (col + 0.5f) / W - 1.0f;
