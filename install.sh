@@ -39,4 +39,8 @@ target="."
 for plugin in plugins/*/; do
   if [ -f "$plugin/pyproject.toml" ]; then .venv/bin/python -m pip install -q -e "$plugin"; fi
 done
+# the truncated-octahedral ray caster's tables (a second of Python) into the user cache now,
+# not the first time the model is chosen in the app
+.venv/bin/python -c "from splineviz.compute.to_tables import cell_classes, stencils; stencils(2); cell_classes()" \
+  || echo "install.sh: could not prepare the ray-casting tables (they are made on first use)" >&2
 echo "install.sh: splineviz installed in .venv"

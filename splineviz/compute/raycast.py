@@ -465,6 +465,7 @@ class RayCaster:
         """
         import pyopencl.array as cla
 
+        from splineviz.compute import to_tables
         from splineviz.compute.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
@@ -479,7 +480,7 @@ class RayCaster:
         strides = np.array([py * pz, pz, 1], dtype=np.int64)
         self._strides = (py, pz)
         rows = []
-        for offsets, w in to_quadratic.stencils(k):
+        for offsets, w in to_tables.stencils(k):
             flat = offsets @ strides
             rows.extend((flat, w[i]) for i in range(w.shape[0]))
         row_ptr = np.concatenate([[0], np.cumsum([np.count_nonzero(w) for _, w in rows])])
@@ -503,7 +504,7 @@ class RayCaster:
         # the private data copy of the classification); the distinct B-net points of the
         # class's pieces (pieces of one TO share points: each is computed once) as stencils
         # into that union, and per point the bit set of the pieces whose B-net holds it
-        tables = to_quadratic.stencils(k)
+        tables = to_tables.stencils(k)
         cls_offsets, cls_start, pt_start = [], [0], [0]
         u_rows, u_cols, u_w, pt_pieces = [0], [], [], []
         for c in range(8):
@@ -823,7 +824,8 @@ class RayCaster:
         # per work-group size, and one chosen from each frame size made every new preview
         # size a 0.2-0.5 s compile in the middle of a drag
         gx, gy = RAY_GROUP
-        k_ray(q, (-(-w // gx) * gx, -(-h // gy) * gy), RAY_GROUP, self._data.data, np.int32(nx), np.int32(ny), np.int32(nz),
+        k_ray(q, (-(-w // gx) * gx, -(-h // gy) * gy), RAY_GROUP, self._data.data,
+              np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
               *(np.int32(c) for c in self._cells), np.float32(shift),
               self._bounds.data, self._levels_buf.data, np.int32(len(self._levels)),

@@ -51,8 +51,44 @@ def _overlaps(tet: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return ~separated.any(axis=1)
 
 
+#: the modules whose code the truncated-octahedral tables are made from (cache keys)
+_TABLE_SOURCES = ("splineviz.core.partitions.truncated_octahedra",
+                  "splineviz.core.splines.to_quadratic", "splineviz.core.bform",
+                  "splineviz.compute.to_tables")
+
+
+@cache
+def stencils(k: float = 2) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`splineviz.core.splines.to_quadratic.stencils` of Q_k, kept on disk between runs
+    (:mod:`splineviz.compute.table_cache`): 144 pairs ``(offsets (K_t, 3) int, weights
+    (10, K_t) float)``."""
+    from splineviz.compute.table_cache import cached_arrays
+    from splineviz.core.splines import to_quadratic
+
+    def make():
+        pairs = to_quadratic.stencils(k)
+        return {"counts": np.array([len(o) for o, _ in pairs], dtype=np.int64),
+                "offsets": np.concatenate([o for o, _ in pairs]).astype(np.int64),
+                "weights": np.concatenate([w for _, w in pairs], axis=1)}
+
+    a = cached_arrays(f"to-stencils-k{k:g}", _TABLE_SOURCES, make)
+    ends = np.cumsum(a["counts"])
+    return [(a["offsets"][e - n:e], a["weights"][:, e - n:e])
+            for n, e in zip(a["counts"], ends, strict=True)]
+
+
 @cache
 def cell_classes():
+    """:func:`make_cell_classes`, kept on disk between runs."""
+    from splineviz.compute.table_cache import cached_arrays
+
+    a = cached_arrays("to-cell-classes", _TABLE_SOURCES,
+                      lambda: dict(zip(("start", "centre", "tet"), make_cell_classes(),
+                                       strict=True)))
+    return a["start"], a["centre"], a["tet"]
+
+
+def make_cell_classes():
     """The (TO, tetrahedron) pairs meeting a cell, per parity class.
 
     Returns

@@ -27,6 +27,13 @@ MAX_CANCEL_S = 1.0
 def window(qapp, tmp_path):
     from PySide6.QtCore import QSettings
 
+    from splineviz.compute.to_tables import cell_classes, stencils
+
+    # as in an installed app: install.sh prepares the truncated-octahedral tables (a second of
+    # Python that would otherwise run, once, the first time that model is chosen)
+    stencils(2)
+    cell_classes()
+
     QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
     w = MainWindow()
     w.show()
