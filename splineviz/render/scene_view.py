@@ -248,20 +248,20 @@ class SceneView:
         self._update_grid()
 
     def _update_grid(self) -> None:
-        """An axes grid with world-unit labels around all data (the scale of the scene)."""
+        """An axes grid with world-unit labels around all data (the scale of the scene).
+
+        The grid actor is made once, with the view, and then only moved or hidden: building
+        one takes pyvista ~40 ms, too long for the GUI thread whenever data is opened."""
+        if self._grid is None:
+            self._grid = self.plotter.show_bounds(
+                bounds=(0, 1, 0, 1, 0, 1), color=OUTLINE_COLOR, grid=False, location="outer",
+                ticks="outside", font_size=10, minor_ticks=False, fmt="%.3g",
+                use_3d_text=False, render=False)
         bounds = self.scene.bounds()
-        if not self.scene.view.show_scale or bounds is None:
-            if self._grid is not None:
-                self.plotter.remove_actor(self._grid, reset_camera=False, render=False)
-                self._grid = None
-            return
-        if self._grid is not None:  # moving the grid is cheap; building one is ~40 ms
+        show = self.scene.view.show_scale and bounds is not None
+        if show:
             self._grid.SetBounds(np.ravel(bounds))
-            return
-        self._grid = self.plotter.show_bounds(bounds=np.ravel(bounds), color=OUTLINE_COLOR,
-                                              grid=False, location="outer", ticks="outside",
-                                              font_size=10, minor_ticks=False, fmt="%.3g",
-                                              use_3d_text=False, render=False)
+        self._grid.SetVisibility(int(show))
 
     # -- pictures ------------------------------------------------------------------------
 
