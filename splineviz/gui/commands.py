@@ -12,9 +12,9 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from splineviz.core.errors import SplinevizError
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
-from splineviz.model.histogram import remember_histogram
 from splineviz.model.opening import read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
+from splineviz.model.summaries import remember
 
 #: what to do with the current objects when a file is opened
 OPEN_MODES = ("ask", "replace", "add")
@@ -105,9 +105,9 @@ class Commands(QObject):
             return self.load_session(path)
 
         def done(result):
-            kind, data, histogram = result
-            if histogram is not None:
-                remember_histogram(data, histogram)
+            kind, data, summaries = result
+            for what, value in summaries.items():
+                remember(what, data, value)
             self.opened.emit(path)
             if kind == "volume":
                 self._add_volume(data, Path(path).name, mode, path=path, **iso)

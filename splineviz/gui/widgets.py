@@ -7,7 +7,7 @@ from PySide6.QtCore import QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QColor, QPainter, QPainterPath, QPen
 from PySide6.QtWidgets import QColorDialog, QPushButton, QSizePolicy, QWidget
 
-from splineviz.model.histogram import HISTOGRAM_BINS, log_histogram
+from splineviz.model.summaries import HISTOGRAM_BINS, log_histogram
 
 
 class HistogramSlider(QWidget):

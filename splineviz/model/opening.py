@@ -30,20 +30,22 @@ def default_scene(scene: Scene | None = None) -> Scene:
 
 
 def read_file(path):
-    """Read a volume or point cloud file: ``(kind, data, histogram or None)`` with kind
-    ``"volume"`` or ``"points"``. A volume's range (kept when the volume is pickled) and its
-    histogram (:func:`~splineviz.model.histogram.log_histogram`) are computed here too, so
-    a GUI that reads in a job process pays nothing to show them."""
+    """Read a volume or point cloud file: ``(kind, data, summaries)`` with kind ``"volume"``
+    or ``"points"`` and the summaries views show (:mod:`splineviz.model.summaries`: a
+    volume's histogram, a cloud's spacing; a volume's range is kept by the volume itself)
+    computed here too, so a GUI that reads in a job process pays nothing to show them.
+    Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
+    process."""
     from splineviz.io.opening import open_path
-    from splineviz.model.histogram import log_histogram
+    from splineviz.model.summaries import log_histogram, median_spacing
 
     opened = open_path(path)
     if opened.kind == "session":
         raise SplinevizError(f"{opened.path.name} is a session; open it as one")
     if opened.kind != "volume":
-        return opened.kind, opened.value, None
+        return opened.kind, opened.value, {"spacing": median_spacing(opened.value.points)}
     _ = opened.value.finite_range
-    return opened.kind, opened.value, log_histogram(opened.value.data)
+    return opened.kind, opened.value, {"histogram": log_histogram(opened.value.data)}
 
 
 def scene_from_path(path, *, isovalue=None, model=None, repoint=None) -> Scene:

@@ -34,7 +34,7 @@ from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewStat
 from splineviz.render.quad import FrameQuad, frame_textures
 
 #: seconds a synchronous preview may take (keeps the window responsive while dragging)
-PREVIEW_BUDGET_S = 0.06
+PREVIEW_BUDGET_S = 0.045
 #: smallest preview resolution factor
 MIN_PREVIEW_SCALE = 1.0 / 16.0
 #: the resolution factors a preview may use (powers of sqrt 2 from 1 down to
@@ -149,7 +149,10 @@ class SplineScene:
         """Add a pyvista dataset with ``plotter.add_mesh`` options; replaces ``name``."""
         if name in self.props:
             self.remove_prop(name)
-        actor = self.plotter.add_mesh(dataset, name=name, reset_camera=False, **options)
+        # render=False: the owner renders when it is ready (pyvista would render at once, and
+        # in a window that means a synchronous frame with previews of every layer)
+        actor = self.plotter.add_mesh(dataset, name=name, reset_camera=False, render=False,
+                                      **options)
         rec = PropRecord(name, dataset, dict(options), actor, kind)
         self.props[name] = rec
         return rec

@@ -5,7 +5,7 @@ import pytest
 from PySide6.QtCore import QPointF, Qt
 
 from splineviz.gui.widgets import HistogramSlider
-from splineviz.model.histogram import HISTOGRAM_BINS, log_histogram
+from splineviz.model.summaries import HISTOGRAM_BINS, log_histogram
 
 
 def test_log_histogram_counts():

@@ -23,7 +23,7 @@ from superqt import QLabeledDoubleSlider
 from splineviz.core.splines import MODELS
 from splineviz.gui.widgets import ColorButton, HistogramSlider
 from splineviz.model import MATERIALS, IsosurfaceNode, Scene, VolumeNode
-from splineviz.model.histogram import cached_histogram
+from splineviz.model.summaries import cached_histogram
 
 #: volumes with at most this many samples get their histogram in the GUI thread
 INLINE_HISTOGRAM_SAMPLES = 2_000_000

@@ -7,7 +7,9 @@ so they always belong to the mesh selected, never to an older or removed one).
 
 from __future__ import annotations
 
-import numpy as np
+# imported with the window, not on the first point cloud: importing scipy.spatial takes
+# ~0.6 s and holds the GIL, which would stall the window even from a worker thread
+import scipy.spatial  # noqa: F401
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
     QComboBox,
@@ -19,21 +21,8 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-# imported with the window, not on the first point cloud: importing scipy.spatial takes
-# ~0.6 s and holds the GIL, which would stall the window even from a worker thread
-from scipy.spatial import cKDTree
-
 from splineviz.model import MeshNode, PointsNode, Scene
-
-
-def median_spacing(points: np.ndarray) -> float:
-    """Median nearest-neighbour distance of (up to 2000 sampled) points."""
-    if len(points) < 2:
-        return 1.0
-    rng = np.random.default_rng(0)
-    sample = points[rng.choice(len(points), size=min(2000, len(points)), replace=False)]
-    d, _ = cKDTree(points).query(sample, k=2)
-    return float(np.median(d[:, 1])) or 1.0
+from splineviz.model.summaries import cached_spacing, known_spacing
 
 
 def quality_text(q: dict) -> str:
@@ -95,10 +84,12 @@ class RemeshPanel(QWidget):
     def _inserted(self, node) -> None:
         if isinstance(node, PointsNode):
             self._set_points(node)
-            # a k-d tree of the cloud: not in the GUI thread
-            self.jobs.run("Point spacing", median_spacing, np.asarray(node.data.points),
-                          cancellable=False,
-                          on_done=lambda h: self.edge.setValue(2.0 * h))
+            spacing = known_spacing(node.data)  # the reading process measured it
+            if spacing is not None:
+                self.edge.setValue(2.0 * spacing)
+            else:  # a k-d tree of the cloud: not in the GUI thread
+                self.jobs.run("Point spacing", cached_spacing, node.data, cancellable=False,
+                              on_done=lambda h: self.edge.setValue(2.0 * h))
 
     def _removed(self, node) -> None:
         if node is self.points:

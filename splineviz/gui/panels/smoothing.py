@@ -54,7 +54,7 @@ def smooth_volume(volume, sigma: float, device=None):
     """Gaussian smoothing (worker thread), with the result's range and histogram computed
     here too: the panels showing them then cost the GUI thread nothing."""
     from splineviz.compute.smoothing import gaussian_smooth
-    from splineviz.model.histogram import cached_histogram
+    from splineviz.model.summaries import cached_histogram
 
     out = gaussian_smooth(volume, sigma, device=device)
     _ = out.finite_range
