@@ -159,7 +159,7 @@ class MainWindow(QMainWindow):
             sb.addPermanentWidget(w)
         self.view.readout.connect(self.readout_label.setText)
         self.view.frame_rendered.connect(self._frame_rendered)
-        self.view.busy.connect(lambda m: m and self.statusBar().showMessage(m, 3000))
+        self.view.busy.connect(self._view_busy)
         for name, dock in self.docks.items():
             a: QAction = dock.toggleViewAction()
             a.setToolTip(f"Show or hide the {name} panel")
@@ -229,6 +229,14 @@ class MainWindow(QMainWindow):
             job.label + (f": {job.message}" if job.message else "..."))
         self.progress.setFormat(job.label)
         self.statusBar().showMessage(text)
+
+    def _view_busy(self, message: str) -> None:
+        """"ray casting..." while exact frames are made; cleared when they are shown (unless
+        a job's message is up)."""
+        if message:
+            self.statusBar().showMessage(message)
+        elif not self.jobs.jobs:
+            self.statusBar().clearMessage()
 
     def _update_title(self) -> None:
         name = self.session_file.name if self.session_file else "untitled"

@@ -260,7 +260,7 @@ class SceneView:
         bounds = self.scene.bounds()
         show = self.scene.view.show_scale and bounds is not None
         if show:
-            self._grid.SetBounds(np.ravel(bounds))
+            self._grid.update_bounds(np.ravel(bounds))  # geometry and tick labels
         self._grid.SetVisibility(int(show))
 
     # -- pictures ------------------------------------------------------------------------
