@@ -15,8 +15,8 @@ import statistics
 import time
 from pathlib import Path
 
-from splineviz.compute.cli_render import default_camera
 from splineviz.compute.raycast import RayCaster, kernel_define
+from splineviz.core.camera import default_camera
 
 #: (file, isovalue) pairs of the issue's benchmark
 DATASETS = (("bonsai.vti", 40.0), ("engine.vti", 128.0))

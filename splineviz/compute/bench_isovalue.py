@@ -81,7 +81,7 @@ def _measure_vtk(path, spacing, size):
     import pyvista as pv
     from vtkmodules.vtkFiltersCore import vtkFlyingEdges3D
 
-    from splineviz.compute.cli_render import default_camera
+    from splineviz.core.camera import default_camera
 
     data = np.load(path)
     img = pv.ImageData(dimensions=data.shape, spacing=spacing)
@@ -127,8 +127,8 @@ def _box(img):
 
 def _measure_caster(path, spacing, model, size, preview, device):
     """One model's isovalue changes, frames and memory, in a child process."""
-    from splineviz.compute.cli_render import default_camera
     from splineviz.compute.raycast import RayCaster
+    from splineviz.core.camera import default_camera
     from splineviz.core.volume import Volume
 
     vol = Volume(np.load(path), spacing=spacing)

@@ -171,3 +171,14 @@ class Camera:
         """(A, B) with window depth = A - B / z_e (used by the OpenCL kernel)."""
         near, far = clipping_range
         return 0.5 * (far + near) / (far - near) + 0.5, far * near / (far - near)
+
+
+def default_camera(bounds, view_angle: float = 30.0, direction=(1.0, -1.3, 0.8)) -> Camera:
+    """An oblique view of the whole box ``bounds`` (fills about the frame height)."""
+    b = np.asarray(bounds, dtype=np.float64)
+    c = b.mean(axis=1)
+    radius = 0.5 * np.linalg.norm(b[:, 1] - b[:, 0])
+    d = np.asarray(direction, dtype=np.float64)
+    d /= np.linalg.norm(d)
+    dist = radius / np.sin(np.radians(view_angle) / 2.0) * 1.05
+    return Camera(c + dist * d, c, view_up=(0, 0, 1), view_angle=view_angle)

@@ -11,6 +11,7 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from splineviz.core.errors import SplinevizError
+from splineviz.core.splines import MODELS
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
 from splineviz.model.opening import read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
@@ -18,6 +19,18 @@ from splineviz.model.summaries import remember
 
 #: what to do with the current objects when a file is opened
 OPEN_MODES = ("ask", "replace", "add")
+
+
+def planes_of(scene: Scene, node) -> list:
+    """``(origin, normal)`` of the enabled planes that cut ``node`` in the view: a volume's
+    isosurfaces are cut by its planes and the scene's; meshes by the scene's."""
+    if isinstance(node, IsosurfaceNode):
+        return scene.planes_for(scene.volume_of(node))
+    if isinstance(node, VolumeNode):
+        return scene.planes_for(node)
+    if isinstance(node, MeshNode):
+        return [p.as_pair() for p in scene.clip_planes if p.enabled and p.volume_id is None]
+    return []
 
 
 def export_mesh_data(scene: Scene, node, path, clip: bool) -> str:
@@ -30,18 +43,17 @@ def export_mesh_data(scene: Scene, node, path, clip: bool) -> str:
     import splineviz as sv
     from splineviz.render.extract import spline_isosurface
 
+    planes = planes_of(scene, node)
     if isinstance(node, MeshNode):
         cells = np.hstack([np.full((len(node.faces), 1), 3), node.faces]).ravel()
         mesh = pv.PolyData(node.vertices, cells)
         if node.normals is not None:
             mesh.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
-        planes = [p.as_pair() for p in scene.clip_planes if p.enabled and p.volume_id is None]
     elif isinstance(node, IsosurfaceNode):
         vol = scene.volume_of(node)
-        opts = {"k": node.k} if node.model == "to-quadratic" else {}
+        opts = {"k": node.k} if "k" in MODELS[node.model].options else {}
         mesh = spline_isosurface(sv.build_spline(vol.active, node.model, **opts),
                                  node.isovalue)
-        planes = scene.planes_for(vol)
     else:
         raise SplinevizError("select a mesh or an isosurface to export")
     if clip and planes:
@@ -200,6 +212,10 @@ class Commands(QObject):
                            device=self.window.device)
         self.saved.emit(str(path))
         return img
+
+    def planes_of(self, node) -> list:
+        """The clip planes that cut ``node`` (see :func:`planes_of`)."""
+        return planes_of(self.scene, node)
 
     def export_mesh(self, path, node=None, clip: bool = True):
         """Write the selected mesh or isosurface as a mesh file in a job."""

@@ -97,10 +97,22 @@ def export_screenshot(window) -> None:
 
 
 def export_mesh(window) -> None:
+    """Save the selected mesh or isosurface; asks whether to cut it by its clip planes when
+    it has some (ParaView's Clip filter before Save Data)."""
     path, _ = QFileDialog.getSaveFileName(window, "Export mesh", "mesh.ply",
                                           "Meshes (*.ply *.stl *.vtp *.obj)")
-    if path:
-        window.guard(window.commands.export_mesh, path)
+    if not path:
+        return
+    clip = True
+    if window.commands.planes_of(window.scene.selected):
+        answer = QMessageBox.question(
+            window, "Export mesh", "Cut the mesh by its clip planes, as the view shows it?",
+            QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No
+            | QMessageBox.StandardButton.Cancel, QMessageBox.StandardButton.Yes)
+        if answer == QMessageBox.StandardButton.Cancel:
+            return
+        clip = answer == QMessageBox.StandardButton.Yes
+    window.guard(window.commands.export_mesh, path, clip=clip)
 
 
 def fill_sources(window, menu) -> None:

@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from splineviz.core.camera import Camera, CameraError, parse_size
+from splineviz.core.camera import Camera, CameraError, default_camera, parse_size
 from splineviz.core.errors import SplinevizError
 
 
@@ -28,17 +28,6 @@ def _floats(text: str, counts, what: str) -> list[float]:
         raise RenderArgumentError(
             f"{what} needs {' or '.join(map(str, counts))} finite numbers, got {text!r}")
     return vals
-
-
-def default_camera(bounds, view_angle: float = 30.0, direction=(1.0, -1.3, 0.8)) -> Camera:
-    """An oblique view of the whole box ``bounds`` (fills about the frame height)."""
-    b = np.asarray(bounds, dtype=np.float64)
-    c = b.mean(axis=1)
-    radius = 0.5 * np.linalg.norm(b[:, 1] - b[:, 0])
-    d = np.asarray(direction, dtype=np.float64)
-    d /= np.linalg.norm(d)
-    dist = radius / np.sin(np.radians(view_angle) / 2.0) * 1.05
-    return Camera(c + dist * d, c, view_up=(0, 0, 1), view_angle=view_angle)
 
 
 def make_camera(spec: str | None, bounds, view_angle: float) -> Camera:

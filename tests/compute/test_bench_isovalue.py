@@ -36,3 +36,18 @@ def test_table_prints_ratios_and_errors():
     assert lines[3].split()[:4] == ["256", "cubic-c1", "0.00010", "0.001"]
     assert "0.500" in lines[3] and lines[3].split()[-1] == "8.0"  # RSS / volume
     assert lines[4].endswith("timed out after 600 s")
+
+
+def test_one_measurement_runs_end_to_end(tmp_path):
+    """The measuring functions themselves (in this process, on a tiny volume): a broken
+    import or call inside them would otherwise only show as an error row of the table."""
+    from splineviz.compute.bench_isovalue import _measure_caster, _measure_vtk
+
+    x = np.linspace(0, 255, 12)
+    data = np.add.outer(np.add.outer(x, x), x).astype(np.float32) / 3
+    np.save(tmp_path / "v.npy", data)
+    row = _measure_caster(tmp_path / "v.npy", (1.0, 1.0, 1.0), "trilinear", (32, 24), (16, 12),
+                          None)
+    assert row["change_s"] >= 0 and row["first_s"] > 0
+    vtk = _measure_vtk(tmp_path / "v.npy", (1.0, 1.0, 1.0), (32, 24))
+    assert vtk["triangles"] > 0
