@@ -3,9 +3,9 @@
 Convention: every reader returns a :class:`VolumeData` whose ``data`` is indexed
 ``data[i, j, k]`` at world point ``origin + (i*sx, j*sy, k*sz)`` (x fastest in the file),
 in the file's own sample type; :func:`read_volume` turns it into a float32
-:class:`~splineviz.Volume`. Readers are built on VTK (VTI, legacy VTK, SLC, MetaImage,
+:class:`~splineviz.Volume`. Readers are built on VTK (VTI, legacy VTK, MetaImage,
 multi-file NRRD), pynrrd (NRRD/NHDR), nibabel (NIfTI), mrcfile (MRC/CCP4) and pydicom (DICOM
-series). Every header is checked against the memory budget *before* the payload is
+series); SLC is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header is checked against the memory budget *before* the payload is
 allocated, and against the payload size where the payload is uncompressed.
 """
 
@@ -130,14 +130,78 @@ def _read_legacy_vtk(path: Path) -> VolumeData:
     return _read_with_vtk(reader, path, "vtk")
 
 
-def _read_slc(path: Path) -> VolumeData:
-    from vtkmodules.vtkIOImage import vtkSLCReader
+#: the SLC header: magic, dimensions and bits, spacing, unit/origin/modification/compression
+_SLC_HEADER = re.compile(rb"\s*11111\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)"
+                         rb"\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s*X")
+_SLC_SLICE = re.compile(rb"\s*(\d+)\s*X")
 
-    reader = vtkSLCReader()
-    reader.SetFileName(str(path))
-    if not reader.CanReadFile(str(path)):
+
+def _slc_decode(run: bytes, size: int, name: str, z: int) -> np.ndarray:
+    """One slice of SLC 8-bit run-length code: a byte ``n | 0x80`` is followed by ``n``
+    literal bytes, a byte ``n`` by one byte repeated ``n`` times; ``0`` ends the slice.
+    Samples the code does not reach are 0 (VTK's reader leaves them uninitialised)."""
+    out = np.zeros(size, dtype=np.uint8)
+    pos = at = 0
+    while pos < len(run):
+        head = run[pos]
+        n = head & 0x7F
+        if n == 0:
+            break
+        if at + n > size:
+            raise CorruptFileError(f"{name}: slice {z} decodes to more than {size} samples")
+        if head & 0x80:
+            out[at:at + n] = np.frombuffer(run, np.uint8, n, pos + 1)
+            pos += 1 + n
+        else:
+            out[at:at + n] = run[pos + 1]
+            pos += 2
+        at += n
+    return out
+
+
+def _read_slc(path: Path) -> VolumeData:
+    """SLC (Stony Brook) volumes, 8 bits, raw or run-length coded, read with NumPy: VTK's
+    reader leaves the part of a slice its code does not cover uninitialised, so the same file
+    read twice could give two volumes."""
+    raw = path.read_bytes()
+    m = _SLC_HEADER.match(raw)
+    if m is None:
         raise CorruptFileError(f"{path.name} does not have a valid SLC header")
-    return _read_with_vtk(reader, path, "slc")
+    nx, ny, nz, bits = (int(m.group(i)) for i in range(1, 5))
+    try:
+        spacing = tuple(float(m.group(i)) for i in range(5, 8))
+    except ValueError:
+        raise CorruptFileError(f"{path.name} has an unreadable SLC spacing") from None
+    compression, icon_w, icon_h = int(m.group(11)), int(m.group(12)), int(m.group(13))
+    if bits != 8:
+        raise FileFormatError(f"{path.name} has {bits}-bit samples; SLC volumes of 8 bits "
+                              "are supported")
+    if compression not in (0, 1):
+        raise FileFormatError(f"{path.name} uses SLC compression {compression}; only raw (0) "
+                              "and run-length (1) are supported")
+    if min(nx, ny, nz) < 1:
+        raise InvalidDataError(f"{path.name} announces an empty grid of {(nx, ny, nz)} samples")
+    check_volume_size((nx, ny, nz), 1, path.name)
+    pos = m.end() + 3 * icon_w * icon_h  # the icon: three planes of icon_w x icon_h bytes
+    size = nx * ny
+    data = np.empty((nz, ny, nx), dtype=np.uint8)
+    for z in range(nz):
+        s = _SLC_SLICE.match(raw, pos)
+        if s is None:
+            raise CorruptFileError(f"{path.name} ends before slice {z} of {nz}")
+        n = int(s.group(1))
+        pos = s.end()
+        chunk = raw[pos:pos + n]
+        if len(chunk) < n:
+            raise CorruptFileError(f"{path.name} ends inside slice {z} of {nz}")
+        pos += n
+        if compression:
+            data[z] = _slc_decode(chunk, size, path.name, z).reshape(ny, nx)
+        elif n != size:
+            raise CorruptFileError(f"{path.name}: slice {z} holds {n} bytes, not {size}")
+        else:
+            data[z] = np.frombuffer(chunk, np.uint8).reshape(ny, nx)
+    return VolumeData(data.transpose(2, 1, 0), spacing, (0.0, 0.0, 0.0), "slc", {})
 
 
 _MHD_KEY = re.compile(rb"^\s*(\w+)\s*=\s*(.*?)\s*$", re.M)

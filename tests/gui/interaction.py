@@ -187,3 +187,23 @@ def agreement(a: np.ndarray, b: np.ndarray, tol: int = 2, shift: int = 0) -> flo
             d = np.abs(a - padded[dy:dy + h, dx:dx + w]).max(axis=2)
             best = d if best is None else np.minimum(best, d)
     return float((best <= tol).mean())
+
+
+def open_window(settings_dir, **kwargs):
+    """A shown main window whose recent files go to ``settings_dir`` (not the user's)."""
+    from PySide6.QtCore import QSettings
+
+    from splineviz.gui.main_window import MainWindow
+
+    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope,
+                      str(settings_dir))
+    w = MainWindow(**kwargs)
+    w.show()
+    pump(0.3)
+    return w
+
+
+def close_window(w) -> None:
+    w.wait_idle()
+    w.close()
+    pump(0.1)

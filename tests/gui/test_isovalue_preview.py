@@ -12,10 +12,15 @@ import pytest
 
 pytest.importorskip("pytestqt")
 
-from interaction import LEFT, NO_BUTTON, _mouse, pump  # noqa: E402
+from interaction import (  # noqa: E402
+    LEFT,
+    NO_BUTTON,
+    _mouse,
+    close_window,
+    open_window,
+    pump,
+)
 from PySide6.QtCore import QEvent  # noqa: E402
-
-from splineviz.gui.main_window import MainWindow  # noqa: E402
 
 #: a picture of the new isovalue must be on screen this soon after a slider step
 PREVIEW_S = 0.100
@@ -25,16 +30,9 @@ EXACT_S = 30.0
 
 @pytest.fixture
 def window(qapp, tmp_path):
-    from PySide6.QtCore import QSettings
-
-    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
-    w = MainWindow()
-    w.show()
-    pump(0.3)
+    w = open_window(tmp_path)
     yield w
-    w.wait_idle()
-    w.close()
-    pump(0.1)
+    close_window(w)
 
 
 def _drag_across(w, steps=12):

@@ -12,10 +12,9 @@ import pytest
 
 pytest.importorskip("pytestqt")
 
-from interaction import StallMeter, pump  # noqa: E402
+from interaction import StallMeter, close_window, open_window, pump  # noqa: E402
 
 from splineviz.core.splines import MODELS  # noqa: E402
-from splineviz.gui.main_window import MainWindow  # noqa: E402
 
 #: the longest the GUI thread may be away from its event loop, milliseconds
 MAX_STALL_MS = 100
@@ -25,23 +24,15 @@ MAX_CANCEL_S = 1.0
 
 @pytest.fixture
 def window(qapp, tmp_path):
-    from PySide6.QtCore import QSettings
-
     from splineviz.compute.to_tables import cell_classes, stencils
 
     # as in an installed app: install.sh prepares the truncated-octahedral tables (a second of
     # Python that would otherwise run, once, the first time that model is chosen)
     stencils(2)
     cell_classes()
-
-    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
-    w = MainWindow()
-    w.show()
-    pump(0.3)
+    w = open_window(tmp_path)
     yield w
-    w.wait_idle()
-    w.close()
-    pump(0.1)
+    close_window(w)
 
 
 def _measure(w, what, action, settle, timeout_s=300.0):

@@ -324,3 +324,23 @@ def test_every_signed_format_is_recognised_by_content(tmp_path, kind):
         assert a.spacing == b.spacing and a.origin == b.origin
     else:
         np.testing.assert_array_equal(a.points, b.points)
+
+
+def test_slc_run_length_code_is_decoded_exactly_and_completely(tmp_path):
+    """Literal runs (n | 0x80), repeats (n) and the end code 0; samples the code does not
+    reach are 0 (VTK's reader left them uninitialised: the same file read differently)."""
+    from splineviz.io.errors import CorruptFileError
+    from splineviz.io.volumes import _slc_decode
+
+    code = bytes([0x83, 7, 8, 9, 2, 5, 0])
+    assert _slc_decode(code, 8, "t.slc", 0).tolist() == [7, 8, 9, 5, 5, 0, 0, 0]
+    with pytest.raises(CorruptFileError, match="more than 4 samples"):
+        _slc_decode(bytes([0x05, 1, 0]), 4, "t.slc", 0)
+    # a whole file: 3 x 2 x 2, two run-length slices
+    slices = [bytes([0x86, 1, 2, 3, 4, 5, 6, 0]), bytes([6, 9, 0])]
+    body = b"".join(b"%d X" % len(s) + s for s in slices)
+    (tmp_path / "v.slc").write_bytes(b"11111\n3 2 2 8\n0.5 1 2\n2 6 4 1\n0 0 X" + body)
+    vol = sv.read_volume(tmp_path / "v.slc")
+    assert vol.spacing == (0.5, 1.0, 2.0)
+    assert vol.data[:, :, 0].T.ravel().tolist() == [1, 2, 3, 4, 5, 6]
+    assert np.all(vol.data[:, :, 1] == 9)
