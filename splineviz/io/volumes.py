@@ -5,8 +5,9 @@ Convention: every reader returns a :class:`VolumeData` whose ``data`` is indexed
 in the file's own sample type; :func:`read_volume` turns it into a float32
 :class:`~splineviz.Volume`. Readers are built on VTK (VTI, legacy VTK, MetaImage,
 multi-file NRRD), pynrrd (NRRD/NHDR), nibabel (NIfTI), mrcfile (MRC/CCP4) and pydicom (DICOM
-series); SLC is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header is checked against the memory budget *before* the payload is
-allocated, and against the payload size where the payload is uncompressed.
+series); SLC is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header
+is checked against the memory budget *before* the payload is allocated, and against the
+payload size where the payload is uncompressed.
 """
 
 from __future__ import annotations

@@ -15,15 +15,21 @@ from splineviz.model.session import apply_session
 DEFAULT_NAME = "Marschner-Lobb 41^3"
 
 
-def default_scene(scene: Scene | None = None) -> Scene:
-    """The embedded default data (Marschner-Lobb 41^3, generated) framed isometrically."""
+def default_volume():
+    """The embedded default data set and its isovalue: Marschner-Lobb sampled on 41^3
+    points of [-1, 1]^3 (generated, nothing to download)."""
     from splineviz.core.testfunctions import ml
     from splineviz.core.volume import Volume
 
+    return Volume.from_function(ml, (41, 41, 41), ml.domain), ml.isovalue
+
+
+def default_scene(scene: Scene | None = None) -> Scene:
+    """The embedded default data (:func:`default_volume`) framed isometrically."""
     scene = Scene() if scene is None else scene
     scene.clear()
-    vol = Volume.from_function(ml, (41, 41, 41), ml.domain)
-    scene.add_volume(vol, DEFAULT_NAME, source="marschner-lobb", isovalue=ml.isovalue)
+    vol, iso = default_volume()
+    scene.add_volume(vol, DEFAULT_NAME, source="marschner-lobb", isovalue=iso)
     scene.frame(view="isometric")
     scene.mark_saved()
     return scene

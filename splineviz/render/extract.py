@@ -1,4 +1,4 @@
-"""Spline isosurfaces as meshes (for "Export mesh") and the embedded default data set.
+"""Spline isosurfaces as meshes (for "Export mesh").
 
 The mesh is the isosurface *of the spline*: a flying-edges mesh of spline samples on a refined
 grid whose vertices are moved onto s(x) = iso by Newton steps along the spline gradient, with
@@ -8,18 +8,6 @@ the exact spline normals. (The ray caster shows the surface exactly; this is its
 from __future__ import annotations
 
 import numpy as np
-
-from splineviz.core.volume import Volume
-
-#: the embedded default data: Marschner-Lobb sampled on 41^3 points of [-1, 1]^3
-DEFAULT_SHAPE = (41, 41, 41)
-
-
-def default_volume() -> tuple[Volume, float]:
-    """The embedded default data set and its isovalue (generated on the fly)."""
-    from splineviz.core.testfunctions import ml
-
-    return Volume.from_function(ml, DEFAULT_SHAPE, ml.domain), ml.isovalue
 
 
 def project_to_isosurface(spline, points: np.ndarray, iso: float, steps: int = 6):

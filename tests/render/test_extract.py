@@ -4,7 +4,8 @@ import numpy as np
 
 import splineviz as sv
 from splineviz.cli import main
-from splineviz.render.extract import default_volume, spline_isosurface
+from splineviz.model.opening import default_volume
+from splineviz.render.extract import spline_isosurface
 
 
 def test_default_isosurface_lies_on_the_spline_surface():
