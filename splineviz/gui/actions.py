@@ -82,7 +82,8 @@ def build_actions(window) -> dict[str, QAction]:
     _action(window, "Export &mesh...", lambda: dialogs.export_mesh(window), menu=m,
             tip="Save the selected mesh or isosurface as PLY/OBJ/STL/VTP (clipped, normals)")
     m.addSeparator()
-    _action(window, "&Quit", window.close, menu=m, shortcut=QKeySequence.StandardKey.Quit)
+    # explicit: without a desktop environment Qt maps StandardKey.Quit to no key at all
+    _action(window, "&Quit", window.close, menu=m, shortcut="Ctrl+Q")
 
     v = window.menuBar().addMenu("&View")
     acts["reset"] = _action(window, "&Reset camera", lambda: window.view.standard_view(None),
