@@ -331,6 +331,8 @@ class JobRunner(QObject):
             self.error.emit(error_message(exc))
 
     def _finished(self, job: Job) -> None:
+        if self.closed:  # the window is gone: nobody to tell
+            return
         if job in self.jobs:
             self.jobs.remove(job)
         if job.state == "cancelled":

@@ -178,7 +178,7 @@ class View3D(QObject):
 
     def _refine_ended(self) -> None:
         job = self._refine_job
-        if job is None or job.active:
+        if self._closed or job is None or job.active:
             return
         self._refine_job = None
         self.busy.emit("")
