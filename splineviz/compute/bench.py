@@ -23,24 +23,31 @@ DATASETS = (("bonsai.vti", 40.0), ("engine.vti", 128.0))
 MODELS = ("trilinear", "super-quadratic", "cubic-c1", "to-quadratic")
 
 
-def _vtk_baseline(volume, iso, camera, size, repeats):
-    """(extract_s, n_triangles, first_frame_s, frame_s) of flying edges + offscreen render."""
-    if not os.environ.get("DISPLAY"):
-        # headless: EGL (Mesa) instead of a failing X connection (see ENVIRONMENT.md)
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+def flying_edges(img, iso: float):
+    """``(mesh, seconds)``: the peer's isosurface, vtkFlyingEdges3D with normals, of a
+    ``pyvista.ImageData`` with one point array, and the time it took."""
     import pyvista as pv
     from vtkmodules.vtkFiltersCore import vtkFlyingEdges3D
 
-    img = pv.ImageData(dimensions=volume.shape, spacing=volume.spacing, origin=volume.origin)
-    img.point_data["v"] = volume.data.ravel(order="F")  # VTK: x varies fastest
     t = time.perf_counter()
     fe = vtkFlyingEdges3D()
     fe.SetInputData(img)
     fe.SetValue(0, iso)
     fe.ComputeNormalsOn()
     fe.Update()
-    extract = time.perf_counter() - t
-    mesh = pv.wrap(fe.GetOutput())
+    return pv.wrap(fe.GetOutput()), time.perf_counter() - t
+
+
+def _vtk_baseline(volume, iso, camera, size, repeats):
+    """(extract_s, n_triangles, first_frame_s, frame_s) of flying edges + offscreen render."""
+    if not os.environ.get("DISPLAY"):
+        # headless: EGL (Mesa) instead of a failing X connection (see ENVIRONMENT.md)
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    import pyvista as pv
+
+    img = pv.ImageData(dimensions=volume.shape, spacing=volume.spacing, origin=volume.origin)
+    img.point_data["v"] = volume.data.ravel(order="F")  # VTK: x varies fastest
+    mesh, extract = flying_edges(img, iso)
     pl = pv.Plotter(off_screen=True, window_size=size)
     pl.add_mesh(mesh, color=(0.93, 0.78, 0.55), smooth_shading=True)
     pl.camera.position = camera.position

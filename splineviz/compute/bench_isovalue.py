@@ -79,8 +79,8 @@ def _measure_vtk(path, spacing, size):
         # headless: EGL (Mesa) instead of a failing X connection (see ENVIRONMENT.md)
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     import pyvista as pv
-    from vtkmodules.vtkFiltersCore import vtkFlyingEdges3D
 
+    from splineviz.compute.bench import flying_edges
     from splineviz.core.camera import default_camera
 
     data = np.load(path)
@@ -89,14 +89,8 @@ def _measure_vtk(path, spacing, size):
     del data
     extract = []
     for iso in EXACT_ISOS[::-1]:  # ends at EXACT_ISOS[0], the mesh that is drawn
-        t = time.perf_counter()
-        fe = vtkFlyingEdges3D()
-        fe.SetInputData(img)
-        fe.SetValue(0, iso)
-        fe.ComputeNormalsOn()
-        fe.Update()
-        extract.append(time.perf_counter() - t)
-    mesh = pv.wrap(fe.GetOutput())
+        mesh, seconds = flying_edges(img, iso)
+        extract.append(seconds)
     cam = default_camera(_box(img))
     pl = pv.Plotter(off_screen=True, window_size=size)
     t = time.perf_counter()

@@ -7,8 +7,21 @@ from pathlib import Path
 
 import numpy as np
 
+from splineviz.compute import device as _devmod
 from splineviz.core.camera import Camera
 from splineviz.core.volume import Volume
+
+
+def _have_opencl() -> bool:
+    try:
+        _devmod.get_device("auto")
+    except _devmod.NoDeviceError:
+        return False
+    return True
+
+
+#: whether any OpenCL device exists; OpenCL tests skip only when none does
+HAVE_CL = _have_opencl()
 
 DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "volumes"
 

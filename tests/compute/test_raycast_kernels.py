@@ -16,20 +16,13 @@ in NumPy). The accuracy checks therefore use half-integer isovalues.
 import numpy as np
 import pytest
 
-from splineviz.compute import device as devmod
 from splineviz.compute.raycast import RayCaster, RayCastError, numpy_cell_bounds
 from splineviz.core.camera import Camera
 from splineviz.core.raycast_reference import reference_raycast
 from splineviz.core.splines import build_spline
 from splineviz.core.volume import Volume
 
-from .helpers import cameras, compare_frames, load_volume, marschner_lobb
-
-try:
-    devmod.get_device("auto")
-    HAVE_CL = True
-except devmod.NoDeviceError:
-    HAVE_CL = False
+from .helpers import HAVE_CL, cameras, compare_frames, load_volume, marschner_lobb
 
 needs_cl = pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device at all")
 SIZE = (160, 120)

@@ -4,18 +4,11 @@ float32 samples, with 4x (uint8, trilinear) or 2x (int16, padded type-6) less me
 import numpy as np
 import pytest
 
-from splineviz.compute import device as devmod
 from splineviz.compute import raycast
 from splineviz.compute.raycast import RayCaster, sample_type_for
 from splineviz.core.volume import Volume
 
-from .helpers import cameras, load_volume
-
-try:
-    devmod.get_device("auto")
-    HAVE_CL = True
-except devmod.NoDeviceError:
-    HAVE_CL = False
+from .helpers import HAVE_CL, cameras, load_volume
 
 
 def test_sample_type_is_the_smallest_exact_one():

@@ -5,17 +5,10 @@ frames of a caster that classified every cell first (``classify_all``)."""
 import numpy as np
 import pytest
 
-from splineviz.compute import device as devmod
 from splineviz.compute.raycast import MAX_EPOCH, RayCaster, RayCastError
 from splineviz.core.camera import Camera
 
-from .helpers import marschner_lobb
-
-try:
-    devmod.get_device("auto")
-    HAVE_CL = True
-except devmod.NoDeviceError:
-    HAVE_CL = False
+from .helpers import HAVE_CL, marschner_lobb
 
 needs_cl = pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device at all")
 SIZE = (96, 72)

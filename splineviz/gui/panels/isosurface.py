@@ -91,8 +91,8 @@ class IsosurfacePanel(QWidget):
         form.addRow(self.add_button)
         self._syncing = False
         self.fill_models()
-        self.histogram.valueChanged.connect(self._iso_from_slider)
-        self.spin.valueChanged.connect(self._iso_from_spin)
+        self.histogram.valueChanged.connect(lambda v: self._iso_changed(v, self.spin))
+        self.spin.valueChanged.connect(lambda v: self._iso_changed(v, self.histogram))
         self.model.currentIndexChanged.connect(lambda _i: self._write(
             "model", self.model.currentData()))
         self.k.valueChanged.connect(lambda v: self._write("k", int(v)))
@@ -216,19 +216,12 @@ class IsosurfacePanel(QWidget):
         if field == "model":
             self._sync_all()  # shows or hides the Q_k order
 
-    def _iso_from_slider(self, v) -> None:
+    def _iso_changed(self, v, mirror) -> None:
+        """The slider or the spin box moved: show the value in the other one, write it."""
         if self._syncing:
             return
         self._syncing = True
-        self.spin.setValue(v)
-        self._syncing = False
-        self._write("isovalue", float(v))
-
-    def _iso_from_spin(self, v) -> None:
-        if self._syncing:
-            return
-        self._syncing = True
-        self.histogram.setValue(v)
+        mirror.setValue(v)
         self._syncing = False
         self._write("isovalue", float(v))
 
