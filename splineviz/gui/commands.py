@@ -11,7 +11,6 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from splineviz.core.errors import SplinevizError
-from splineviz.core.splines import MODELS
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
 from splineviz.model.opening import read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
@@ -19,51 +18,6 @@ from splineviz.model.summaries import remember
 
 #: what to do with the current objects when a file is opened
 OPEN_MODES = ("ask", "replace", "add")
-
-
-def planes_of(scene: Scene, node) -> list:
-    """``(origin, normal)`` of the enabled planes that cut ``node`` in the view: a volume's
-    isosurfaces are cut by its planes and the scene's; meshes by the scene's."""
-    if isinstance(node, IsosurfaceNode):
-        return scene.planes_for(scene.volume_of(node))
-    if isinstance(node, VolumeNode):
-        return scene.planes_for(node)
-    if isinstance(node, MeshNode):
-        return [p.as_pair() for p in scene.clip_planes if p.enabled and p.volume_id is None]
-    return []
-
-
-def export_mesh_data(scene: Scene, node, path, clip: bool) -> str:
-    """Write a mesh node, or an isosurface meshed on a refined grid, with normals (worker).
-
-    ``clip``: cut the mesh by the clip planes that cut the object (ParaView's "Clip").
-    """
-    import pyvista as pv
-
-    import splineviz as sv
-    from splineviz.render.extract import spline_isosurface
-
-    planes = planes_of(scene, node)
-    if isinstance(node, MeshNode):
-        cells = np.hstack([np.full((len(node.faces), 1), 3), node.faces]).ravel()
-        mesh = pv.PolyData(node.vertices, cells)
-        if node.normals is not None:
-            mesh.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
-    elif isinstance(node, IsosurfaceNode):
-        vol = scene.volume_of(node)
-        opts = {"k": node.k} if "k" in MODELS[node.model].options else {}
-        mesh = spline_isosurface(sv.build_spline(vol.active, node.model, **opts),
-                                 node.isovalue)
-    else:
-        raise SplinevizError("select a mesh or an isosurface to export")
-    if clip and planes:
-        for origin, normal in planes:
-            # invert=False keeps the side the normal points to, as the ray caster does
-            mesh = mesh.clip(normal=normal, origin=origin, invert=False)
-        if not isinstance(mesh, pv.PolyData):
-            mesh = mesh.extract_surface(algorithm="dataset_surface")
-        mesh = mesh.triangulate()
-    return str(sv.write_mesh(path, mesh))
 
 
 class Commands(QObject):
@@ -213,10 +167,6 @@ class Commands(QObject):
         self.saved.emit(str(path))
         return img
 
-    def planes_of(self, node) -> list:
-        """The clip planes that cut ``node`` (see :func:`planes_of`)."""
-        return planes_of(self.scene, node)
-
     def export_mesh(self, path, node=None, clip: bool = True):
         """Write the selected mesh or isosurface as a mesh file in a job."""
         node = node if node is not None else self.scene.selected
@@ -225,5 +175,7 @@ class Commands(QObject):
             node = isos[0] if isos else None
         if not isinstance(node, MeshNode | IsosurfaceNode):
             raise SplinevizError("select a mesh or an isosurface to export")
-        return self.jobs.run(f"Exporting {Path(path).name}", export_mesh_data, self.scene,
-                             node, str(path), clip, on_done=lambda p: self.saved.emit(p))
+        from splineviz.render.extract import export_mesh
+
+        return self.jobs.run(f"Exporting {Path(path).name}", export_mesh, self.scene, node,
+                             str(path), clip=clip, on_done=lambda p: self.saved.emit(p))

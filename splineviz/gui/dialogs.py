@@ -104,7 +104,7 @@ def export_mesh(window) -> None:
     if not path:
         return
     clip = True
-    if window.commands.planes_of(window.scene.selected):
+    if window.scene.planes_cutting(window.scene.selected):
         answer = QMessageBox.question(
             window, "Export mesh", "Cut the mesh by its clip planes, as the view shows it?",
             QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No

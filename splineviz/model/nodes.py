@@ -162,6 +162,12 @@ class IsosurfaceNode(Node):
             raise ValueError(f"unknown spline model {v!r}; choose one of {', '.join(MODELS)}")
         return v
 
+    def model_options(self) -> dict:
+        """Keyword arguments of the spline model (``k`` for the models that take it)."""
+        from splineviz.core.splines import MODELS
+
+        return {"k": self.k} if "k" in MODELS[self.model].options else {}
+
     @field_validator("material")
     @classmethod
     def _known_material(cls, v: str) -> str:
@@ -200,6 +206,22 @@ class MeshNode(Node):
     faces: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     normals: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     stats: dict = Field(default_factory=dict, exclude=True, repr=False)
+
+    @property
+    def has_normals(self) -> bool:
+        return self.normals is not None and len(self.normals) == len(self.vertices)
+
+    def to_polydata(self):
+        """The mesh as writers and renderers take it (``pyvista.PolyData`` made by
+        :func:`splineviz.io.meshes.as_polydata`), its normals as the active float32 point
+        normals (PLY ``nx ny nz``)."""
+        from splineviz.io.meshes import as_polydata
+
+        poly = as_polydata((self.vertices, self.faces))
+        if self.has_normals:
+            poly.point_data["Normals"] = np.asarray(self.normals, dtype=np.float32)
+            poly.point_data.active_normals_name = "Normals"
+        return poly
 
 
 class ClipPlaneNode(Node):

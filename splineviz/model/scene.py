@@ -134,6 +134,17 @@ class Scene:
         return [p.as_pair() for p in self.clip_planes
                 if p.enabled and p.volume_id in (None, vid)]
 
+    def planes_cutting(self, node: Node) -> list[tuple[tuple, tuple]]:
+        """The enabled planes that cut ``node`` in the view: an isosurface (or a volume's
+        isosurfaces) by its volume's planes and the scene's, a mesh by the scene's."""
+        if isinstance(node, IsosurfaceNode):
+            return self.planes_for(node.volume_id)
+        if isinstance(node, VolumeNode):
+            return self.planes_for(node)
+        if isinstance(node, MeshNode):
+            return [p.as_pair() for p in self.clip_planes if p.enabled and p.volume_id is None]
+        return []
+
     def bounds(self) -> tuple | None:
         """``((xmin, xmax), (ymin, ymax), (zmin, zmax))`` of all data, or None when empty."""
         boxes = []

@@ -118,7 +118,7 @@ def save_scene(scene: Scene, path) -> Path:
             node.path = str(write_volume(folder / f"{node.id}.vti", node.data))
         elif isinstance(node, MeshNode) and node.path is None:
             folder.mkdir(exist_ok=True)
-            node.path = str(write_mesh(folder / f"{node.id}.ply", _polydata(node)))
+            node.path = str(write_mesh(folder / f"{node.id}.ply", node.to_polydata()))
         elif isinstance(node, PointsNode) and node.path is None:
             folder.mkdir(exist_ok=True)
             pts = np.asarray(node.data.points, dtype=np.float64)
@@ -127,17 +127,6 @@ def save_scene(scene: Scene, path) -> Path:
     save_session(to_session(scene), p)
     scene.mark_saved()
     return p
-
-
-def _polydata(node: MeshNode):
-    """The mesh with its normals (PLY ``nx ny nz``) as the writers take it."""
-    from splineviz.io.meshes import as_polydata
-
-    poly = as_polydata((node.vertices, node.faces))
-    if node.normals is not None and len(node.normals) == len(node.vertices):
-        poly.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
-        poly.point_data.active_normals_name = "Normals"
-    return poly
 
 
 def read_session_data(session: Session) -> dict:

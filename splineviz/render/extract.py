@@ -77,3 +77,35 @@ def spline_isosurface(spline, iso: float, refine: int = 2):
     mesh.points = pts
     mesh.point_data.active_normals = normals
     return mesh
+
+
+def export_mesh(scene, node, path, clip: bool = True) -> str:
+    """Write a mesh node, or an isosurface node meshed on a refined grid
+    (:func:`spline_isosurface`), with normals; returns the path written.
+
+    ``clip``: cut the mesh by the planes that cut the object in the view
+    (:meth:`splineviz.model.Scene.planes_cutting`; ParaView's Clip before Save Data).
+    """
+    import pyvista as pv
+
+    import splineviz as sv
+    from splineviz.core.errors import SplinevizError
+    from splineviz.model import IsosurfaceNode, MeshNode
+
+    if isinstance(node, MeshNode):
+        mesh = node.to_polydata()
+    elif isinstance(node, IsosurfaceNode):
+        vol = scene.volume_of(node)
+        mesh = spline_isosurface(sv.build_spline(vol.active, node.model, **node.model_options()),
+                                 node.isovalue)
+    else:
+        raise SplinevizError("select a mesh or an isosurface to export")
+    planes = scene.planes_cutting(node) if clip else []
+    for origin, normal in planes:
+        # invert=False keeps the side the normal points to, as the ray caster does
+        mesh = mesh.clip(normal=normal, origin=origin, invert=False)
+    if planes:
+        if not isinstance(mesh, pv.PolyData):
+            mesh = mesh.extract_surface(algorithm="dataset_surface")
+        mesh = mesh.triangulate()
+    return str(sv.write_mesh(path, mesh))

@@ -146,14 +146,9 @@ class SceneView:
         else:
             if node.vertices is None:
                 return
-            cells = np.hstack([np.full((len(node.faces), 1), 3), node.faces]).ravel()
-            data = pv.PolyData(node.vertices, cells)
-            smooth = node.normals is not None and len(node.normals) == len(node.vertices)
-            if smooth:
-                data.point_data["Normals"] = np.asarray(node.normals, dtype=np.float32)
-                data.point_data.active_normals_name = "Normals"
+            data = node.to_polydata()
             opts = dict(color=node.color, opacity=node.opacity, show_edges=node.show_edges,
-                        edge_color=(0.2, 0.25, 0.35), smooth_shading=smooth)
+                        edge_color=(0.2, 0.25, 0.35), smooth_shading=node.has_normals)
         self.spline_scene.add_mesh(name, data, kind=node.kind, **opts)
         self.spline_scene.set_prop_visible(name, node.visible)
         self._update_grid()
@@ -163,22 +158,16 @@ class SceneView:
         layer = IsosurfaceLayer(vol.active, model=node.model, isovalue=node.isovalue,
                                 color=node.color, opacity=node.opacity, name=node.name,
                                 device=self.device, material=node.material,
-                                model_options=self._model_options(node))
+                                model_options=node.model_options())
         layer.set_visible(node.visible and vol.visible)
         layer.set_clip_planes(self._volume_planes(vol.id))
         self.layers[node.id] = layer
         self.spline_scene.add_layer(layer)
 
-    @staticmethod
-    def _model_options(node: IsosurfaceNode) -> dict:
-        from splineviz.core.splines import model_spec
-
-        return {"k": node.k} if "k" in model_spec(node.model).options else {}
-
     def _update_layer(self, node: IsosurfaceNode, what: str) -> None:
         layer = self.layers[node.id]
         if what in ("model", "k"):
-            layer.set_model(node.model, self._model_options(node))
+            layer.set_model(node.model, node.model_options())
         elif what == "isovalue":
             layer.set_isovalue(node.isovalue)
         elif what == "color":
