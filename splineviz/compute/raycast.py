@@ -383,11 +383,17 @@ class RayCaster:
                      NUNION=self._nunion)
         return d
 
+    def _ray_kernel(self, kernel: str):
+        """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude)."""
+        return get_kernel(self._device.context, "raycast", kernel, self._defines(),
+                          self._prelude)
+
     def _upload(self):
         """Samples, min-max octree and the cleared classification cache on the device."""
         import pyopencl.array as cla
 
         dev = self._device
+        self._prelude = ""
         q = dev.queue
         ctx = dev.context
         levels = _octree_levels(self._cells)
@@ -465,7 +471,7 @@ class RayCaster:
         """
         import pyopencl.array as cla
 
-        from splineviz.compute import to_tables
+        from splineviz.compute import to_program, to_tables
         from splineviz.compute.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
@@ -500,43 +506,13 @@ class RayCaster:
         }
         if np.diff(start).max() > 32 * TO_WORDS:
             raise AssertionError("more pieces per cell than the bit set holds")  # a bug
-        # union of the data offsets read by each class (for the conservative cell bounds and
-        # the private data copy of the classification); the distinct B-net points of the
-        # class's pieces (pieces of one TO share points: each is computed once) as stencils
-        # into that union, and per point the bit set of the pieces whose B-net holds it
-        tables = to_tables.stencils(k)
-        cls_offsets, cls_start, pt_start = [], [0], [0]
-        u_rows, u_cols, u_w, pt_pieces = [0], [], [], []
-        for c in range(8):
-            pts = sorted({p for e in range(start[c], start[c + 1])
-                          for p in map(tuple, tables[tet[e]][0] + base_off[e])})
-            where = {p: n for n, p in enumerate(pts)}
-            cls_offsets.extend(np.array(pts) @ strides)
-            cls_start.append(len(cls_offsets))
-            points = {}  # stencil (union index, weight) pairs -> point of the class
-            for e in range(start[c], start[c + 1]):
-                offsets, w = tables[tet[e]]
-                idx = [where[tuple(o)] for o in offsets + base_off[e]]
-                for i in range(w.shape[0]):
-                    nz = np.flatnonzero(w[i])
-                    key = tuple((idx[n], float(w[i, n])) for n in nz)
-                    if key not in points:
-                        points[key] = len(points)
-                        u_cols.extend(idx[n] for n in nz)
-                        u_w.extend(w[i, nz])
-                        u_rows.append(len(u_cols))
-                        pt_pieces.append(np.zeros(TO_WORDS, np.uint32))
-                    bit = e - start[c]
-                    pt_pieces[pt_start[-1] + points[key]][bit >> 5] |= np.uint32(1 << (bit & 31))
-            pt_start.append(pt_start[-1] + len(points))
-        self._nunion = int(np.diff(cls_start).max())
-        self._cls_start = cla.to_device(q, np.array(cls_start, np.int32))
-        self._cls_offsets = cla.to_device(q, np.array(cls_offsets, np.int32))
-        self._union_csr = [cla.to_device(q, np.array(pt_start, np.int32)),
-                           cla.to_device(q, np.array(u_rows, np.int32)),
-                           cla.to_device(q, np.array(u_cols, np.uint16)),
-                           cla.to_device(q, np.array(u_w, np.float32)),
-                           cla.to_device(q, np.concatenate(pt_pieces))]
+        # the data each class reads (its union: the conservative cell bounds and the private
+        # copy the generated relevance test sums, see splineviz.compute.to_program)
+        pts = to_tables.class_points(k, TO_WORDS)
+        self._nunion = int(np.diff(pts["union_start"]).max())
+        self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
+        self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
+        self._prelude = to_program.relevance_source(k, TO_WORDS)
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
@@ -662,7 +638,7 @@ class RayCaster:
                 ijk = np.stack(np.unravel_index(cells, self._cells))
                 bricks = len(np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:])))
                 self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + bricks)
-                get_kernel(ctx, "raycast", "tet_codes", self._defines())(
+                self._ray_kernel("tet_codes")(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
                     self._stencil.data, *(a.data for a in self._cube_program),
@@ -678,11 +654,10 @@ class RayCaster:
                 nrel = cla.empty(q, n, np.int32)
                 bits = cla.empty(q, n * TO_WORDS, np.uint32)
                 _, cy, cz = self._cells
-                get_kernel(ctx, "raycast", "to_codes", self._defines())(
+                self._ray_kernel("to_codes")(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
-                    self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
-                    *(a.data for a in self._union_csr), np.float32(self._negmass), iso,
+                    self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass), iso,
                     bits.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
         if relevant is None:
@@ -713,7 +688,7 @@ class RayCaster:
         q = self._device.queue
         skip = cla.empty(q, int(np.prod(self._cells)), np.uint8)
         cx, cy, cz = self._cells
-        get_kernel(self._device.context, "raycast", "skip_codes", self._defines())(
+        self._ray_kernel("skip_codes")(
             q, (cz, cy, cx), None, self._bounds.data, self._levels_buf.data,
             np.int32(len(self._levels)), np.int32(cx), np.int32(cy), np.int32(cz),
             np.float32(self._isovalue), skip.data)
@@ -781,7 +756,7 @@ class RayCaster:
 
         dev = self._device
         q = dev.queue
-        k_ray = get_kernel(dev.context, "raycast", "raycast", self._defines())
+        k_ray = self._ray_kernel("raycast")
         vol = self._volume
         spacing = np.asarray(vol.spacing, dtype=np.float64)
         origin = np.asarray(vol.origin, dtype=np.float64)
@@ -816,8 +791,8 @@ class RayCaster:
         elif self._family == "MODEL_TO":
             e = self._ent
             model_args = [*self._cache_args(), self._cls_start.data,
-                          self._cls_offsets.data, *(a.data for a in self._union_csr),
-                          e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
+                          self._cls_offsets.data, e["start"].data, e["centre"].data,
+                          e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         # a fixed work-group size, the launch padded to whole groups: PoCL compiles a kernel

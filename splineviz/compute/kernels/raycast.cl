@@ -478,15 +478,13 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
 // returns the number of relevant pieces. The data a cell's pieces read (the class union, at
 // most NUNION values) are gathered once. First the cheap cell bounds of classify.cl (their
 // range widened by the negative weight mass): most cells the rays reach end there. Then each
-// distinct B-net point of the class's pieces (stencils into the union, pt_start per class) is
-// computed once: min <= iso <= max over a piece's coefficients iff one is <= iso and one is
-// >= iso, so each point marks the pieces whose B-net holds it (pt_pieces) in two masks.
+// distinct B-net point of the class's pieces is computed once: min <= iso <= max over a
+// piece's coefficients iff one is <= iso and one is >= iso, so each point marks the pieces
+// whose B-net holds it in two masks (to_class_points, generated from the class tables by
+// splineviz/compute/to_program.py and prepended to this file).
 inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
-                        __constant const int *ent_start, __global const int *pt_start,
-                        __global const int *u_rows,
-                        __global const ushort *u_cols, __global const float *u_w,
-                        __global const uint *pt_pieces, float negmass, float iso, uint *words)
+                        float negmass, float iso, uint *words)
 {
     float vals[NUNION];
     const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
@@ -496,27 +494,12 @@ inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
         vlo = fmin(vlo, vals[u]);
         vhi = fmax(vhi, vals[u]);
     }
-    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
     const float wid = negmass * (vhi - vlo);
-    if (!(vlo - wid <= iso && iso <= vhi + wid)) return 0;
-    uint below[NWORDS];
-    for (int w = 0; w < NWORDS; ++w) below[w] = 0u;
-    // words holding pieces of this class (64 of 144 pieces in most classes: 2 of 5)
-    const int nw = (ent_start[cls + 1] - ent_start[cls] + 31) >> 5;
-    for (int p = pt_start[cls]; p < pt_start[cls + 1]; ++p) {
-        float acc = 0.0f;
-        for (int q = u_rows[p]; q < u_rows[p + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
-        if (acc <= iso)
-            for (int w = 0; w < nw; ++w) below[w] |= pt_pieces[p * NWORDS + w];
-        if (acc >= iso)
-            for (int w = 0; w < nw; ++w) words[w] |= pt_pieces[p * NWORDS + w];
+    if (!(vlo - wid <= iso && iso <= vhi + wid)) {
+        for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+        return 0;
     }
-    int count = 0;
-    for (int w = 0; w < nw; ++w) {
-        words[w] &= below[w];
-        count += popcount(words[w]);
-    }
-    return count;
+    return to_class_points(vals, cls, iso, words);
 }
 
 // The bit set of `cell` at this epoch: from the brick cache, or computed by this ray and
@@ -526,11 +509,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
                            uint epoch, int3 cell, int BY, int BZ,
                            __global const DATA_T *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
-                           __constant const int *ent_start, __global const int *pt_start,
-                           __global const int *u_rows,
-                           __global const ushort *u_cols, __global const float *u_w,
-                           __global const uint *pt_pieces, float negmass, float iso,
-                           __global int *counts, uint *words)
+                           float negmass, float iso, __global int *counts, uint *words)
 {
     const int a = brick_entry(slots, pool, pool_cap, epoch, cell, BY, BZ, counts);
     const int at = a >= 0 ? cell_word(a, cell) : 0;
@@ -538,8 +517,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
         for (int w = 0; w < NWORDS; ++w) words[w] = pool[at + w];
         return;
     }
-    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, pt_start,
-                               u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
+    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words);
     if (a < 0) return;
     for (int w = 0; w < NWORDS; ++w) pool[at + w] = words[w];
     mem_fence(CLK_GLOBAL_MEM_FENCE);  // the words before their flag
@@ -553,11 +531,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
 // the number of relevant pieces per candidate.
 __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int CZ,
                        __global const int *cells, __constant const int *cls_start,
-                       __constant const int *cls_offsets, __constant const int *ent_start,
-                       __global const int *pt_start,
-                       __global const int *u_rows, __global const ushort *u_cols,
-                       __global const float *u_w, __global const uint *pt_pieces,
-                       float negmass, float iso,
+                       __constant const int *cls_offsets, float negmass, float iso,
                        __global uint *bits, __global int *n_relevant)
 {
     const int a = get_global_id(0);
@@ -566,8 +540,7 @@ __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
     const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
-    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start,
-                                 pt_start, u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words);
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
@@ -636,10 +609,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
 #endif
 #ifdef MODEL_TO
                       __constant const int *cls_start,
-                      __constant const int *cls_offsets, __global const int *pt_start,
-                      __global const int *u_rows, __global const ushort *u_cols,
-                      __global const float *u_w, __global const uint *pt_pieces,
-                      __constant const int *ent_start,
+                      __constant const int *cls_offsets, __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
                       __constant const int *ent_tet, __global const int *row_ptr,
                       __global const int *cols, __global const float *weights,
@@ -724,8 +694,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                 uint words[NWORDS];
                 to_cached_bits(slots, pool, pool_cap, epoch, cell, BY, BZ, data, corner, cls,
-                               cls_start, cls_offsets, ent_start, pt_start, u_rows, u_cols, u_w,
-                               pt_pieces, negmass, iso, counts, words);
+                               cls_start, cls_offsets, negmass, iso, counts, words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
