@@ -557,9 +557,11 @@ inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, con
 {
     float best = -1.0f;
     const int e0 = ent_start[cls];
-    for (int e = e0; e < ent_start[cls + 1]; ++e) {
-        const int q = e - e0;
-        if (!(words[q >> 5] & (1u << (q & 31)))) continue;
+    const int nw = (ent_start[cls + 1] - e0 + 31) >> 5;
+    // the set bits only (about 30 of the class's 64 or 144 pieces), lowest first
+    for (int w = 0; w < nw; ++w)
+    for (uint bits = words[w]; bits != 0u; bits &= bits - 1u) {
+        const int e = e0 + (w << 5) + (31 - (int)clz(bits & (0u - bits)));
         const int t = ent_tet[e];
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
                      r3 = bary[4 * t + 3];
