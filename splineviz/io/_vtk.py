@@ -64,11 +64,11 @@ def captured_vtk_output():
             sink.append(text)
 
 
-def first_vtk_error(text: str) -> str | None:
+def first_vtk_error(text: str, *, generic: str = "the reader failed") -> str | None:
     """The most specific error message in VTK output text, without file/line noise.
 
     The pipeline's generic "Algorithm ... returned failure" is used only when nothing more
-    specific was reported.
+    specific was reported; it is then replaced by ``generic``.
     """
     found = []
     for block in re.split(r"\n(?=(?:ERROR|Generic Warning|Warning))", (text or "").lstrip()):
@@ -82,7 +82,7 @@ def first_vtk_error(text: str) -> str | None:
     specific = [m for m in found if "returned failure for request" not in m]
     if specific:
         return specific[0]
-    return "the reader failed" if found else None
+    return generic if found else None
 
 
 def run_vtk(algorithm, name: str, *, information_only: bool = False):
