@@ -66,7 +66,7 @@ def _read_back(poly, keeps_points: bool, name: str):
             back = _read_mesh_pv(tmp)
         except (CorruptFileError, InvalidDataError):
             back = None
-        if back is None or back.n_cells != poly.n_cells or (
+        if back is None or back.GetNumberOfPolys() != poly.GetNumberOfPolys() or (
                 keeps_points and back.n_points != poly.n_points):
             raise WriteError(f"writing {name} stopped before the end (disk full or file "
                              "too large?); the previous file, if any, is unchanged")

@@ -686,7 +686,6 @@ def _resolve(session: Session, session_file: Path) -> None:
     """Make every data path absolute (relative ones against the session's folder) and refuse
     those whose real path (``..`` and symbolic links followed) leaves that folder, unless
     :func:`~splineviz.io._util.outside_allowed` is in force."""
-    folder = session_file.parent
     for o in session.objects:
         if o.type not in FILE_TYPES:
             continue
@@ -695,8 +694,8 @@ def _resolve(session: Session, session_file: Path) -> None:
         if p.is_absolute() or PurePosixPath(raw).is_absolute() or re.match(r"^[A-Za-z]:[\\/]",
                                                                            raw):
             name = os.path.normpath(p)
-        else:
-            name = os.path.normpath(folder / Path(*PurePosixPath(raw.replace("\\", "/")).parts))
+        else:  # stored in POSIX form; confined() joins it with the session's folder
+            name = os.path.normpath(Path(*PurePosixPath(raw.replace("\\", "/")).parts))
         resolved = confined(name, session_file, what=f"data file of object {o.id!r}",
                             error=SessionOutsideFolderError)
         o.properties.path = str(Path(os.path.normpath(resolved)))

@@ -47,7 +47,8 @@ def run(args) -> int:
     from splineviz.render.scene_view import render_scene
 
     size = parse_size(args.size)
-    scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model)
+    scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
+                            allow_outside=args.allow_outside_data)
     if not scene.isosurfaces:
         raise RenderArgumentError(f"{args.volume} holds no volume to render")
     for vol in scene.volumes:
@@ -76,13 +77,15 @@ def run(args) -> int:
 
 def register(subparsers) -> None:
     """Add the ``render`` sub-command (see :mod:`splineviz.cli`)."""
+    from splineviz.cli import finite_float
     from splineviz.core.splines import MODELS
 
     p = subparsers.add_parser("render", help="ray cast a spline isosurface into a PNG",
                               description="Ray cast the isosurface of a spline model of a "
                               "volume (or render a session) into a PNG, without a display.")
     p.add_argument("volume", help="volume file (any format splineviz reads) or session")
-    p.add_argument("--iso", type=float, default=None, help="isovalue (default: mid-range)")
+    p.add_argument("--iso", type=finite_float, default=None,
+                   help="isovalue (default: mid-range)")
     p.add_argument("--model", default=None,
                    help=" | ".join(MODELS) + " (default: cubic-c1, or the session's)")
     p.add_argument("--size", default="1024x768", help="image size WxH")
@@ -94,4 +97,6 @@ def register(subparsers) -> None:
     p.add_argument("--device", default=None, help="gpu | cpu | numpy | device-name substring "
                    "(default: $SPLINEVIZ_DEVICE, else GPU before CPU)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
+    p.add_argument("--allow-outside-data", action="store_true",
+                   help="read data files that a header or session names outside its folder")
     p.set_defaults(func=run)
