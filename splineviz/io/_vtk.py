@@ -26,6 +26,45 @@ def _vtk():
 
 
 @contextlib.contextmanager
+def quiet_vtk_logger():
+    """Keep vtkLogger's stderr output off inside the block: off-screen rendering without a
+    display logs "bad X server connection" before falling back, which is no news to a user
+    who rendered to a file (errors still reach the output window and are reported)."""
+    logger = _vtk().vtkLogger
+    cutoff = logger.GetCurrentVerbosityCutoff()
+    logger.SetStderrVerbosity(logger.VERBOSITY_OFF)
+    try:
+        yield
+    finally:
+        logger.SetStderrVerbosity(logger.ConvertToVerbosity(cutoff))
+
+
+@contextlib.contextmanager
+def captured_stderr(sink: list[str]):
+    """Collect what C/C++ code writes to file descriptor 2 (``std::cerr``) inside the block
+    into ``sink``: MetaIO prints "data not read completely" there, bypassing VTK's output
+    window, and a user error must be one line, not a library's report followed by ours."""
+    import sys
+
+    with contextlib.suppress(AttributeError, ValueError, OSError):
+        sys.stderr.flush()
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr at all (a detached GUI): nothing to capture
+        yield
+        return
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            sink.append(tmp.read(65536).decode("utf-8", "replace"))
+
+
+@contextlib.contextmanager
 def captured_vtk_output():
     """Collect everything VTK would print; yields a list that receives the text on exit.
 
@@ -45,8 +84,10 @@ def captured_vtk_output():
         cutoff = logger.GetCurrentVerbosityCutoff()
         logger.SetStderrVerbosity(logger.VERBOSITY_OFF)
         logger.LogToFile(log_path, logger.TRUNCATE, logger.VERBOSITY_WARNING)
+        cerr: list[str] = []
         try:
-            yield sink
+            with captured_stderr(cerr):
+                yield sink
         finally:
             logger.EndLogToFile(log_path)
             logger.SetStderrVerbosity(logger.ConvertToVerbosity(cutoff))
@@ -61,6 +102,11 @@ def captured_vtk_output():
                             text += f"\nERROR: vtkLogger\n{msg.strip()}\n"
             except OSError:
                 pass
+            for line in "".join(cerr).splitlines():
+                # MetaIO reports failed reads only here ("M_ReadElementsData: data not read
+                # completely"); anything else printed there is noise, not shown either
+                if re.search(r"rror|not read|cannot|failed", line):
+                    text += f"\nERROR: stderr\n{line.strip()}\n"
             sink.append(text)
 
 
