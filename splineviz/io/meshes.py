@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.io import _vtk
-from splineviz.io._util import atomic_output, regular_input
+from splineviz.io._util import atomic_output, memory_budget, regular_input
 from splineviz.io.errors import CorruptFileError, InvalidDataError, WriteError
 from splineviz.io.registry import find_format, register_format
 
@@ -208,6 +208,8 @@ def _read_mesh_pv(path: Path):
         if err:
             raise CorruptFileError(f"{path.name} cannot be read: {err}")
     else:
+        if path.name.lower().endswith(".vtp"):
+            _vtk.check_xml_appended(path, path.name, memory_budget())
         # the VTK reader run directly: its errors are captured, nothing reaches stderr
         reader.SetFileName(str(path))
         _vtk.run_vtk(reader, path.name)
@@ -241,9 +243,13 @@ def _read_png(path: Path):
     from PIL import Image, UnidentifiedImageError
 
     try:
-        with Image.open(path) as im:
-            return np.asarray(im.convert("RGBA"))
-    except (UnidentifiedImageError, OSError, ValueError) as exc:
+        with warnings.catch_warnings():
+            # a decompression-bomb warning is answered by the error below, not printed
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            with Image.open(path) as im:
+                return np.asarray(im.convert("RGBA"))
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError, EOFError,
+            Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
         raise CorruptFileError(f"{path.name} is not a readable PNG image: {exc}") from None
 
 

@@ -267,6 +267,7 @@ def _read_stl(path: Path) -> PointData:
 def _read_off(path: Path) -> PointData:
     """Geomview OFF through meshio (Open3D returns garbage for truncated files)."""
     import meshio
+    from meshio import off
 
     m = re.match(rb"\s*[CN]*OFF\s+(?:#[^\n]*\n\s*)*(\d+)", _head(path, 4096))
     if m is None:
@@ -275,7 +276,9 @@ def _read_off(path: Path) -> PointData:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            mesh = meshio.read(str(path), file_format="off")
+            # the format's own reader: meshio.read prints a failed read and calls
+            # sys.exit(1) instead of raising
+            mesh = off.read(str(path))
     except (meshio.ReadError, ValueError, IndexError, EOFError) as exc:
         raise CorruptFileError(f"{path.name} is not a valid OFF file: {exc}") from None
     return PointData(np.asarray(mesh.points, dtype=np.float64), None, None, "off")

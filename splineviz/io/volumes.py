@@ -30,6 +30,7 @@ from splineviz.io._util import (
     atomic_output,
     check_volume_size,
     confined,
+    memory_budget,
     open_regular,
     outside_allowed,
     reader_errors,
@@ -120,6 +121,7 @@ def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
 def _read_vti(path: Path) -> VolumeData:
     from vtkmodules.vtkIOXML import vtkXMLImageDataReader
 
+    _vtk.check_xml_appended(path, path.name, memory_budget())
     return _read_with_vtk(vtkXMLImageDataReader(), path, "vti")
 
 
