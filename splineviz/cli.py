@@ -13,7 +13,6 @@ as one ``splineviz: warning:`` line each; warnings of third-party libraries are 
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import warnings
 from importlib import import_module
@@ -34,16 +33,6 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(f"{self.prog}: {message}")
 
 
-def finite_float(text: str) -> float:
-    """argparse type of a finite number (``nan`` and ``inf`` parse as floats but are no
-    isovalue)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
-    return value
 
 # sub-command name -> "module:register_function"
 SUBCOMMANDS: dict[str, str] = {
@@ -70,6 +59,8 @@ def _build_parser() -> argparse.ArgumentParser:
 def _viewer_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="splineviz", description="Open the splineviz app.")
     parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
+    from splineviz.render.cli_render import finite_float
+
     parser.add_argument("--iso", type=finite_float, default=None, help="isovalue")
     parser.add_argument("--model", default=None,
                         help="spline model (default: the smoothest one with an OpenCL kernel)")

@@ -7,6 +7,7 @@ picture is the one the window would show for the same camera.
 
 from __future__ import annotations
 
+import math
 import sys
 
 import numpy as np
@@ -28,6 +29,20 @@ def _floats(text: str, counts, what: str) -> list[float]:
         raise RenderArgumentError(
             f"{what} needs {' or '.join(map(str, counts))} finite numbers, got {text!r}")
     return vals
+
+
+def finite_float(text: str) -> float:
+    """argparse type of a finite number (``nan`` and ``inf`` parse as floats but are no
+    isovalue)."""
+    import argparse
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
 
 
 def make_camera(spec: str | None, bounds, view_angle: float) -> Camera:
@@ -77,7 +92,6 @@ def run(args) -> int:
 
 def register(subparsers) -> None:
     """Add the ``render`` sub-command (see :mod:`splineviz.cli`)."""
-    from splineviz.cli import finite_float
     from splineviz.core.splines import MODELS
 
     p = subparsers.add_parser("render", help="ray cast a spline isosurface into a PNG",

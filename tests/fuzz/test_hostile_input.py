@@ -331,3 +331,40 @@ def test_cli_prints_documented_warnings_as_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert [ln for ln in err if ln.startswith("splineviz: warning:")] and \
         all(ln.startswith("splineviz:") for ln in err), err
+
+
+# ---------------------------------------------------------------------------- the CLI
+def _subprocess_cases(d):
+    """A handful of representative refusals, run as a user runs them."""
+    import nibabel as nib
+
+    (d / "sub").mkdir()
+    _mhd(d / "sub", "/etc/passwd")
+    (d / "trunc.mha").write_bytes(b"ObjectType = Image\nNDims = 3\nDimSize = 5 4 3\n"
+                                  b"ElementType = MET_FLOAT\nElementDataFile = LOCAL\n" + RAW[:99])
+    (d / "bomb.nhdr").write_text("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 3\n"
+                                 "encoding: raw\ndata file: s%0999999999d.raw 1 3 1 2\n")
+    nib.save(nib.Nifti1Image(F, np.eye(4)), d / "v.nii")
+    (d / "trunc.nii").write_bytes((d / "v.nii").read_bytes()[:360])
+    os.mkfifo(d / "pipe.nrrd")
+    return [["info", str(d / "sub" / "v.mhd")],
+            ["render", str(d / "trunc.mha"), "-o", str(d / "o.png")],
+            ["info", str(d / "bomb.nhdr")],
+            ["render", str(d / "trunc.nii"), "-o", str(d / "o.png")],
+            ["info", str(d / "pipe.nrrd")]]
+
+
+def test_cli_refusals_are_one_line_without_traceback(tmp_path, tried):
+    import subprocess
+    import sys
+
+    for argv in _subprocess_cases(tmp_path):
+        t = time.perf_counter()
+        r = subprocess.run([sys.executable, "-m", "splineviz.cli", *argv], capture_output=True,
+                           text=True, timeout=120, env={**os.environ, "DISPLAY": ""})
+        assert r.returncode == 2, (argv, r.stdout, r.stderr)
+        assert r.stderr.count("\n") == 1 and r.stderr.startswith("splineviz: error: "), \
+            (argv, r.stderr)
+        assert time.perf_counter() - t < 60
+        tried["cli subprocess"] += 1
+    assert not (tmp_path / "o.png").exists()
