@@ -196,6 +196,9 @@ _XML_TAG = {name: re.compile(rb"<" + name.encode() + rb"\b([^>]*)>", re.S)
 _XML_ATTR = re.compile(rb'(\w+)\s*=\s*"([^"]*)"')
 #: most blocks a compressed array of a sane file has (VTK's blocks are 32 KiB by default)
 MAX_BLOCKS = 2**26
+#: most components per tuple: VTK loops over components while it parses a header (2^31 of
+#: them hang the reader); real arrays have 1 to 9, field data a few hundred
+MAX_COMPONENTS = 4096
 
 
 def _attrs(text: bytes) -> dict:
@@ -233,6 +236,14 @@ def check_xml_appended(path, name: str, budget: int) -> None:
                             if not re.fullmatch(r"-?\d{1,12}", n) or abs(int(n)) > 2**31:
                                 raise CorruptFileError(f"{name} has the unusable piece size "
                                                        f"{key}={val[:40]!r}")
+            for arr in _XML_TAG["DataArray"].findall(head):
+                for key in ("NumberOfComponents", "NumberOfTuples"):
+                    val = _attrs(arr).get(key)
+                    limit = MAX_COMPONENTS if key == "NumberOfComponents" else 2**31
+                    if val is not None and (not re.fullmatch(r"\d{1,12}", val.strip())
+                                            or int(val) > limit):
+                        raise CorruptFileError(f"{name} has an array with the unusable "
+                                               f"{key}={val[:40]!r}")
             if where < 0:
                 return
             tag = _XML_TAG["AppendedData"].match(m[where:where + 4096])
@@ -286,7 +297,9 @@ def check_xml_appended(path, name: str, budget: int) -> None:
                                            "compression header")
                 csizes = words(at, 3 + int(nblocks))[3:]
                 total = (nblocks - 1) * bsize + (last or bsize) if nblocks else 0
-                if last > bsize or total > budget or \
+                # zlib inflates at most ~1032:1; a table announcing more is damaged (and a
+                # large enough claim would make VTK's allocation fail and abort)
+                if last > bsize or total > budget or total > 1100 * (sum(csizes) + 64) or \
                         at + (3 + nblocks) * hsize + sum(csizes) > size * (1 + encoded):
                     raise CorruptFileError(f"{name}: array {a.get('Name', '')!r} has a damaged "
                                            "compression header (sizes beyond the file or "

@@ -218,6 +218,8 @@ def _read_mesh_pv(path: Path):
         mesh = mesh.extract_surface()
     if mesh.n_points == 0:
         raise InvalidDataError(f"{path.name} holds no vertices")
+    if not np.isfinite(np.asarray(mesh.points)).all():
+        raise InvalidDataError(f"{path.name} has NaN or infinite vertex coordinates")
     return mesh
 
 
