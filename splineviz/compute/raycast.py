@@ -372,6 +372,22 @@ class RayCaster:
                 f"{dev.max_mem_alloc_size / gib:.2f} GiB per buffer); use a smaller or "
                 f"downsampled volume")
 
+    #: device bytes per pixel of the frame buffers of _render_cl: hit flag, position and
+    #: normal (float4 each), depth, RGBA colour; the largest single buffer is a float4
+    FRAME_BYTES_PER_PIXEL = 1 + 16 + 16 + 4 + 4
+
+    def _check_frame_memory(self, w: int, h: int) -> None:
+        """Refuse, before allocating anything, a frame the device cannot hold (pyopencl would
+        fail with INVALID_BUFFER_SIZE or MEM_OBJECT_ALLOCATION_FAILURE half-way)."""
+        dev = self._device.device
+        n = w * h
+        if n * 16 > dev.max_mem_alloc_size or \
+                n * self.FRAME_BYTES_PER_PIXEL > 0.5 * dev.global_mem_size:
+            raise RayCastError(
+                f"a {w}x{h} frame needs {n * self.FRAME_BYTES_PER_PIXEL / 2**30:.2f} GiB of "
+                f"device memory, more than {self._device.name} offers (at most "
+                f"{dev.max_mem_alloc_size / 2**30:.2f} GiB per buffer); render a smaller image")
+
     def _defines(self) -> dict:
         """-D options of this model's programs."""
         d = {self._family: 1, "DATA_T": self._sample_type[1], **_shading_defines()}
@@ -715,6 +731,8 @@ class RayCaster:
             raise RayCastError("render needs a splineviz Camera")
         w, h = parse_size(size)
         planes = ref.normalize_clip_planes(clip_planes)
+        if self._device is not None:
+            self._check_frame_memory(w, h)
         t = time.perf_counter()
         if self._device is None:
             frame = ref.reference_raycast(self.spline, camera, (w, h), self._isovalue, planes)

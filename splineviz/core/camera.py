@@ -27,8 +27,13 @@ CLIP_MARGIN = 0.01
 NEAR_TOLERANCE = 1e-3
 
 
+#: largest image side: VTK's largest render window, and far beyond any screen or print use
+MAX_IMAGE_SIDE = 16384
+
+
 def parse_size(size) -> tuple[int, int]:
-    """(width, height) from a pair or a ``"WxH"`` string."""
+    """(width, height) from a pair or a ``"WxH"`` string, each side 1 to
+    :data:`MAX_IMAGE_SIDE` (checked before any frame buffer is allocated)."""
     if isinstance(size, str):
         parts = size.lower().split("x")
         if len(parts) != 2:
@@ -40,6 +45,9 @@ def parse_size(size) -> tuple[int, int]:
         raise CameraError(f"image size must be two integers, got {size!r}") from None
     if w < 1 or h < 1:
         raise CameraError(f"image size must be positive, got {w}x{h}")
+    if max(w, h) > MAX_IMAGE_SIDE:
+        raise CameraError(f"image size {w}x{h} is too large: at most {MAX_IMAGE_SIDE} pixels "
+                          "per side")
     return w, h
 
 

@@ -84,6 +84,11 @@ class Volume:
             raise VolumeError("the volume has no finite samples")
         return float(finite.min()), float(finite.max())
 
+    @functools.cached_property
+    def nonfinite_count(self) -> int:
+        """Number of NaN or infinite samples (computed once, like :attr:`finite_range`)."""
+        return int(self.data.size - np.count_nonzero(np.isfinite(self.data)))
+
     def world_to_index(self, points: np.ndarray) -> np.ndarray:
         """(N, 3) world coordinates -> (N, 3) continuous grid indices (float64)."""
         p = np.asarray(points, dtype=np.float64)

@@ -72,3 +72,28 @@ class SessionPathError(SessionError):
 
 class PluginError(_OneSentence, SplinevizError, RuntimeError):
     """A plugin could not be loaded or registered something invalid."""
+
+
+class OutsideFolderError(_OneSentence, SplinevizError, ValueError):
+    """A file named by a header or a session resolves (symbolic links followed) outside the
+    folder of the file that names it. Refused unless the caller opts in (``allow_outside=True``
+    in the API, ``--allow-outside-data`` on the command line); a GUI asks the user about
+    :attr:`path` and retries with the opt-in.
+
+    Attributes
+    ----------
+    path : Path
+        The resolved file that would have been read.
+    folder : Path
+        The resolved folder it had to stay in.
+    """
+
+    def __init__(self, message="", *, path=None, folder=None):
+        super().__init__(message)
+        self.path = path
+        self.folder = folder
+
+
+class SessionOutsideFolderError(OutsideFolderError, SessionPathError):
+    """A session's data path resolves outside the session's folder (see
+    :class:`OutsideFolderError`)."""

@@ -10,12 +10,14 @@ import numpy as np
 from splineviz.io.errors import UnknownFormatError
 
 
-def describe(path, **raw) -> dict:
+def describe(path, *, allow_outside: bool = False, **raw) -> dict:
     """Summary of a file: kind, format and geometry.
 
     Parameters
     ----------
     path : path-like
+    allow_outside : bool
+        Accept data files that a header or session names outside its own folder.
     **raw
         ``dims``, ``dtype``, ``byteorder``, ``offset`` for headerless raw volumes.
 
@@ -33,12 +35,13 @@ def describe(path, **raw) -> dict:
 
     p = regular_input(path, allow_dir=True)
     if p.suffix.lower() == ".svs":
-        s = load_session(p, check_data=False)
+        s = load_session(p, check_data=False, allow_outside=allow_outside)
         return {"kind": "session", "file": str(p), "schema_version": s.schema_version,
                 "objects": [f"{o.id} ({o.type})" for o in s.objects],
                 "views": [v.id for v in s.views]}
     try:
-        vd = load_volume_data(p, **{k: v for k, v in raw.items() if v is not None})
+        vd = load_volume_data(p, allow_outside=allow_outside,
+                              **{k: v for k, v in raw.items() if v is not None})
     except UnknownFormatError:
         try:
             raw = load_point_data(p)
@@ -93,6 +96,8 @@ def register(subparsers) -> None:
     p.add_argument("--byteorder", choices=("little", "big"), default=None,
                    help="raw volumes: byte order (default little)")
     p.add_argument("--offset", type=int, default=None, help="raw volumes: header bytes to skip")
+    p.add_argument("--allow-outside-data", action="store_true",
+                   help="read data files that a header or session names outside its folder")
     p.set_defaults(func=_run)
 
 
@@ -100,6 +105,7 @@ def _run(args) -> int:
     import json
 
     info = describe(Path(os.fspath(args.file)), dims=args.dims, dtype=args.dtype,
-                    byteorder=args.byteorder, offset=args.offset)
+                    byteorder=args.byteorder, offset=args.offset,
+                    allow_outside=args.allow_outside_data)
     print(json.dumps(info, indent=2) if args.json else format_info(info))
     return 0

@@ -31,7 +31,7 @@ class Opened:
     path: Path
 
 
-def open_path(path, *, repoint=None) -> Opened:
+def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
     """Read ``path`` as a session (``.svs``), else as a volume, else as a point cloud.
 
     Parameters
@@ -39,6 +39,9 @@ def open_path(path, *, repoint=None) -> Opened:
     path : path-like
     repoint : callable, optional
         Passed to :func:`~splineviz.io.session.load_session` for missing data files.
+    allow_outside : bool
+        Read data files that a header or session names outside its own folder (refused by
+        default with an :class:`~splineviz.io.errors.OutsideFolderError`).
 
     Raises
     ------
@@ -52,9 +55,10 @@ def open_path(path, *, repoint=None) -> Opened:
 
     p = Path(os.fspath(path)).expanduser()
     if p.suffix.lower() in SESSION_SUFFIXES:
-        return Opened("session", load_session(p, repoint=repoint), p)
+        return Opened("session", load_session(p, repoint=repoint,
+                                                    allow_outside=allow_outside), p)
     try:
-        return Opened("volume", read_volume(p), p)
+        return Opened("volume", read_volume(p, allow_outside=allow_outside), p)
     except UnknownFormatError:
         pass
     try:

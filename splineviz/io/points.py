@@ -74,7 +74,10 @@ def _check_count(count: int, path: Path, bytes_per_point: int) -> None:
 _TRIANGLES = {"face": {"vertex_indices": 3, "vertex_index": 3}}
 
 
-def _read_ply(path: Path) -> PointData:
+def read_ply_data(path: Path):
+    """Parse a PLY file completely with plyfile -> ``PlyData`` (payload length checked
+    against the header's counts); every failure is a :class:`CorruptFileError`. Shared by
+    the point and mesh readers: VTK's PLY reader crashes the process on truncated files."""
     from plyfile import PlyData, PlyElementParseError, PlyHeaderParseError, PlyParseError
 
     try:
@@ -93,31 +96,42 @@ def _read_ply(path: Path) -> PointData:
                     raise
                 fh.seek(0)
                 ply = PlyData.read(fh, mmap="c")
-            if "vertex" not in ply:
-                raise InvalidDataError(f"{path.name} has no vertex element")
-            v = ply["vertex"].data
-            names = v.dtype.names or ()
-            if not all(c in names for c in "xyz"):
-                raise InvalidDataError(f"{path.name} has vertices without x, y, z")
-            pts = np.column_stack([np.asarray(v[c], dtype=np.float64) for c in "xyz"])
-            normals = None
-            if all(c in names for c in ("nx", "ny", "nz")):
-                normals = np.column_stack([np.asarray(v[c], np.float64)
-                                           for c in ("nx", "ny", "nz")])
-            colors = None
-            for keys in (("red", "green", "blue", "alpha"), ("red", "green", "blue"),
-                         ("diffuse_red", "diffuse_green", "diffuse_blue")):
-                if all(k in names for k in keys):
-                    colors = np.column_stack([np.asarray(v[k]) for k in keys])
-                    if colors.dtype.kind == "f":  # float colours are in [0, 1]
-                        colors = np.clip(colors * 255 + 0.5, 0, 255)
-                    colors = colors.astype(np.uint8)
-                    break
-    except InvalidDataError:
-        raise
+            for el in ply.elements:
+                _ = el.data  # memory-mapped: touch while the file is open
+        return ply
     except (PlyParseError, PlyHeaderParseError) as exc:
         raise CorruptFileError(f"{path.name} is not a valid PLY file: {exc}") from None
-    except (ValueError, EOFError, UnicodeDecodeError, MemoryError, TypeError) as exc:
+    except (ValueError, EOFError, UnicodeDecodeError, MemoryError, TypeError, IndexError,
+            OverflowError) as exc:
+        raise CorruptFileError(f"{path.name} has a damaged PLY payload: {exc}") from None
+
+
+def _read_ply(path: Path) -> PointData:
+    ply = read_ply_data(path)
+    try:
+        if "vertex" not in ply:
+            raise InvalidDataError(f"{path.name} has no vertex element")
+        v = ply["vertex"].data
+        names = v.dtype.names or ()
+        if not all(c in names for c in "xyz"):
+            raise InvalidDataError(f"{path.name} has vertices without x, y, z")
+        pts = np.column_stack([np.asarray(v[c], dtype=np.float64) for c in "xyz"])
+        normals = None
+        if all(c in names for c in ("nx", "ny", "nz")):
+            normals = np.column_stack([np.asarray(v[c], np.float64)
+                                       for c in ("nx", "ny", "nz")])
+        colors = None
+        for keys in (("red", "green", "blue", "alpha"), ("red", "green", "blue"),
+                     ("diffuse_red", "diffuse_green", "diffuse_blue")):
+            if all(k in names for k in keys):
+                colors = np.column_stack([np.asarray(v[k]) for k in keys])
+                if colors.dtype.kind == "f":  # float colours are in [0, 1]
+                    colors = np.clip(colors * 255 + 0.5, 0, 255)
+                colors = colors.astype(np.uint8)
+                break
+    except InvalidDataError:
+        raise
+    except (ValueError, TypeError) as exc:
         raise CorruptFileError(f"{path.name} has a damaged PLY payload: {exc}") from None
     if ply.text:
         fmt = "ascii"
@@ -253,6 +267,7 @@ def _read_stl(path: Path) -> PointData:
 def _read_off(path: Path) -> PointData:
     """Geomview OFF through meshio (Open3D returns garbage for truncated files)."""
     import meshio
+    from meshio import off
 
     m = re.match(rb"\s*[CN]*OFF\s+(?:#[^\n]*\n\s*)*(\d+)", _head(path, 4096))
     if m is None:
@@ -261,7 +276,9 @@ def _read_off(path: Path) -> PointData:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            mesh = meshio.read(str(path), file_format="off")
+            # the format's own reader: meshio.read prints a failed read and calls
+            # sys.exit(1) instead of raising
+            mesh = off.read(str(path))
     except (meshio.ReadError, ValueError, IndexError, EOFError) as exc:
         raise CorruptFileError(f"{path.name} is not a valid OFF file: {exc}") from None
     return PointData(np.asarray(mesh.points, dtype=np.float64), None, None, "off")

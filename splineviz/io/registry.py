@@ -117,7 +117,11 @@ def _by_suffix(path: Path, kind: str, mode: str) -> list[Format]:
 
 
 def read_head(path: Path, n: int = SNIFF_BYTES) -> bytes:
-    with open(path, "rb") as fh:
+    """The first ``n`` bytes of a regular file (a FIFO or device is refused, never waited
+    on)."""
+    from splineviz.io._util import open_regular
+
+    with open_regular(path) as fh:
         return fh.read(n)
 
 

@@ -22,12 +22,15 @@ A clip plane cuts the isosurfaces of the volumes it takes as input, the isosurfa
 takes as input, or, with no input, every isosurface of the scene.
 
 Only properties that differ from their defaults are written (the napari ``_get_state`` habit).
-Data paths are stored relative to the session file and resolved against its folder on load;
-an absolute path is accepted only inside that folder, and a missing file can be re-pointed
-with the ``repoint`` callback of :func:`load_session`. Relative paths may climb out of the
-folder (``../data/ct.nrrd``: projects often keep data beside their sessions), but every path
-must name a regular file or a folder: device files and pipes (``/dev/zero``, FIFOs) that could
-hang a reader are refused.
+Data paths are stored relative to the session file and resolved against its folder on load.
+A path whose real location (``..`` and symbolic links followed) is outside that folder, such
+as ``../data/ct.nrrd`` or a link to ``/etc/passwd``, is refused with a
+:class:`~splineviz.io.errors.SessionOutsideFolderError` unless the caller opts in
+(``allow_outside=True``; ``--allow-outside-data`` on the command line; the GUI asks the user):
+a session received from someone else must not read files of the receiver's choosing. A
+missing file can be re-pointed with the ``repoint`` callback of :func:`load_session`. Every
+path must name a regular file or a folder: device files and pipes (``/dev/zero``, FIFOs)
+that could hang a reader are refused.
 
 Safety: a session is data only. It is parsed with :func:`json.loads` (NaN/Infinity and
 duplicate keys refused), validated by pydantic models that forbid unknown keys, bounded in
@@ -57,8 +60,13 @@ from pydantic import (
     model_validator,
 )
 
-from splineviz.io._util import atomic_output
-from splineviz.io.errors import SessionError, SessionPathError, SessionVersionError
+from splineviz.io._util import atomic_write_bytes, confined, outside_allowed
+from splineviz.io.errors import (
+    SessionError,
+    SessionOutsideFolderError,
+    SessionPathError,
+    SessionVersionError,
+)
 
 FORMAT = "splineviz-session"
 SCHEMA_VERSION = 3
@@ -443,9 +451,10 @@ class Session(_Model):
                 if o.type in ("Isosurface", "PointsFile", "MeshFile", "Remesh")
                 and o.properties.visible and o.id not in view.hidden]
 
-    def load_volume(self, obj_id: str):
+    def load_volume(self, obj_id: str, *, allow_outside: bool = False):
         """The :class:`~splineviz.Volume` behind ``obj_id`` (a VolumeFile, a Source, or an
-        Isosurface, whose input is read)."""
+        Isosurface, whose input is read); ``allow_outside`` as in
+        :func:`~splineviz.io.volumes.read_volume` (for the file's own header)."""
         from splineviz.io.volumes import read_volume
         from splineviz.plugins import source_volume
 
@@ -459,7 +468,7 @@ class Session(_Model):
         p = obj.properties
         return read_volume(p.path, format=p.format, dims=p.dims, dtype=p.dtype,
                            byteorder=p.byteorder, offset=p.offset, spacing=p.spacing,
-                           origin=p.origin)
+                           origin=p.origin, allow_outside=allow_outside)
 
     def load_points(self, obj_id: str):
         """The :class:`~splineviz.PointCloud` of a PointsFile (or of a Remesh's input)."""
@@ -526,6 +535,9 @@ def _v1_to_v2(doc: dict) -> dict:
     under the key ``colour``."""
     out = {k: v for k, v in doc.items() if k not in ("view", "objects")}
     objects = []
+    if not isinstance(doc.get("objects", []), list):
+        raise SessionError(f"invalid session entry objects: a schema-1 session needs a list "
+                           f"of objects, got {type(doc['objects']).__name__}")
     for o in doc.get("objects", []):
         if not isinstance(o, dict):
             objects.append(o)
@@ -598,10 +610,12 @@ def _reject_constant(name):
 
 
 def _no_duplicates(pairs):
-    keys = [k for k, _ in pairs]
-    if len(keys) != len(set(keys)):
-        dup = next(k for k in keys if keys.count(k) > 1)
-        raise SessionError(f"the session repeats the key {dup!r} in one object")
+    # one pass with a set: linear in the number of keys (a hostile object has 10^5 of them)
+    seen = set()
+    for k, _ in pairs:
+        if k in seen:
+            raise SessionError(f"the session repeats the key {k[:80]!r} in one object")
+        seen.add(k)
     return dict(pairs)
 
 
@@ -668,8 +682,10 @@ def validate_document(doc: dict) -> Session:
     return session
 
 
-def _resolve(session: Session, folder: Path) -> None:
-    root = folder.resolve()
+def _resolve(session: Session, session_file: Path) -> None:
+    """Make every data path absolute (relative ones against the session's folder) and refuse
+    those whose real path (``..`` and symbolic links followed) leaves that folder, unless
+    :func:`~splineviz.io._util.outside_allowed` is in force."""
     for o in session.objects:
         if o.type not in FILE_TYPES:
             continue
@@ -677,18 +693,12 @@ def _resolve(session: Session, folder: Path) -> None:
         p = Path(raw).expanduser() if raw.startswith("~") else Path(raw)
         if p.is_absolute() or PurePosixPath(raw).is_absolute() or re.match(r"^[A-Za-z]:[\\/]",
                                                                            raw):
-            resolved = Path(os.path.normpath(p))
-            try:
-                resolved.resolve().relative_to(root)
-            except ValueError:
-                raise SessionPathError(
-                    f"object {o.id!r} names the absolute path {raw}, outside the session's "
-                    "folder; sessions store data paths relative to themselves"
-                ) from None
-        else:
-            resolved = Path(os.path.normpath(folder / Path(*PurePosixPath(raw.replace(
-                "\\", "/")).parts)))
-        o.properties.path = str(resolved)
+            name = os.path.normpath(p)
+        else:  # stored in POSIX form; confined() joins it with the session's folder
+            name = os.path.normpath(Path(*PurePosixPath(raw.replace("\\", "/")).parts))
+        resolved = confined(name, session_file, what=f"data file of object {o.id!r}",
+                            error=SessionOutsideFolderError)
+        o.properties.path = str(Path(os.path.normpath(resolved)))
 
 
 def _check_data(session: Session, repoint) -> None:
@@ -735,7 +745,7 @@ def _usable(p: Path):
 
 
 def load_session(path, *, repoint: Callable[[str, Path], Any] | None = None,
-                 check_data: bool = True) -> Session:
+                 check_data: bool = True, allow_outside: bool = False) -> Session:
     """Read, migrate and validate a session file.
 
     Parameters
@@ -747,6 +757,12 @@ def load_session(path, *, repoint: Callable[[str, Path], Any] | None = None,
         file that is missing (the GUI shows a file dialog). ``None`` gives up.
     check_data : bool
         Check that data files exist and sources are provided by a plugin.
+    allow_outside : bool
+        Accept data paths that resolve (``..`` and symbolic links followed) outside the
+        session's folder. Refused by default with a
+        :class:`~splineviz.io.errors.SessionOutsideFolderError` whose ``path`` a GUI can show
+        the user before retrying with ``allow_outside=True``. Files chosen through
+        ``repoint`` are the user's own choice and are not checked.
 
     Returns
     -------
@@ -773,7 +789,8 @@ def load_session(path, *, repoint: Callable[[str, Path], Any] | None = None,
     except UnicodeDecodeError:
         raise SessionError(f"{p.name} is not UTF-8 text, so not a session file") from None
     session = validate_document(parse_document(text))
-    _resolve(session, p.parent)
+    with outside_allowed(allow_outside):
+        _resolve(session, p)
     if check_data:
         _check_data(session, repoint)
     return session
@@ -791,6 +808,9 @@ def save_session(session: Session, path) -> Path:
     doc = session.to_document(base_dir=p.parent)
     validate_document(json.loads(json.dumps(doc)))
     text = json.dumps(doc, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-    with atomic_output(p) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+    data = text.encode("utf-8")
+    if len(data) > MAX_SESSION_BYTES:
+        raise SessionError(f"the session would be {len(data):,} bytes, more than the "
+                           f"{MAX_SESSION_BYTES:,} a session file may hold")
+    atomic_write_bytes(p, data)
     return p

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from splineviz.core.errors import SplinevizWarning
 from splineviz.core.volume import Volume, VolumeError
 from splineviz.io import _vtk
 from splineviz.io._util import (
@@ -28,6 +29,10 @@ from splineviz.io._util import (
     as_float_triplet,
     atomic_output,
     check_volume_size,
+    confined,
+    memory_budget,
+    open_regular,
+    outside_allowed,
     reader_errors,
     regular_input,
 )
@@ -116,6 +121,7 @@ def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
 def _read_vti(path: Path) -> VolumeData:
     from vtkmodules.vtkIOXML import vtkXMLImageDataReader
 
+    _vtk.check_xml_appended(path, path.name, memory_budget())
     return _read_with_vtk(vtkXMLImageDataReader(), path, "vti")
 
 
@@ -226,21 +232,37 @@ def _read_metaimage(path: Path) -> VolumeData:
     ndims = keys.get("ndims", "3").strip()
     if ndims != "3":
         raise InvalidDataError(f"{path.name} is a {ndims}-D MetaImage, not a volume")
-    if datafile.upper() not in ("LOCAL", "LIST") and "%" not in datafile:
-        payload = path.parent / datafile
-        regular_input(payload)
+    try:
+        dims = [int(v) for v in keys.get("dimsize", "").split()]
+    except ValueError:
+        raise CorruptFileError(f"{path.name} has a malformed DimSize") from None
+    etype = keys.get("elementtype", "").strip().upper()
+    size = _MET_SIZES.get(etype)
+    if len(dims) == 3 and size:
+        check_volume_size(dims, size, path.name)
+    kind = datafile.split()[0].upper() if datafile.split() else ""
+    if kind == "LOCAL":
+        pass
+    elif kind == "LIST" or "%" in datafile:
+        # one file per slice: every name is checked (count first, so a pattern bomb is
+        # refused before any name is built) against the header's folder
+        if len(dims) != 3:
+            raise CorruptFileError(f"{path.name} has a malformed DimSize")
+        if kind == "LIST":
+            names = _listed_names(path, rb"^\s*ElementDataFile\s*=[^\n]*\n")
+        else:
+            names = _pattern_names(path, datafile.split(), dims[2])
+        if len(names) != dims[2]:
+            raise DataSizeError(f"{path.name} lists {len(names)} slice files for {dims[2]} "
+                                "slices")
+        for name in names:
+            regular_input(confined(name, path, what="slice file"))
+    else:
+        payload = regular_input(confined(datafile, path))
         compressed = keys.get("compresseddata", "false").strip().lower() == "true"
-        try:
-            dims = [int(v) for v in keys.get("dimsize", "").split()]
-        except ValueError:
-            raise CorruptFileError(f"{path.name} has a malformed DimSize") from None
-        etype = keys.get("elementtype", "").strip().upper()
-        size = _MET_SIZES.get(etype)
         if len(dims) == 3 and size and compressed:
-            check_volume_size(dims, size, path.name)
             _check_zlib_stream(payload, dims[0] * dims[1] * dims[2] * size)
         if len(dims) == 3 and size and not compressed:
-            check_volume_size(dims, size, path.name)
             need = dims[0] * dims[1] * dims[2] * size
             have = payload.stat().st_size
             if have < need:
@@ -248,7 +270,15 @@ def _read_metaimage(path: Path) -> VolumeData:
                     f"{payload.name} holds {have} bytes but DimSize {tuple(dims)} of {etype} "
                     f"needs {need}"
                 )
-    return _read_with_vtk(vtkMetaImageReader(), path, "metaimage")
+    vd = _read_with_vtk(vtkMetaImageReader(), path, "metaimage")
+    try:
+        signs = [np.sign(float(v)) for v in keys.get("elementspacing", "").split()]
+    except ValueError:
+        signs = []
+    if len(signs) == 3 and min(signs) < 0:
+        # VTK's reader drops the sign of ElementSpacing: keep it, to_volume flips the axis
+        vd.spacing = tuple(-s if g < 0 else s for s, g in zip(vd.spacing, signs, strict=True))
+    return vd
 
 
 def _check_zlib_stream(payload: Path, need: int) -> None:
@@ -311,31 +341,71 @@ def _read_nrrd(path: Path) -> VolumeData:
     elif "space directions" in header:
         dirs = np.asarray(header["space directions"], dtype=float)
         spacing = tuple(float(v) for v in np.linalg.norm(dirs, axis=1))
+        if dirs.shape == (3, 3) and np.all(dirs[~np.eye(3, dtype=bool)] == 0):
+            # an axis-aligned grid keeps the sign of each step: a negative one (e.g. LPS
+            # scans stored with "-1 0 0") is flipped by to_volume, not silently mirrored
+            spacing = tuple(float(v) for v in np.diag(dirs))
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
     return VolumeData(data, spacing, origin, "nrrd")
 
 
-def _nrrd_file_list(path: Path, datafile: str) -> list[str]:
+#: a printf pattern of slice file names: one integer conversion, at most two digits of
+#: width and precision (wider would only build huge names: "%0999999999d" is 1 GB a name)
+_NAME_PATTERN = re.compile(r"^(?:[^%]|%%)*%[-+ #0]*(\d{0,2})(?:\.(\d{0,2}))?[diuoxX]"
+                           r"(?:[^%]|%%)*$")
+#: longest slice file name built from a pattern
+MAX_NAME = 4096
+
+
+def _pattern_names(path: Path, parts: list[str], expected: int) -> list[str]:
+    """Slice file names of ``<printf pattern> <min> <max> <step>``: the pattern and the count
+    are checked before any name is built (a header can ask for 10^9 names)."""
+    if len(parts) < 4:
+        raise CorruptFileError(f"{path.name} has a malformed multi-file data file entry")
+    pattern = parts[0]
+    if len(pattern) > MAX_NAME or _NAME_PATTERN.match(pattern) is None:
+        raise CorruptFileError(f"{path.name} has an unusable file-name pattern {pattern[:60]!r} "
+                               "(one integer conversion of at most 99 digits)")
+    try:
+        lo, hi, step = int(parts[1]), int(parts[2]), int(parts[3])
+    except ValueError:
+        raise CorruptFileError(f"{path.name} has a malformed file-name range "
+                               f"{' '.join(parts[1:4])[:60]!r}") from None
+    if step == 0 or (hi - lo) * step < 0:
+        raise CorruptFileError(f"{path.name} has the empty file-name range {lo} to {hi} by "
+                               f"{step}")
+    count = len(range(lo, hi + (1 if step > 0 else -1), step))  # O(1), no list
+    if count != expected:
+        raise DataSizeError(f"{path.name} lists {count:,} slice files for {expected} slices")
+    return [pattern % i for i in range(lo, hi + (1 if step > 0 else -1), step)]
+
+
+def _listed_names(path: Path, marker: bytes) -> list[str]:
+    """File names one per line after the line matching ``marker`` (the LIST forms)."""
+    with open_regular(path) as fh:
+        text = fh.read(MAX_HEADER_BYTES + 1)
+    if len(text) > MAX_HEADER_BYTES:
+        raise CorruptFileError(f"{path.name} is a header of more than {MAX_HEADER_BYTES:,} "
+                               "bytes")
+    after = re.split(marker, text, maxsplit=1, flags=re.M | re.I)
+    if len(after) != 2:
+        return []
+    return [ln.strip() for ln in after[1].decode("latin-1").splitlines() if ln.strip()]
+
+
+#: largest detached header read whole (its LIST of slice files included)
+MAX_HEADER_BYTES = 16 * 2**20
+
+
+def _nrrd_file_list(path: Path, datafile: str, expected: int) -> list[str]:
     """File names of a multi-file NRRD: ``<printf pattern> <min> <max> <step> [<subdim>]`` or
     ``LIST [<subdim>]`` followed by one name per line (NRRD0004 "data file")."""
     parts = datafile.split()
     if parts[0].upper() == "LIST":
-        text = path.read_bytes().decode("latin-1")
-        after = re.split(r"^data ?file:[^\n]*\n", text, maxsplit=1, flags=re.M)
-        names = [ln.strip() for ln in after[-1].splitlines() if ln.strip()] if len(after) == 2 \
-            else []
+        names = _listed_names(path, rb"^data ?file:[^\n]*\n")
         subdim = parts[1] if len(parts) > 1 else None
     else:
-        if len(parts) < 4:
-            raise CorruptFileError(f"{path.name} has a malformed multi-file 'data file' entry")
-        try:
-            lo, hi, step = int(parts[1]), int(parts[2]), int(parts[3])
-            if step == 0 or (hi - lo) * step < 0:
-                raise ValueError
-            names = [parts[0] % i for i in range(lo, hi + (1 if step > 0 else -1), step)]
-        except (ValueError, TypeError):
-            raise CorruptFileError(f"{path.name} has a malformed file-name pattern "
-                                   f"{datafile!r}") from None
+        names = _pattern_names(path, parts, expected)
         subdim = parts[4] if len(parts) > 4 else None
     if subdim is not None and subdim != "2":
         raise FileFormatError(f"{path.name} splits its data into {subdim}-D files; only "
@@ -347,12 +417,12 @@ def _read_nrrd_multifile(path: Path, header, datafile: str, sizes) -> np.ndarray
     """One 2-D slice per file, each read by pynrrd's own payload decoder (raw, gzip, ...)."""
     import nrrd
 
-    names = _nrrd_file_list(path, datafile)
+    names = _nrrd_file_list(path, datafile, sizes[2])
     if len(names) != sizes[2]:
         raise DataSizeError(f"{path.name} lists {len(names)} slice files for {sizes[2]} slices")
     out = None
     for k, name in enumerate(names):
-        slice_path = regular_input(path.parent / name)
+        slice_path = regular_input(confined(name, path, what="slice file"))
         h = {key: val for key, val in header.items()
              if key in ("type", "encoding", "endian", "line skip", "byte skip", "lineskip",
                         "byteskip")}
@@ -377,7 +447,7 @@ def _read_nrrd_single(path: Path, datafile: str):
     import nrrd
 
     if datafile:
-        regular_input(path.parent / datafile)
+        regular_input(confined(datafile, path))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -421,10 +491,11 @@ def _write_vti(path: Path, vol: Volume) -> None:
         writer.SetDataModeToAppended()
         with _vtk.captured_vtk_output() as out:
             ok = writer.Write()
-        if not ok or _vtk.first_vtk_error(out[0]):
+        err = _vtk.first_vtk_error(out[0], generic="the writer failed")
+        if not ok or err:
             from splineviz.io.errors import WriteError
 
-            raise WriteError(f"cannot write {path.name}: {_vtk.first_vtk_error(out[0])}")
+            raise WriteError(f"cannot write {path.name}: {err or 'the writer failed'}")
 
 
 # ---------------------------------------------------------------------------- NIfTI
@@ -540,6 +611,8 @@ def _read_dicom_folder(path: Path) -> VolumeData:
 
     headers = []
     for f in sorted(p for p in path.iterdir() if p.is_file()):
+        # a symbolic link in the series folder must not pull in a file from elsewhere
+        confined(f.name, path / f.name, what="DICOM file", folder=path)
         try:
             ds = pydicom.dcmread(str(f), stop_before_pixels=True)
         except (InvalidDicomError, EOFError, OSError, ValueError, TypeError, KeyError):
@@ -658,7 +731,7 @@ def _read_raw(path: Path, *, dims=None, dtype=None, byteorder="little", offset=0
 
 # ---------------------------------------------------------------------------- sniffing
 def _head(path: Path, n: int) -> bytes:
-    with open(path, "rb") as fh:
+    with open_regular(path) as fh:
         return fh.read(n)
 
 
@@ -707,7 +780,7 @@ _RAW_OPTIONS = ("dims", "dtype", "byteorder", "offset")
 
 
 def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="little",
-                     offset=0) -> VolumeData:
+                     offset=0, allow_outside=False) -> VolumeData:
     """Read a volume file in its own sample type (see :func:`read_volume`)."""
     from splineviz.plugins import ensure_loaded
 
@@ -716,7 +789,7 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
     if dims is not None or dtype is not None:
         format = format or "raw"
     fmt = find_format(p, "volume", name=format)
-    with reader_errors(p.name, fmt.name):
+    with reader_errors(p.name, fmt.name), outside_allowed(allow_outside):
         if fmt.name == "raw":
             vd = fmt.reader(p, dims=dims, dtype=dtype, byteorder=byteorder, offset=offset)
         else:
@@ -728,7 +801,7 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
 
 
 def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little", offset=0,
-                spacing=None, origin=None, nonfinite="error") -> Volume:
+                spacing=None, origin=None, nonfinite="error", allow_outside=False) -> Volume:
     """Read a volume file (or DICOM folder) into a :class:`~splineviz.Volume`.
 
     Parameters
@@ -743,8 +816,14 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     spacing, origin : (3,) float, optional
         Override the file's geometry (raw files have none: default 1 and 0).
     nonfinite : {"error", "fill"}
-        What to do with NaN/Inf samples: refuse the file, or replace them by the smallest
-        finite sample (outside every isosurface above it).
+        What to do with NaN/Inf samples: refuse the file (default), or replace them by the
+        smallest finite sample (outside every isosurface above it) with a
+        :class:`~splineviz.core.errors.SplinevizWarning`. A negative spacing flips its axis
+        (samples keep their world positions), also with a warning.
+    allow_outside : bool
+        Read data files that a header (MetaImage ``ElementDataFile``, NRRD ``data file``)
+        names outside the header's folder; refused by default with an
+        :class:`~splineviz.io.errors.OutsideFolderError`.
 
     Returns
     -------
@@ -765,7 +844,7 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
-                          offset=offset)
+                          offset=offset, allow_outside=allow_outside)
     return to_volume(vd, Path(os.fspath(path)).name, spacing=spacing, origin=origin,
                      nonfinite=nonfinite)
 
@@ -778,23 +857,71 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     validate_volume_data(vd, name)
-    data = np.asarray(vd.data, dtype=np.float32)
+    raw = np.asarray(vd.data)
+    if raw.dtype.kind == "f" and raw.dtype.itemsize > 4:
+        # checked before the float32 cast, which would turn these into infinities and the
+        # message into a false "infinite samples"
+        with np.errstate(invalid="ignore"):
+            beyond = int(np.count_nonzero(np.abs(raw) > np.finfo(np.float32).max))
+        if beyond:
+            raise InvalidDataError(
+                f"{name} has {beyond} finite samples beyond the float32 range "
+                f"(magnitude above {np.finfo(np.float32).max:.3g}) that splineviz computes in; "
+                "rescale the data")
+    data = np.asarray(raw, dtype=np.float32)
     bad = ~np.isfinite(data)
     if bad.any():
+        count = int(bad.sum())
         if bad.all():
             raise InvalidDataError(f"{name} has no finite samples")
         if nonfinite == "error":
             raise InvalidDataError(
-                f"{name} has {int(bad.sum())} NaN or infinite samples "
+                f"{name} has {count} NaN or infinite samples "
                 "(read with nonfinite='fill' to replace them)"
             )
-        data = np.where(bad, data[~bad].min(), data)
+        fill = float(data[~bad].min())
+        data = np.where(bad, np.float32(fill), data)
+        warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {fill:g}, "
+                      "the smallest finite sample", SplinevizWarning, stacklevel=3)
     try:
         sp = as_float_triplet(vd.spacing if spacing is None else spacing, "spacing")
         og = as_float_triplet(vd.origin if origin is None else origin, "origin")
+    except ValueError as exc:
+        raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+    data, sp, og = _flip_negative_axes(data, sp, og, name)
+    try:
         return Volume(data, spacing=sp, origin=og)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+
+
+def _flip_negative_axes(data, spacing, origin, name):
+    """A grid stored with a negative step along an axis, flipped so that the step is positive
+    and every sample keeps its world position (``origin + i * step`` is the same point), with
+    a :class:`SplinevizWarning` saying so. Zero steps are left for :class:`Volume` to refuse.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) ndarray
+    spacing, origin : (3,) tuple of float
+
+    Returns
+    -------
+    data : (nx, ny, nz) ndarray
+    spacing, origin : (3,) tuple of float
+    """
+    flipped = [a for a in range(3) if spacing[a] < 0]
+    if not flipped:
+        return data, spacing, origin
+    sp, og = list(spacing), list(origin)
+    for a in flipped:
+        og[a] = origin[a] + (data.shape[a] - 1) * spacing[a]
+        sp[a] = -spacing[a]
+    data = np.flip(data, axis=flipped)
+    warnings.warn(f"{name} has a negative spacing along {', '.join('xyz'[a] for a in flipped)}: "
+                  "the axis is flipped so that every sample keeps its world position",
+                  SplinevizWarning, stacklevel=4)
+    return data, tuple(sp), tuple(og)
 
 
 def validate_volume_data(vd: VolumeData, name: str) -> None:

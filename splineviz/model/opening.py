@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from splineviz.core.errors import SplinevizError
 from splineviz.model.scene import Scene
-from splineviz.model.session import apply_session
+from splineviz.model.session import apply_session, read_session_data
 
 #: the embedded default data's name in the data panel
 DEFAULT_NAME = "Marschner-Lobb 41^3"
@@ -35,17 +35,17 @@ def default_scene(scene: Scene | None = None) -> Scene:
     return scene
 
 
-def read_file(path):
+def read_file(path, *, allow_outside: bool = False):
     """Read a volume or point cloud file: ``(kind, data, summaries)`` with kind ``"volume"``
     or ``"points"`` and the summaries views show (:mod:`splineviz.model.summaries`: a
     volume's histogram, a cloud's spacing; a volume's range is kept by the volume itself)
     computed here too, so a GUI that reads in a job process pays nothing to show them.
     Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
-    process."""
+    process. ``allow_outside`` as in :func:`splineviz.io.opening.open_path`."""
     from splineviz.io.opening import open_path
     from splineviz.model.summaries import log_histogram, median_spacing
 
-    opened = open_path(path)
+    opened = open_path(path, allow_outside=allow_outside)
     if opened.kind == "session":
         raise SplinevizError(f"{opened.path.name} is a session; open it as one")
     if opened.kind != "volume":
@@ -54,15 +54,18 @@ def read_file(path):
     return opened.kind, opened.value, {"histogram": log_histogram(opened.value.data)}
 
 
-def scene_from_path(path, *, isovalue=None, model=None, repoint=None) -> Scene:
+def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
+                    allow_outside: bool = False) -> Scene:
     """Read a session, volume or point cloud into a new scene, framed isometrically
-    (a session keeps its own camera). ``isovalue``/``model`` override every isosurface."""
+    (a session keeps its own camera). ``isovalue``/``model`` override every isosurface;
+    ``allow_outside`` lets headers and sessions name data outside their folders."""
     from splineviz.io.opening import open_path
 
-    opened = open_path(path, repoint=repoint)
+    opened = open_path(path, repoint=repoint, allow_outside=allow_outside)
     scene = Scene()
     if opened.kind == "session":
-        apply_session(scene, opened.value)
+        apply_session(scene, opened.value,
+                      read_session_data(opened.value, allow_outside=allow_outside))
     elif opened.kind == "volume":
         scene.add_volume(opened.value, opened.path.name, path=str(opened.path))
         scene.frame(view="isometric")

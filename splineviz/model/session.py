@@ -129,15 +129,16 @@ def save_scene(scene: Scene, path) -> Path:
     return p
 
 
-def read_session_data(session: Session) -> dict:
+def read_session_data(session: Session, *, allow_outside: bool = False) -> dict:
     """Read the data of every object of ``session`` that has some (slow; a worker may run
-    it): object id -> Volume, PointCloud or ``(vertices, faces, normals or None)``."""
+    it): object id -> Volume, PointCloud or ``(vertices, faces, normals or None)``.
+    ``allow_outside`` lets the volume files' own headers name data outside their folders."""
     from splineviz.io.meshes import read_mesh
 
     data = {}
     for obj in session.objects:
         if obj.type in ("VolumeFile", "Source"):
-            data[obj.id] = session.load_volume(obj.id)
+            data[obj.id] = session.load_volume(obj.id, allow_outside=allow_outside)
         elif obj.type == "PointsFile":
             data[obj.id] = session.load_points(obj.id)
         elif obj.type == "MeshFile":
@@ -210,7 +211,11 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
     return scene
 
 
-def load_scene(path, *, repoint=None, scene: Scene | None = None) -> Scene:
-    """Read a session file and its data into ``scene`` (a new one when None)."""
-    return apply_session(Scene() if scene is None else scene,
-                         load_session(path, repoint=repoint))
+def load_scene(path, *, repoint=None, scene: Scene | None = None,
+               allow_outside: bool = False) -> Scene:
+    """Read a session file and its data into ``scene`` (a new one when None);
+    ``allow_outside`` accepts data outside the session's folder (see
+    :func:`~splineviz.io.session.load_session`)."""
+    session = load_session(path, repoint=repoint, allow_outside=allow_outside)
+    return apply_session(Scene() if scene is None else scene, session,
+                         read_session_data(session, allow_outside=allow_outside))

@@ -79,8 +79,11 @@ def run(args) -> int:
         "quality": quality,
     }
     if args.report:
-        with open(args.report, "w", encoding="utf-8") as fh:
-            json.dump(_json_safe(summary), fh, indent=2)
+        from splineviz.io._util import atomic_write_bytes
+
+        # through the atomic writer: a failed write keeps an earlier report intact
+        atomic_write_bytes(args.report, (json.dumps(_json_safe(summary), indent=2) + "\n")
+                           .encode("utf-8"))
     if not args.quiet:
         print(f"{quality['n_vertices']} vertices, {quality['n_faces']} triangles, "
               f"radius ratio {quality['radius_ratio_mean']:.3f}, "

@@ -14,7 +14,7 @@ import numpy as np
 
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
-from splineviz.pointcloud.advancing_front import AdvancingFront
+from splineviz.pointcloud.advancing_front import BORDER_NEIGHBOURS, AdvancingFront
 from splineviz.pointcloud.guidance import guidance_field
 from splineviz.pointcloud.projection import Projector
 from splineviz.pointcloud.relaxation import optimize
@@ -43,6 +43,33 @@ def _as_cloud(pc) -> PointCloud:
         if isinstance(exc, SplinevizError):
             raise
         raise RemeshError("the input must be a PointCloud or an (N, 3) array of points") from exc
+
+
+#: largest ratio of a cloud's second to first principal extent that counts as a line: a
+#: cloud this thin has no surface to sample (a "mesh" of it would be a few slivers)
+COLLINEAR_RATIO = 1e-3
+
+
+#: fewest points :func:`remesh` triangulates: the advancing front looks at the
+#: ``BORDER_NEIGHBOURS`` nearest input points of every new vertex
+MIN_POINTS = BORDER_NEIGHBOURS
+
+
+def _check_spans_a_surface(points: np.ndarray) -> None:
+    """Refuse, before any work, clouds without a surface to mesh: too few points for the
+    front's neighbourhoods, or points on (nearly) one line.
+
+    Parameters
+    ----------
+    points : (N, 3) float ndarray
+    """
+    if len(points) < MIN_POINTS:
+        raise RemeshError(f"at least {MIN_POINTS} points are needed to build a mesh, got "
+                          f"{len(points)}")
+    extent = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    if extent[1] <= COLLINEAR_RATIO * max(extent[0], np.finfo(float).tiny):
+        raise RemeshError("the points lie on a line (their width is under "
+                          f"{COLLINEAR_RATIO:g} of their length), so they span no surface")
 
 
 def remesh(pc, edge_length: float | None = None, rho: float | None = None, progress=None, *,
@@ -93,8 +120,7 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     import pyvista as pv
 
     cloud = _as_cloud(pc)
-    if len(cloud) < 4:
-        raise RemeshError(f"at least 4 points are needed to build a mesh, got {len(cloud)}")
+    _check_spans_a_surface(np.asarray(cloud.points, dtype=np.float64))
     rep = report if report is not None else RemeshReport()
     rep.parameters = {"edge_length": edge_length, "rho": rho, "min_length": min_length,
                       "max_length": max_length, "smoothing": smoothing,

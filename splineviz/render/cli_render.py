@@ -7,6 +7,7 @@ picture is the one the window would show for the same camera.
 
 from __future__ import annotations
 
+import math
 import sys
 
 import numpy as np
@@ -30,6 +31,20 @@ def _floats(text: str, counts, what: str) -> list[float]:
     return vals
 
 
+def finite_float(text: str) -> float:
+    """argparse type of a finite number (``nan`` and ``inf`` parse as floats but are no
+    isovalue)."""
+    import argparse
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
 def make_camera(spec: str | None, bounds, view_angle: float) -> Camera:
     """Camera from ``--camera``: ``px,py,pz`` (looks at the box centre), ``+focal`` (6
     numbers) or ``+view up`` (9 numbers); ``None`` gives :func:`default_camera`."""
@@ -47,7 +62,8 @@ def run(args) -> int:
     from splineviz.render.scene_view import render_scene
 
     size = parse_size(args.size)
-    scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model)
+    scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
+                            allow_outside=args.allow_outside_data)
     if not scene.isosurfaces:
         raise RenderArgumentError(f"{args.volume} holds no volume to render")
     for vol in scene.volumes:
@@ -82,7 +98,8 @@ def register(subparsers) -> None:
                               description="Ray cast the isosurface of a spline model of a "
                               "volume (or render a session) into a PNG, without a display.")
     p.add_argument("volume", help="volume file (any format splineviz reads) or session")
-    p.add_argument("--iso", type=float, default=None, help="isovalue (default: mid-range)")
+    p.add_argument("--iso", type=finite_float, default=None,
+                   help="isovalue (default: mid-range)")
     p.add_argument("--model", default=None,
                    help=" | ".join(MODELS) + " (default: cubic-c1, or the session's)")
     p.add_argument("--size", default="1024x768", help="image size WxH")
@@ -94,4 +111,6 @@ def register(subparsers) -> None:
     p.add_argument("--device", default=None, help="gpu | cpu | numpy | device-name substring "
                    "(default: $SPLINEVIZ_DEVICE, else GPU before CPU)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
+    p.add_argument("--allow-outside-data", action="store_true",
+                   help="read data files that a header or session names outside its folder")
     p.set_defaults(func=run)

@@ -19,12 +19,13 @@ from __future__ import annotations
 
 import threading
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from splineviz.core.camera import Camera
-from splineviz.core.errors import SplinevizError
+from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.core.raycast_reference import Frame
 from splineviz.core.splines import MODELS
 from splineviz.core.volume import Volume
@@ -290,6 +291,22 @@ class IsosurfaceLayer:
         of this frame reach (visible-first), so a reduced-resolution preview of a new
         isovalue is as cheap as any other preview.
         """
+        try:
+            return self._compute(view, scale, preview, blocking)
+        except Exception as exc:  # noqa: BLE001 - pyopencl's errors, matched by module
+            if not _is_opencl_error(exc) or self._device == "numpy":
+                raise
+            # out of device memory, a lost device, a driver failure: the NumPy path still
+            # gives the exact picture, slowly; say so once instead of dying
+            warnings.warn(f"the OpenCL device failed ({' '.join(str(exc).split())[:120]}); "
+                          "rendering on the NumPy reference path (slow)", SplinevizWarning,
+                          stacklevel=2)
+            with self._lock, self._preview_lock:
+                self._device = "numpy"
+                self._caster = self._preview = None
+            return self._compute(view, scale, preview, blocking)
+
+    def _compute(self, view, scale, preview, blocking):
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
         exact, fast = self._casters(build=blocking)
@@ -315,3 +332,9 @@ class IsosurfaceLayer:
         path = "preview" if rc is not exact else stats.get("path", "numpy")
         self.last_stats = stats
         return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats)
+
+
+def _is_opencl_error(exc: BaseException) -> bool:
+    """Whether ``exc`` is a pyopencl error (matched by module: this layer does not import
+    pyopencl itself)."""
+    return any(c.__module__.startswith("pyopencl") for c in type(exc).__mro__)

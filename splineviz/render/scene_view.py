@@ -295,16 +295,19 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
     w, h = int(size[0]), int(size[1])
     if w < 1 or h < 1 or w > 16384 or h > 16384:
         raise SceneError(f"a picture must be 1..16384 pixels per side, got {w}x{h}")
+    from splineviz.io._vtk import quiet_vtk_logger
+
     smooth_pending(scene, device)
-    pl = pv.Plotter(off_screen=True, window_size=(w, h))
-    view = SceneView(scene, pl, progressive=False, device=device)
-    try:
-        view.render_exact()
-        img = pl.screenshot(None, transparent_background=transparent_background,
-                            return_img=True)
-    finally:
-        view.close()
-        pl.close()
+    with quiet_vtk_logger():
+        pl = pv.Plotter(off_screen=True, window_size=(w, h))
+        view = SceneView(scene, pl, progressive=False, device=device)
+        try:
+            view.render_exact()
+            img = pl.screenshot(None, transparent_background=transparent_background,
+                                return_img=True)
+        finally:
+            view.close()
+            pl.close()
     if filename is not None:
         from splineviz.io.meshes import write_screenshot
 

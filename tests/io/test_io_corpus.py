@@ -209,9 +209,9 @@ CASES = {
         E.InvalidDataError),
     "nrrd-datafile-is-a-device": lambda d: (lambda: RV(_nrrd_text(
         d, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 3\nencoding: raw\n"
-           "data file: /dev/zero\n", name="v.nhdr")), E.DataFileNotFoundError),
+           "data file: /dev/zero\n", name="v.nhdr")), E.OutsideFolderError),
     "mhd-datafile-is-a-device": lambda d: (lambda: RV(_mhd(d, datafile="/dev/zero", raw=None)),
-                                           E.DataFileNotFoundError),
+                                           E.OutsideFolderError),
     "nhdr-missing-slice": lambda d: (lambda: RV(_nrrd_text(
         d, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 3\nencoding: raw\n"
            "data file: s.%d 1 3 1\n", name="v.nhdr")), E.DataFileNotFoundError),

@@ -81,7 +81,10 @@ def test_paths_stay_relative_when_saved_elsewhere(project):
     save_session(s, project / "sub" / "moved.svs")
     doc = json.loads((project / "sub" / "moved.svs").read_text())
     assert doc["objects"][0]["properties"]["path"] == "../data/head.mhd"
-    again = load_session(project / "sub" / "moved.svs")
+    # data outside the session's folder is read only when the caller allows it
+    with pytest.raises(errors.SessionOutsideFolderError, match="head.mhd"):
+        load_session(project / "sub" / "moved.svs")
+    again = load_session(project / "sub" / "moved.svs", allow_outside=True)
     assert Path(again.object("vol1").properties.path).resolve() == \
         (project / "data" / "head.mhd").resolve()
 
@@ -207,5 +210,5 @@ def test_relative_paths_set_in_memory_are_relative_to_the_working_directory(proj
     doc = json.loads((project / "sessions" / "s.svs").read_text())
     assert doc["objects"][0]["properties"]["path"] == "../data/head.mhd"
     monkeypatch.chdir(project)
-    again = load_session(project / "sessions" / "s.svs")
+    again = load_session(project / "sessions" / "s.svs", allow_outside=True)
     assert Path(again.object("volumefile1").properties.path) == project / "data" / "head.mhd"

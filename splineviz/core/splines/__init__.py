@@ -3,12 +3,20 @@
 
 from __future__ import annotations
 
+import inspect
 from importlib import import_module
 
-from splineviz.core.splines.registry import MODELS, ModelSpec, UnknownModelError, model_spec
-from splineviz.core.volume import Volume
+from splineviz.core.splines.registry import (
+    MODELS,
+    ModelSpec,
+    SplineOptionError,
+    UnknownModelError,
+    model_spec,
+)
+from splineviz.core.volume import Volume, VolumeError
 
-__all__ = ["MODELS", "ModelSpec", "UnknownModelError", "build_spline", "model_spec"]
+__all__ = ["MODELS", "ModelSpec", "SplineOptionError", "UnknownModelError", "build_spline",
+           "model_spec"]
 
 
 def build_spline(volume, model: str = "to-quadratic", **kwargs):
@@ -31,9 +39,25 @@ def build_spline(volume, model: str = "to-quadratic", **kwargs):
     ------
     UnknownModelError
         ``model`` is not registered.
+    SplineOptionError
+        An option the model does not take, or a value it cannot use.
+    VolumeError
+        The volume has NaN or infinite samples: a spline over them is NaN wherever they
+        reach, so they are refused here rather than drawn as holes (read files with
+        ``read_volume(..., nonfinite="fill")`` to replace them, with a warning).
     """
     spec = model_spec(model)
     if not isinstance(volume, Volume):
         volume = Volume(volume)
-    module_name, _, cls = spec.target.partition(":")
-    return getattr(import_module(module_name), cls)(volume, **kwargs)
+    if volume.nonfinite_count:
+        raise VolumeError(f"the volume has {volume.nonfinite_count} NaN or infinite samples, "
+                          f"which would make the {spec.name} spline NaN around them; replace "
+                          "them first (read_volume(..., nonfinite='fill'))")
+    module_name, _, cls_name = spec.target.partition(":")
+    cls = getattr(import_module(module_name), cls_name)
+    try:
+        inspect.signature(cls).bind(volume, **kwargs)
+    except TypeError:
+        raise SplineOptionError(f"the {spec.name} model does not take the option(s) "
+                                f"{', '.join(sorted(kwargs))}") from None
+    return cls(volume, **kwargs)

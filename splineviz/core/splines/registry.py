@@ -20,6 +20,11 @@ class UnknownModelError(SplinevizError, ValueError):
     """A model name that no built-in model or installed plugin provides."""
 
 
+class SplineOptionError(SplinevizError, ValueError):
+    """A model option that the model does not have or whose value it cannot use
+    (e.g. ``k <= 0`` for ``to-quadratic``)."""
+
+
 #: OpenCL kernel families of ``compute/kernels/raycast.cl`` (the ``-D`` define each selects)
 KERNEL_FAMILIES = {"trilinear": "MODEL_TRILINEAR", "type6": "MODEL_TYPE6", "to": "MODEL_TO"}
 

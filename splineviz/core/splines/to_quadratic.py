@@ -19,6 +19,8 @@ per k, as integer offsets from the TO's base data point ``centre - (1/2, 1/2, 1/
 
 from __future__ import annotations
 
+import math
+import numbers
 from functools import cache
 
 import numpy as np
@@ -27,6 +29,7 @@ from splineviz.core import bform
 from splineviz.core.partitions import truncated_octahedra as to
 from splineviz.core.splines.base import TetSpline
 from splineviz.core.splines.boundary import pad_linear
+from splineviz.core.splines.registry import SplineOptionError
 
 #: ghost layers the stencils reach beyond the data box (see module docstring of boundary.py)
 GHOST_LAYERS = 3
@@ -220,8 +223,9 @@ class TOQuadraticSpline(TetSpline):
 
     def __init__(self, volume, k: float = 2):
         super().__init__(volume)
-        if not k >= 1:
-            raise ValueError(f"Q_k needs k >= 1, got {k}")
+        if not (isinstance(k, numbers.Real) and math.isfinite(k) and k >= 1):
+            raise SplineOptionError(f"the to-quadratic model needs a finite k >= 1 (thesis "
+                                    f"Q_k), got {k!r}")
         self.k = float(k)
         self._padded = pad_linear(self.volume.data, GHOST_LAYERS)
         stencils(self.k)  # build the tables once, up front
