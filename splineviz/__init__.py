@@ -12,6 +12,7 @@ __version__ = "0.1.0"
 _LAZY = {
     "Volume": "splineviz.core.volume:Volume",
     "SplinevizError": "splineviz.core.errors:SplinevizError",
+    "SplinevizWarning": "splineviz.core.errors:SplinevizWarning",
     "VolumeError": "splineviz.core.volume:VolumeError",
     "PointCloud": "splineviz.core.points:PointCloud",
     "PointCloudError": "splineviz.core.points:PointCloudError",

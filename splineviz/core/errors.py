@@ -5,3 +5,7 @@ a traceback."""
 
 class SplinevizError(Exception):
     """Base class of errors caused by user input (files, parameters, data)."""
+
+
+class SplinevizWarning(UserWarning):
+    """Input accepted with a change the user should know of (e.g. NaN samples replaced)."""

@@ -7,7 +7,11 @@ scene here, so the same arguments give the same scene (and, through
 
 from __future__ import annotations
 
-from splineviz.core.errors import SplinevizError
+import inspect
+import warnings
+from dataclasses import dataclass
+
+from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.model.scene import Scene
 from splineviz.model.session import apply_session
 
@@ -35,23 +39,101 @@ def default_scene(scene: Scene | None = None) -> Scene:
     return scene
 
 
-def read_file(path):
+def read_file(path, *, allow_outside: bool = False):
     """Read a volume or point cloud file: ``(kind, data, summaries)`` with kind ``"volume"``
     or ``"points"`` and the summaries views show (:mod:`splineviz.model.summaries`: a
     volume's histogram, a cloud's spacing; a volume's range is kept by the volume itself)
     computed here too, so a GUI that reads in a job process pays nothing to show them.
     Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
-    process."""
+    process. ``allow_outside``: read a data file that a header names outside its folder
+    (the user confirmed it)."""
     from splineviz.io.opening import open_path
     from splineviz.model.summaries import log_histogram, median_spacing
 
-    opened = open_path(path)
+    opened = open_path(path, **outside_option(open_path, allow_outside))
     if opened.kind == "session":
         raise SplinevizError(f"{opened.path.name} is a session; open it as one")
     if opened.kind != "volume":
         return opened.kind, opened.value, {"spacing": median_spacing(opened.value.points)}
     _ = opened.value.finite_range
     return opened.kind, opened.value, {"histogram": log_histogram(opened.value.data)}
+
+
+@dataclass(frozen=True)
+class OutsideFolder:
+    """A file (header or session) that names a data file outside its own folder: the io
+    layer refused to read it without the user's confirmation.
+
+    Attributes
+    ----------
+    path : str
+        The header or session.
+    data_path : str
+        The data file it names.
+    message : str
+        The refusal, one sentence.
+    """
+
+    path: str
+    data_path: str
+    message: str
+
+
+def outside_folder(exc: BaseException) -> OutsideFolder | None:
+    """The :class:`OutsideFolder` an io error stands for (an error carrying ``path`` and
+    ``data_path``: a data file outside the folder of the file naming it), else None."""
+    data_path = getattr(exc, "data_path", None)
+    if data_path is None:
+        return None
+    return OutsideFolder(str(getattr(exc, "path", "") or ""), str(data_path), str(exc))
+
+
+def outside_option(func, allow_outside: bool) -> dict:
+    """Keyword arguments asking ``func`` (a reader) to read data files outside the folder
+    of the file that names them: ``{"allow_outside": True}`` when asked and ``func`` takes
+    the keyword (a reader without it never refuses such files), else nothing."""
+    try:
+        known = "allow_outside" in inspect.signature(func).parameters
+    except (TypeError, ValueError):
+        known = False
+    return {"allow_outside": True} if allow_outside and known else {}
+
+
+@dataclass(frozen=True)
+class Noted:
+    """What a read in a job process returns to the GUI: the result (or the refusal of a
+    data file outside its folder) and the warnings raised while reading.
+
+    Attributes
+    ----------
+    value : object or OutsideFolder
+    warnings : list of str
+        :class:`~splineviz.core.errors.SplinevizWarning` messages: shown to the user.
+    other_warnings : list of str
+        Library warnings (``Category: message``): logged, not shown.
+    """
+
+    value: object
+    warnings: list
+    other_warnings: list
+
+
+def noting_warnings(func, *args, **kwargs) -> Noted:
+    """Call ``func`` recording the warnings it raises and turning a refusal of a data file
+    outside its folder into an :class:`OutsideFolder` (run in a job process: warnings are
+    process state, and the refusal's exception need not pickle)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            value = func(*args, **kwargs)
+        except SplinevizError as exc:
+            value = outside_folder(exc)
+            if value is None:
+                raise
+    ours = [str(w.message) for w in caught if issubclass(w.category, SplinevizWarning)]
+    other = [f"{w.category.__name__}: {w.message}" for w in caught
+             if not issubclass(w.category, SplinevizWarning)]
+    return Noted(value, ours, other)
 
 
 def scene_from_path(path, *, isovalue=None, model=None, repoint=None) -> Scene:
