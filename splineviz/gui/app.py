@@ -93,4 +93,6 @@ def run_gui(args) -> int:
         window.open_path(args.file)
     elif window.scene.volumes and not restoring:
         window.scene.select(window.scene.volumes[0])
-    return app.exec()
+    code = app.exec()
+    window.join_workers()
+    return code

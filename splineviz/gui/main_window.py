@@ -372,6 +372,16 @@ class MainWindow(QMainWindow):
     def request_render(self) -> None:
         self.view.request_render()
 
+    def join_workers(self, timeout_s: float = 10.0) -> bool:
+        """After the window closed: wait up to ``timeout_s`` for the background threads still
+        running (a frame being ray cast, a job winding down, an autosave copy). Exiting the
+        process while one is inside OpenCL aborted it ("terminate called without an active
+        exception", from pocl's threads): the app calls this before it exits."""
+        end = time.perf_counter() + timeout_s
+        ok = self.view.join(timeout_s)
+        ok = self.jobs.join(max(end - time.perf_counter(), 0.0)) and ok
+        return ok
+
     # -- drag and drop, close ------------------------------------------------------------
 
     def dragEnterEvent(self, event):  # noqa: N802 (Qt naming)

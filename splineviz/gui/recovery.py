@@ -38,6 +38,8 @@ RECOVERY_ENV = "SPLINEVIZ_RECOVERY_DIR"
 ANSWER_ENV = "SPLINEVIZ_RECOVER"
 #: quiet time after the last change before the scene is written (milliseconds)
 DEBOUNCE_MS = 2000
+#: longest wait at a clean quit for a data copy being written (seconds)
+CLOSE_WAIT_S = 10.0
 
 _NAME = re.compile(r"^recovery-(\d+)-(\d+)\.svs$")
 log = logging.getLogger("splineviz")
@@ -152,6 +154,7 @@ class Autosaver(QObject):
         #: node id -> (weak reference to the data written, path, read options)
         self._written: dict[str, tuple] = {}
         self._writing = False
+        self._thread: threading.Thread | None = None
         self._closed = False
         self._signals = _Signals()
         self._signals.written.connect(self._data_written)
@@ -193,8 +196,9 @@ class Autosaver(QObject):
         todo = self._unwritten()
         if todo:
             self._writing = True
-            threading.Thread(target=self._write_data, args=(todo,), daemon=True,
-                             name="splineviz autosave").start()
+            self._thread = threading.Thread(target=self._write_data, args=(todo,),
+                                            daemon=True, name="splineviz autosave")
+            self._thread.start()
             return
         self._write_session()
 
@@ -252,6 +256,9 @@ class Autosaver(QObject):
         self._closed = True
         self._timer.stop()
         self.scene.changed.disconnect(self._schedule)
+        if self._thread is not None:
+            # a copy being written would land in the folder removed next
+            self._thread.join(CLOSE_WAIT_S)
         RecoveryFile(self.path, 0.0).discard()
 
 
