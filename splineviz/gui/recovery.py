@@ -18,6 +18,7 @@ answers for tests and scripts: ``restore`` or ``discard``).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import re
@@ -87,8 +88,10 @@ class RecoveryFile:
         return self.path.with_name(f"{self.path.stem}_data")
 
     def discard(self) -> None:
-        """Remove the session and its data folder."""
-        self.path.unlink(missing_ok=True)
+        """Remove the session and its data folder (what cannot be removed stays: a
+        quit must not fail over a recovery file)."""
+        with contextlib.suppress(OSError):
+            self.path.unlink(missing_ok=True)
         shutil.rmtree(self.data_dir, ignore_errors=True)
 
 
