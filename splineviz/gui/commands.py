@@ -170,7 +170,9 @@ class Commands(QObject):
         try:
             noted = noting_warnings(load_session, path, repoint=self._ask_repoint,
                                     **outside_option(load_session, allow_outside))
-        except (SplinevizError, OSError) as exc:
+        except Exception as exc:  # noqa: BLE001  (a hostile session is a message, not a crash)
+            if not isinstance(exc, SplinevizError | OSError):
+                log.debug("loading %s", path, exc_info=True)
             self.window.show_error(error_message(exc))
             return None
         session = self._noted(noted, Path(path).name)
