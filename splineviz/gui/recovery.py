@@ -239,7 +239,7 @@ class Autosaver(QObject):
 
     def _write_session(self) -> None:
         from splineviz.io.session import save_session
-        from splineviz.model.session import to_session
+        from splineviz.model.session import needs_data_file, to_session
 
         written = {i: (p, o) for i, (_, p, o) in self._written.items() if i in self.scene}
         try:
@@ -248,8 +248,9 @@ class Autosaver(QObject):
         except (SplinevizError, OSError) as exc:
             self.failed.emit(f"autosave failed: {exc}")
             return
-        # copies of removed objects are no longer needed
-        for node_id in [i for i in self._written if i not in self.scene]:
+        # copies of removed objects, and of objects saved to files since, are not needed
+        for node_id in [i for i in self._written
+                        if i not in self.scene or not needs_data_file(self.scene.get(i))]:
             _, path, _ = self._written.pop(node_id)
             Path(path).unlink(missing_ok=True)
         self.saved.emit(str(self.path))
