@@ -86,8 +86,8 @@ class Commands(QObject):
         def done(noted):
             result = self._noted(noted, Path(path).name)
             if isinstance(result, OutsideFolder):
-                if self.confirm_outside(result):
-                    self.open_path(path, mode, allow_outside=True, **iso)
+                self._outside(result, allow_outside,
+                              lambda: self.open_path(path, mode, allow_outside=True, **iso))
                 return
             kind, data, summaries = result
             for what, value in summaries.items():
@@ -110,6 +110,14 @@ class Commands(QObject):
         for text in noted.warnings:
             self.warned.emit(f"{name}: {text}")
         return noted.value
+
+    def _outside(self, refusal: OutsideFolder, confirmed: bool, retry):
+        """A data file outside its folder was refused: ask, and ``retry()`` (its result is
+        returned) if the user confirms; refused again after a confirmation, it is an error."""
+        if confirmed:
+            self.window.show_error(refusal.message)
+            return None
+        return retry() if self.confirm_outside(refusal) else None
 
     def confirm_outside(self, outside: OutsideFolder) -> bool:
         """Ask whether to read a data file outside the folder of the file naming it (as
@@ -177,17 +185,16 @@ class Commands(QObject):
             return None
         session = self._noted(noted, Path(path).name)
         if isinstance(session, OutsideFolder):
-            if self.confirm_outside(session):
-                return self.load_session(path, allow_outside=True, on_loaded=on_loaded)
-            return None
+            return self._outside(session, allow_outside, lambda: self.load_session(
+                path, allow_outside=True, on_loaded=on_loaded))
         return self._read_session(path, session, allow_outside, on_loaded)
 
     def _read_session(self, path, session, allow_outside: bool, on_loaded):
         def done(noted):
             data = self._noted(noted, Path(path).name)
             if isinstance(data, OutsideFolder):
-                if self.confirm_outside(data):
-                    self._read_session(path, session, True, on_loaded)
+                self._outside(data, allow_outside,
+                              lambda: self._read_session(path, session, True, on_loaded))
                 return
             apply_session(self.scene, session, data)
             self.opened.emit(str(path))
