@@ -144,7 +144,9 @@ def test_autosave_is_debounced_copies_data_once_and_a_clean_quit_removes_it(wind
     # the session write in the GUI thread is small: well under a frame of stall budget
     t0 = time.perf_counter()
     saver._write_session()
-    assert time.perf_counter() - t0 < 0.1
+    took = time.perf_counter() - t0
+    print(f"recovery session written in the GUI thread in {1000 * took:.1f} ms")
+    assert took < 0.1
     # removing the object removes its copy
     window.scene.remove(vol)
     assert pump(10, until=lambda: len(saves) >= 4 and not copy.exists())
