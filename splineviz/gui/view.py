@@ -295,6 +295,11 @@ class View3D(QObject):
         self.scene_view.close()
         self.plotter.close()
 
+    def join(self, timeout_s: float) -> bool:
+        """After :meth:`close`: wait for a frame still being ray cast (see
+        :meth:`splineviz.gui.jobs.JobRunner.join`)."""
+        return self._refiner.join(timeout_s)
+
 
 def _trilinear(volume, point) -> float:
     """The samples of ``volume`` interpolated trilinearly at a world point."""

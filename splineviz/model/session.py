@@ -44,8 +44,16 @@ def _props(node, *names) -> dict:
     return {n: getattr(node, n) for n in names}
 
 
-def to_session(scene: Scene) -> Session:
+def to_session(scene: Scene, written: dict | None = None) -> Session:
     """The :class:`~splineviz.io.session.Session` of ``scene``.
+
+    Parameters
+    ----------
+    scene : Scene
+    written : dict, optional
+        Object id -> ``(path, read options)`` of data without a file of its own that was
+        written elsewhere (the GUI's autosave keeps such copies in its recovery folder and
+        must not point the nodes at them); used for nodes whose ``path`` is None.
 
     Raises
     ------
@@ -53,16 +61,20 @@ def to_session(scene: Scene) -> Session:
         An object holds data without a file or source (use :func:`save_scene`, which
         writes such data first).
     """
+    written = written or {}
     s = Session()
     for node in scene:
         common = {"name": node.name, "id": node.id}
+        path, read_options = getattr(node, "path", None), getattr(node, "read_options", {})
+        if path is None and node.id in written:
+            path, read_options = written[node.id]
         if isinstance(node, VolumeNode):
             extra = _props(node, "sigma", "show_outline", "visible")
             if node.source is not None:
                 s.add("Source", {"source": node.source, "shape": list(node.data.shape),
                                  **extra}, **common)
-            elif node.path is not None:
-                s.add("VolumeFile", {"path": node.path, **node.read_options, **extra}, **common)
+            elif path is not None:
+                s.add("VolumeFile", {"path": path, **read_options, **extra}, **common)
             else:
                 raise SessionError(f"volume {node.name!r} has no file; save the session with "
                                    "save_scene, which writes it")
@@ -71,17 +83,17 @@ def to_session(scene: Scene) -> Session:
                                           "material"), "color": list(node.color)},
                   inputs=[node.volume_id], **common)
         elif isinstance(node, PointsNode):
-            if node.path is None:
+            if path is None:
                 raise SessionError(f"point cloud {node.name!r} has no file")
-            s.add("PointsFile", {"path": node.path, "color": list(node.color),
+            s.add("PointsFile", {"path": path, "color": list(node.color),
                                  **_props(node, "point_size", "opacity", "visible")}, **common)
         elif isinstance(node, MeshNode):
-            if node.path is None:
+            if path is None:
                 raise SessionError(f"mesh {node.name!r} has no file")
             provenance = {k: v for k, v in _props(node, "edge_length", "rho").items()
                           if v is not None}
             inputs = [node.points_id] if node.points_id in scene else []
-            s.add("MeshFile", {"path": node.path, "color": list(node.color),
+            s.add("MeshFile", {"path": path, "color": list(node.color),
                                **_props(node, "opacity", "show_edges", "visible"),
                                **provenance}, inputs=inputs, **common)
         elif isinstance(node, ClipPlaneNode):
@@ -100,6 +112,54 @@ def to_session(scene: Scene) -> Session:
     return s
 
 
+def needs_data_file(node) -> bool:
+    """Whether ``node`` holds data that no file or source describes (a volume made in
+    Python, a remeshed mesh): a session must write it somewhere first."""
+    if isinstance(node, VolumeNode):
+        return node.path is None and node.source is None
+    return isinstance(node, MeshNode | PointsNode) and node.path is None
+
+
+def write_node_data(node, folder, volume_suffix: str = ".vti") -> tuple[str, dict]:
+    """Write the data of a node without a file (see :func:`needs_data_file`) into
+    ``folder`` as ``<id><suffix>``; the node is not changed.
+
+    Parameters
+    ----------
+    node : VolumeNode, MeshNode or PointsNode
+    folder : path-like
+        An existing folder.
+    volume_suffix : str
+        ``".vti"`` (keeps spacing and origin in the file) or ``".npy"`` (a plain array
+        write, which releases the GIL: what a background writer wants; spacing and origin
+        then go into the read options).
+
+    Returns
+    -------
+    (str, dict)
+        The file written and the read options a session records beside it.
+    """
+    from splineviz.io.meshes import write_mesh
+    from splineviz.io.volumes import write_volume
+
+    folder = Path(folder)
+    if isinstance(node, VolumeNode):
+        path = write_volume(folder / f"{node.id}{volume_suffix}", node.data)
+        options = {}
+        if volume_suffix == ".npy":
+            vol = node.data
+            options = {"spacing": [float(v) for v in np.broadcast_to(vol.spacing, 3)],
+                       "origin": [float(v) for v in np.broadcast_to(vol.origin, 3)]}
+        return str(path), options
+    if isinstance(node, MeshNode):
+        return str(write_mesh(folder / f"{node.id}.ply", node.to_polydata())), {}
+    if isinstance(node, PointsNode):
+        pts = np.asarray(node.data.points, dtype=np.float64)
+        return str(write_mesh(folder / f"{node.id}.ply",
+                              (pts, np.zeros((0, 3), dtype=np.int64)))), {}
+    raise SessionError(f"{node.kind} {node.name!r} holds no data to write")
+
+
 def save_scene(scene: Scene, path) -> Path:
     """Write ``scene`` as a session file (``.svs`` appended when missing), data without a
     file written into ``<stem>_data/`` beside it first; returns the session's path.
@@ -107,23 +167,12 @@ def save_scene(scene: Scene, path) -> Path:
     Nodes whose data were written point at the new files afterwards, so saving again does
     not write them again.
     """
-    from splineviz.io.meshes import write_mesh
-    from splineviz.io.volumes import write_volume
-
     p = session_path(path)
     folder = p.parent / f"{p.stem}_data"
     for node in scene:
-        if isinstance(node, VolumeNode) and node.path is None and node.source is None:
+        if needs_data_file(node):
             folder.mkdir(exist_ok=True)
-            node.path = str(write_volume(folder / f"{node.id}.vti", node.data))
-        elif isinstance(node, MeshNode) and node.path is None:
-            folder.mkdir(exist_ok=True)
-            node.path = str(write_mesh(folder / f"{node.id}.ply", node.to_polydata()))
-        elif isinstance(node, PointsNode) and node.path is None:
-            folder.mkdir(exist_ok=True)
-            pts = np.asarray(node.data.points, dtype=np.float64)
-            node.path = str(write_mesh(folder / f"{node.id}.ply",
-                                       (pts, np.zeros((0, 3), dtype=np.int64))))
+            node.path, _ = write_node_data(node, folder)
     save_session(to_session(scene), p)
     scene.mark_saved()
     return p
