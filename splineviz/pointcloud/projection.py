@@ -49,6 +49,23 @@ FAR_SPACINGS = 2.0
 HINT_CANDIDATES = 8
 #: Gauss-Newton iterations of the orthogonal projection onto a polynomial graph
 PROJECTION_ITERATIONS = 3
+#: nearest points of the variable-degree fit of clean points in the adaptive mode (3 spacings)
+CLEAN_NEIGHBOURS = 40
+#: points fitted at once (bounds the memory of the (chunk, K, m) basis arrays)
+CHUNK = 4096
+#: adaptive mode: nearest points gathered per neighbourhood (the widest scale's support)
+ADAPTIVE_NEIGHBOURS = 80
+#: adaptive mode: Gaussian widths h (in local spacings) and polynomial degrees of the smoothing
+#: fits, narrowest first; the first one also measures the noise
+SCALES = ((1.6, 3), (2.6, 2), (4.2, 2))
+#: intersection-of-confidence-intervals rule: half width of an interval in standard deviations
+ICI_KAPPA = 2.0
+#: noise below this fraction of the spacing counts as none: the interpolating variable-degree
+#: fit of §7.2 is kept (its error on clean data is far below what any smoothing fit reaches)
+CLEAN_NOISE = 1e-3
+#: neighbours whose oriented normal deviates more than this from the point's (cos) belong to
+#: another sheet of the surface (the two sides of a thin part) and are left out
+SHEET_COS = 0.0
 
 
 class ProjectionError(SplinevizError, ValueError):
@@ -289,6 +306,103 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
     return coeffs, degree, cond
 
 
+def _cond_spd(a: np.ndarray) -> np.ndarray:
+    """Condition numbers ``(P,)`` of symmetric positive semi-definite ``(P, m, m)`` matrices
+    from their eigenvalues (a quarter of the cost of the SVD of ``np.linalg.cond``)."""
+    ev = np.linalg.eigvalsh(a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = ev[:, -1] / ev[:, 0]
+    return np.where(ev[:, 0] > 0, c, np.inf)
+
+
+def smoothing_fit(local: np.ndarray, valid: np.ndarray, width: float, q: int,
+                  cond_max: float = COND_MAX, noise: bool = False):
+    """Weighted least-squares polynomial of degree ``q`` with Gaussian width ``width``.
+
+    The fit runs in coordinates divided by ``width`` so that the condition number means the
+    same at every width; where it exceeds ``cond_max`` (points near a curve of degree ``q``,
+    Fig. 7.7, e.g. scan lines) the plane (degree 1) is fitted instead.
+
+    Parameters
+    ----------
+    local : (P, K, 3) local coordinates in units of the spacing
+    valid : (P, K) bool, False for padding and points of other sheets
+    width : Gaussian width h in spacings
+    q : degree, 1 ... Q_MAX
+    noise : also return the residual noise estimate
+
+    Returns
+    -------
+    coeffs : (P, m) coefficients in spacing units for the basis of degree ``q``
+    degree : (P,) int, ``q`` or 1
+    cond : (P,) condition number of the scaled normal matrix
+    spread : (P,) sum of the squared equivalent-kernel weights of the value at the origin:
+        its variance is ``spread`` times the noise variance
+    sigma : (P,) unbiased residual standard deviation in spacings (only with ``noise``)
+    """
+    x, y, z = local[..., 0] / width, local[..., 1] / width, local[..., 2]
+    w = np.where(valid, np.exp(-(x * x + y * y) - (local[..., 2] / width) ** 2), 0.0)
+    m = basis_size(q)
+    b = basis(x, y, q)
+    bwt = (b * w[..., None]).transpose(0, 2, 1)
+    a = bwt @ b
+    cond = _cond_spd(a)
+    degree = np.where(np.isfinite(cond) & (cond <= cond_max), q, 1)
+    low = degree == 1
+    if low.any() and q > 1:
+        # degree 1 only: zero the higher rows/columns, keep a unit diagonal there
+        a[low, 3:, :] = 0.0
+        a[low, :, 3:] = 0.0
+        a[low, 3:, 3:] = np.eye(m - 3)
+        cond[low] = _cond_spd(a[low][:, :3, :3])
+    rhs = np.zeros((len(a), m, 2))
+    rhs[..., 0] = (bwt @ z[..., None])[..., 0]
+    rhs[low, 3:, 0] = 0.0
+    rhs[:, 0, 1] = 1.0
+    a += 1e-12 * np.eye(m)  # guards exactly singular plane fits (all points on a line)
+    sol = np.linalg.solve(a, rhs)
+    coeffs, e0 = sol[..., 0], sol[..., 1]
+    kernel = w * np.einsum("pkm,pm->pk", b, e0)
+    spread = np.einsum("pk,pk->p", kernel, kernel)
+    # back to spacing units: the monomial x^a y^b of the scaled fit is (x/h)^a (y/h)^b
+    e = monomial_exponents(q)
+    coeffs = coeffs / width ** e.sum(axis=1)
+    if not noise:
+        return coeffs, degree, cond, spread
+    r = z - np.einsum("pkm,pm->pk", b, sol[..., 0])
+    # E[sum w r^2] = sigma^2 (sum w - tr(A^-1 B^T W^2 B)) for weighted least squares
+    c2 = bwt @ (b * w[..., None])
+    dof = w.sum(axis=1) - np.einsum("pij,pji->p", np.linalg.inv(a), c2)
+    sigma = np.sqrt(np.einsum("pk,pk->p", w, r * r) / np.maximum(dof, 1e-12))
+    return coeffs, degree, cond, spread, sigma
+
+
+def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
+                 kappa: float = ICI_KAPPA) -> np.ndarray:
+    """Intersection of confidence intervals (Lepski's method): the widest fit whose interval,
+    and those of all narrower fits, still share a point.
+
+    A wider Gaussian averages more noise out but bends less with the surface; while the value
+    at the origin stays within ``kappa`` standard deviations of all narrower fits, the wider
+    fit is no more biased than the noise, so the widest such fit is taken.
+
+    Parameters
+    ----------
+    values : (P, S) value at the origin of each fit, narrowest first
+    spread : (P, S) variance factors (see :func:`smoothing_fit`)
+    sigma : (P,) noise standard deviation
+
+    Returns
+    -------
+    (P,) int index of the chosen fit.
+    """
+    half = kappa * sigma[:, None] * np.sqrt(spread)
+    lo = np.maximum.accumulate(values - half, axis=1)
+    hi = np.minimum.accumulate(values + half, axis=1)
+    ok = np.logical_and.accumulate(lo <= hi, axis=1)
+    return ok.sum(axis=1) - 1
+
+
 def _local_normals(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Unit normals ``(-z_x, -z_y, 1)/|.|`` of polynomial graphs in local coordinates."""
     _, zx, zy = evaluate(coeffs, x, y)
@@ -329,10 +443,10 @@ class Projector:
     True
     """
 
-    def __init__(self, cloud, smoothing: float = 1.0, q_max: int = Q_MAX,
+    def __init__(self, cloud, smoothing: float | None = None, q_max: int = Q_MAX,
                  cond_max: float = COND_MAX, fixed_degree: int | None = None,
                  connectivity: Connectivity | None = None):
-        if not (np.isfinite(smoothing) and smoothing > 0):
+        if smoothing is not None and not (np.isfinite(smoothing) and smoothing > 0):
             raise ProjectionError(f"smoothing must be a positive number, got {smoothing}")
         if not 1 <= int(q_max) <= 6:
             raise ProjectionError(f"q_max must be between 1 and 6, got {q_max}")
@@ -340,10 +454,16 @@ class Projector:
             raise ProjectionError(f"fixed_degree must be between 1 and q_max, got {fixed_degree}")
         self.conn = connectivity if connectivity is not None else cocone_connectivity(cloud)
         self.q_max = int(q_max)
-        self.smoothing = float(smoothing)
+        self.smoothing = None if smoothing is None else float(smoothing)
         self.points = self.conn.points
         self.scale = self.conn.spacing.copy()
-        self._fit(fixed_degree, cond_max)
+        if self.smoothing is None and fixed_degree is None:
+            self._fit_adaptive(cond_max)
+        else:
+            self.smoothing = 1.0 if self.smoothing is None else self.smoothing
+            self._fit(fixed_degree, cond_max)
+            self.reach = np.full(len(self.points), CUTOFF * self.smoothing)
+            self.noise = None
         self._median_sets()
 
     # -- precomputation ------------------------------------------------------------------
@@ -388,6 +508,88 @@ class Projector:
         zero = np.zeros(n)
         nloc = _local_normals(coeffs, zero, zero)
         self.normals = np.einsum("nji,nj->ni", frames, nloc)
+
+    def _fit_adaptive(self, cond_max):
+        """Noise-aware fits: the scale (and with it the degree) chosen per point from the data.
+
+        Per point: the ``ADAPTIVE_NEIGHBOURS`` nearest points of its own sheet; the noise
+        level from the residuals of the narrowest smoothing fit, pooled over the nearest
+        points (median); clean points keep the interpolating variable-degree fit of §7.2,
+        noisy ones take the widest of the ``SCALES`` fits that the intersection of confidence
+        intervals accepts (:func:`choose_scale`).  The LCS re-orientation of Fig. 7.5 runs on
+        the chosen polynomial.
+        """
+        pts, n = self.points, len(self.points)
+        k = min(ADAPTIVE_NEIGHBOURS, n)
+        _, index = self.conn.tree.query(pts, k=k)
+        index[:, 0] = np.arange(n)  # points are distinct: the nearest is the point itself
+        normals = self.conn.normals
+        # the other side of a thin part is near but faces the other way (oriented normals)
+        valid = np.einsum("nkc,nc->nk", normals[index], normals) > SHEET_COS
+        valid[:, 0] = True
+        self.neighbourhoods = Neighbourhoods(index, np.zeros(index.shape, dtype=int), valid)
+        frames = frames_from_normals(normals)
+        coeffs = np.zeros((n, basis_size(self.q_max)))
+        degree = np.ones(n, dtype=int)
+        cond = np.zeros(n)
+        reach = np.full(n, CUTOFF)
+        noise = None
+        todo = np.arange(n)
+        for it in range(MAX_BISECTIONS + 1):
+            if noise is None:
+                raw = np.empty(n)
+            for lo in range(0, len(todo), CHUNK):
+                ids = todo[lo:lo + CHUNK]
+                rel = pts[index[ids]] - pts[ids, None, :]
+                local = np.einsum("pij,pkj->pki", frames[ids], rel) / self.scale[ids, None, None]
+                fits = [smoothing_fit(local, valid[ids], width, q, cond_max, noise=(s == 0))
+                        for s, (width, q) in enumerate(SCALES)]
+                if noise is None:
+                    raw[ids] = fits[0][4]
+                    continue
+                self._choose(ids, local, valid[ids], fits, noise[ids], cond_max,
+                             coeffs, degree, cond, reach)
+            if noise is None:
+                # the median over the nearest points steadies the estimate (a handful of
+                # residuals per point) without blurring where the noise level changes
+                noise = np.median(raw[index[:, :MEDIAN_NEIGHBOURS]], axis=1)
+                self.noise = noise * self.scale
+                continue
+            zero = np.zeros(len(todo))
+            nloc = _local_normals(coeffs[todo], zero, zero)
+            bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
+            if it == MAX_BISECTIONS or not bad.any():
+                break
+            nworld = np.einsum("nji,nj->ni", frames[todo[bad]], nloc[bad])
+            frames[todo[bad]] = frames_from_normals(frames[todo[bad], 2] + nworld)
+            todo = todo[bad]
+        self.frames, self.coeffs, self.degree, self.cond, self.reach = (
+            frames, coeffs, degree, cond, reach)
+        zero = np.zeros(n)
+        self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
+
+    def _choose(self, ids, local, valid, fits, noise, cond_max, coeffs, degree, cond, reach):
+        """Store the chosen fit of points ``ids`` (see :meth:`_fit_adaptive`)."""
+        clean = noise < CLEAN_NOISE
+        values = np.stack([f[0][:, 0] for f in fits], axis=1)
+        spread = np.stack([f[3] for f in fits], axis=1)
+        pick = choose_scale(values, spread, noise)
+        for s, (width, _q) in enumerate(SCALES):
+            sel = np.flatnonzero((pick == s) & ~clean)
+            c = fits[s][0][sel]
+            coeffs[ids[sel]] = 0.0
+            coeffs[ids[sel], :c.shape[1]] = c
+            degree[ids[sel]] = fits[s][1][sel]
+            cond[ids[sel]] = fits[s][2][sel]
+            reach[ids[sel]] = CUTOFF * width
+        sel = np.flatnonzero(clean)
+        if len(sel):
+            k = min(CLEAN_NEIGHBOURS, local.shape[1])
+            loc = local[sel, :k]
+            w = np.where(valid[sel, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
+            c, q, kc = fit_polynomials(loc, w, self.q_max, cond_max)
+            coeffs[ids[sel]] = c
+            degree[ids[sel]], cond[ids[sel]], reach[ids[sel]] = q, kc, CUTOFF
 
     def _median_sets(self):
         """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""
@@ -435,7 +637,7 @@ class Projector:
         loc = np.einsum("pij,pj->pi", f, r - self.points[ids]) / s[:, None]
         u, v = loc[:, 0].copy(), loc[:, 1].copy()
         limit = 1.0  # at most one spacing per step: damped for far queries
-        reach = CUTOFF * self.smoothing
+        reach = self.reach[ids]
         rad = np.hypot(u, v)
         shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
         u *= shrink
