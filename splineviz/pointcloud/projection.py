@@ -112,6 +112,22 @@ def basis(x: np.ndarray, y: np.ndarray, q: int) -> np.ndarray:
     return _powers(x, q)[..., e[:, 0]] * _powers(y, q)[..., e[:, 1]]
 
 
+def _basis_planes(x: np.ndarray, y: np.ndarray, q: int) -> np.ndarray:
+    """:func:`basis` with the monomial axis first, shape ``(m,) + x.shape``: each monomial
+    is one contiguous plane, which the moment sums below read about five times faster."""
+    px, py = [np.ones_like(x)], [np.ones_like(y)]
+    for _ in range(q):
+        px.append(px[-1] * x)
+        py.append(py[-1] * y)
+    out = np.empty((basis_size(q),) + x.shape)
+    col = 0
+    for t in range(q + 1):
+        for b in range(t + 1):
+            np.multiply(px[t - b], py[b], out=out[col])
+            col += 1
+    return out
+
+
 @cache
 def _derivative_tables(q: int):
     """Exponents and index/factor arrays for :func:`evaluate` (cached per degree)."""
@@ -315,66 +331,78 @@ def _cond_spd(a: np.ndarray) -> np.ndarray:
     return np.where(ev[:, 0] > 0, c, np.inf)
 
 
-def smoothing_fit(local: np.ndarray, valid: np.ndarray, width: float, q: int,
-                  cond_max: float = COND_MAX, noise: bool = False):
-    """Weighted least-squares polynomial of degree ``q`` with Gaussian width ``width``.
+@cache
+def _pair_index(q: int) -> np.ndarray:
+    """``(m, m)`` position of the monomial ``b_i b_j`` in the basis of degree ``2 q``."""
+    e = monomial_exponents(q)
+    s = e[:, None, :] + e[None, :, :]
+    t = s.sum(axis=-1)
+    return t * (t + 1) // 2 + s[..., 1]
 
-    The fit runs in coordinates divided by ``width`` so that the condition number means the
-    same at every width; where it exceeds ``cond_max`` (points near a curve of degree ``q``,
-    Fig. 7.7, e.g. scan lines) the plane (degree 1) is fitted instead.
+
+def smoothing_fits(local: np.ndarray, valid: np.ndarray, scales=SCALES,
+                   cond_max: float = COND_MAX, noise: bool = False) -> list:
+    """Weighted least-squares polynomials at several Gaussian widths over one neighbourhood.
+
+    Each fit runs in coordinates divided by its width ``h`` so that the condition number
+    means the same at every width; where it exceeds ``cond_max`` (points near a curve of
+    that degree, Fig. 7.7, e.g. scan lines) the plane (degree 1) is fitted instead.  The
+    normal matrices are gathered from the weighted moments ``sum w x^a y^b`` (``a + b <= 2q``),
+    28 sums per point for degree 3 instead of 100 products.
 
     Parameters
     ----------
     local : (P, K, 3) local coordinates in units of the spacing
     valid : (P, K) bool, False for padding and points of other sheets
-    width : Gaussian width h in spacings
-    q : degree, 1 ... Q_MAX
-    noise : also return the residual noise estimate
+    scales : sequence of (width h in spacings, degree q)
+    noise : also return the residual noise estimate of each fit
 
     Returns
     -------
-    coeffs : (P, m) coefficients in spacing units for the basis of degree ``q``
-    degree : (P,) int, ``q`` or 1
-    cond : (P,) condition number of the scaled normal matrix
-    spread : (P,) sum of the squared equivalent-kernel weights of the value at the origin:
-        its variance is ``spread`` times the noise variance
-    sigma : (P,) unbiased residual standard deviation in spacings (only with ``noise``)
+    list with one tuple per scale: ``coeffs (P, m)`` in spacing units for the basis of degree
+    ``q``; ``degree (P,)`` (``q`` or 1); ``cond (P,)`` of the scaled normal matrix;
+    ``spread (P,)``, the sum of the squared equivalent-kernel weights of the value at the
+    origin (its variance is ``spread`` times the noise variance); with ``noise``, ``sigma
+    (P,)``, the unbiased residual standard deviation in spacings.
     """
-    x, y, z = local[..., 0] / width, local[..., 1] / width, local[..., 2]
-    w = np.where(valid, np.exp(-(x * x + y * y) - (local[..., 2] / width) ** 2), 0.0)
-    m = basis_size(q)
-    b = basis(x, y, q)
-    bwt = (b * w[..., None]).transpose(0, 2, 1)
-    a = bwt @ b
-    cond = _cond_spd(a)
-    degree = np.where(np.isfinite(cond) & (cond <= cond_max), q, 1)
-    low = degree == 1
-    if low.any() and q > 1:
-        # degree 1 only: zero the higher rows/columns, keep a unit diagonal there
-        a[low, 3:, :] = 0.0
-        a[low, :, 3:] = 0.0
-        a[low, 3:, 3:] = np.eye(m - 3)
-        cond[low] = _cond_spd(a[low][:, :3, :3])
-    rhs = np.zeros((len(a), m, 2))
-    rhs[..., 0] = (bwt @ z[..., None])[..., 0]
-    rhs[low, 3:, 0] = 0.0
-    rhs[:, 0, 1] = 1.0
-    a += 1e-12 * np.eye(m)  # guards exactly singular plane fits (all points on a line)
-    sol = np.linalg.solve(a, rhs)
-    coeffs, e0 = sol[..., 0], sol[..., 1]
-    kernel = w * np.einsum("pkm,pm->pk", b, e0)
-    spread = np.einsum("pk,pk->p", kernel, kernel)
-    # back to spacing units: the monomial x^a y^b of the scaled fit is (x/h)^a (y/h)^b
-    e = monomial_exponents(q)
-    coeffs = coeffs / width ** e.sum(axis=1)
-    if not noise:
-        return coeffs, degree, cond, spread
-    r = z - np.einsum("pkm,pm->pk", b, sol[..., 0])
-    # E[sum w r^2] = sigma^2 (sum w - tr(A^-1 B^T W^2 B)) for weighted least squares
-    c2 = bwt @ (b * w[..., None])
-    dof = w.sum(axis=1) - np.einsum("pij,pji->p", np.linalg.inv(a), c2)
-    sigma = np.sqrt(np.einsum("pk,pk->p", w, r * r) / np.maximum(dof, 1e-12))
-    return coeffs, degree, cond, spread, sigma
+    x, y, z = local[..., 0], local[..., 1], local[..., 2]
+    d2 = x * x + y * y + z * z
+    qs = max(q for _, q in scales)
+    mono = _basis_planes(x, y, 2 * qs)  # (M, P, K)
+    out = []
+    for width, q in scales:
+        m, m2 = basis_size(q), basis_size(2 * q)
+        f2 = float(width) ** -monomial_exponents(2 * q).sum(axis=1)
+        f1 = f2[:m]
+        w = np.where(valid, np.exp(-d2 / width**2), 0.0)
+        a = (np.einsum("mpk,pk->pm", mono[:m2], w) * f2)[:, _pair_index(q)]
+        cond = _cond_spd(a)
+        degree = np.where(np.isfinite(cond) & (cond <= cond_max), q, 1)
+        low = degree == 1
+        rhs = np.zeros((len(a), m, 2))
+        rhs[..., 0] = np.einsum("mpk,pk->pm", mono[:m], w * z) * f1
+        rhs[:, 0, 1] = 1.0
+        if low.any() and q > 1:
+            # the plane only: no coupling to the higher monomials, unit diagonal there
+            a[low, 3:, :] = 0.0
+            a[low, :, 3:] = 0.0
+            a[low, 3:, 3:] = np.eye(m - 3)
+            rhs[low, 3:, 0] = 0.0
+            cond[low] = _cond_spd(a[low][:, :3, :3])
+        a += 1e-12 * np.eye(m)  # guards exactly singular plane fits (all points on a line)
+        sol = np.linalg.solve(a, rhs)
+        coeffs = sol[..., 0] * f1  # back to spacing units: (x/h)^a (y/h)^b
+        kernel = w * np.einsum("mpk,pm->pk", mono[:m], sol[..., 1] * f1)
+        spread = np.einsum("pk,pk->p", kernel, kernel)
+        fit = (coeffs, degree, cond, spread)
+        if noise:
+            r = z - np.einsum("mpk,pm->pk", mono[:m], coeffs)
+            # E[sum w r^2] = sigma^2 (sum w - tr(A^-1 B^T W^2 B)) for weighted least squares
+            c2 = (np.einsum("mpk,pk->pm", mono[:m2], w * w) * f2)[:, _pair_index(q)]
+            dof = w.sum(axis=1) - np.einsum("pij,pji->p", np.linalg.inv(a), c2)
+            fit += (np.sqrt(np.einsum("pk,pk->p", w, r * r) / np.maximum(dof, 1e-12)),)
+        out.append(fit)
+    return out
 
 
 def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
@@ -413,22 +441,37 @@ def _local_normals(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarr
 class Projector:
     """Projection onto the point-set surface of thesis §7.2.
 
-    Precomputes Cocone connectivity, breadth-first neighbourhoods (r_c rule and overlap rule,
-    Fig. 7.6), and per point a weighted least-squares polynomial of variable degree in a local
-    coordinate system re-oriented by bisection (Fig. 7.5).
+    Precomputes Cocone connectivity and per point a weighted least-squares polynomial in a
+    local coordinate system re-oriented by bisection (Fig. 7.5).
+
+    By default (``smoothing=None``) the fits adapt to the noise in the data: per point the
+    noise level is measured from the residuals of a degree-3 fit over about 1.6 spacings and
+    pooled over the nearest points.  Where it is below ``CLEAN_NOISE`` spacings the thesis'
+    interpolating fit is kept (Gaussian width one spacing, variable degree up to ``q_max`` by
+    the condition number), so clean data keeps its accuracy; elsewhere the widest of the
+    ``SCALES`` fits (widths 1.6-4.2 spacings, degree 3 then 2) whose value at the point
+    stays within the confidence intervals of the narrower fits is taken
+    (:func:`choose_scale`), so noise is averaged out where the surface is flat enough and
+    curvature detail stops the widening.  Neighbourhoods are the ``ADAPTIVE_NEIGHBOURS``
+    nearest points whose oriented normals agree (the two sides of a thin part stay apart).
+
+    With a number for ``smoothing`` the thesis' fixed scheme runs: breadth-first
+    neighbourhoods (r_c rule and overlap rule, Fig. 7.6) and variable degree at that width.
 
     Parameters
     ----------
     cloud : PointCloud or (N, 3) array_like
-    smoothing : float
-        Multiplies the Gaussian width ``h`` (eq. 7.2), which defaults to the local spacing;
-        raise it (e.g. 2-3) to smooth out measurement noise.
+    smoothing : float, optional
+        Fixed Gaussian width ``h`` (eq. 7.2) in units of the local spacing (1 is the thesis'
+        choice; e.g. 2-3 smooths out measurement noise); ``None`` (default) chooses the width
+        per point from the data as described above.
     q_max : int
         Highest polynomial degree (1 ... 6).
     cond_max : float
         Condition-number threshold for the degree reduction.
     fixed_degree : int, optional
-        Use this degree everywhere and skip the condition test: an MLS-style ablation.
+        Use this degree everywhere and skip the condition test: an MLS-style ablation (with
+        the fixed width ``smoothing``, 1 when not given).
     connectivity : Connectivity, optional
         Reuse a previously computed :func:`cocone_connectivity`.
 
@@ -542,13 +585,12 @@ class Projector:
                 ids = todo[lo:lo + CHUNK]
                 rel = pts[index[ids]] - pts[ids, None, :]
                 local = np.einsum("pij,pkj->pki", frames[ids], rel) / self.scale[ids, None, None]
-                fits = [smoothing_fit(local, valid[ids], width, q, cond_max, noise=(s == 0))
-                        for s, (width, q) in enumerate(SCALES)]
                 if noise is None:
-                    raw[ids] = fits[0][4]
-                    continue
-                self._choose(ids, local, valid[ids], fits, noise[ids], cond_max,
-                             coeffs, degree, cond, reach)
+                    raw[ids] = smoothing_fits(local, valid[ids], SCALES[:1], cond_max,
+                                              noise=True)[0][4]
+                else:
+                    self._choose(ids, local, valid[ids], noise[ids], cond_max,
+                                 coeffs, degree, cond, reach)
             if noise is None:
                 # the median over the nearest points steadies the estimate (a handful of
                 # residuals per point) without blurring where the noise level changes
@@ -568,20 +610,22 @@ class Projector:
         zero = np.zeros(n)
         self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
 
-    def _choose(self, ids, local, valid, fits, noise, cond_max, coeffs, degree, cond, reach):
-        """Store the chosen fit of points ``ids`` (see :meth:`_fit_adaptive`)."""
+    def _choose(self, ids, local, valid, noise, cond_max, coeffs, degree, cond, reach):
+        """Fit points ``ids`` and store the chosen fits (see :meth:`_fit_adaptive`)."""
         clean = noise < CLEAN_NOISE
-        values = np.stack([f[0][:, 0] for f in fits], axis=1)
-        spread = np.stack([f[3] for f in fits], axis=1)
-        pick = choose_scale(values, spread, noise)
-        for s, (width, _q) in enumerate(SCALES):
-            sel = np.flatnonzero((pick == s) & ~clean)
+        noisy = np.flatnonzero(~clean)
+        if len(noisy):
+            fits = smoothing_fits(local[noisy], valid[noisy], SCALES, cond_max)
+            values = np.stack([f[0][:, 0] for f in fits], axis=1)
+            spread = np.stack([f[3] for f in fits], axis=1)
+            pick = choose_scale(values, spread, noise[noisy])
+        for s, (width, _q) in enumerate(SCALES if len(noisy) else ()):
+            sel = np.flatnonzero(pick == s)
+            dst = ids[noisy[sel]]
             c = fits[s][0][sel]
-            coeffs[ids[sel]] = 0.0
-            coeffs[ids[sel], :c.shape[1]] = c
-            degree[ids[sel]] = fits[s][1][sel]
-            cond[ids[sel]] = fits[s][2][sel]
-            reach[ids[sel]] = CUTOFF * width
+            coeffs[dst] = 0.0
+            coeffs[dst, :c.shape[1]] = c
+            degree[dst], cond[dst], reach[dst] = fits[s][1][sel], fits[s][2][sel], CUTOFF * width
         sel = np.flatnonzero(clean)
         if len(sel):
             k = min(CLEAN_NEIGHBOURS, local.shape[1])

@@ -47,7 +47,7 @@ def _as_cloud(pc) -> PointCloud:
 
 def remesh(pc, edge_length: float | None = None, rho: float | None = None, progress=None, *,
            min_length: float | None = None, max_length: float | None = None,
-           smoothing: float = 1.0, optimize_mesh: bool = True, projector: Projector | None = None,
+           smoothing: float | None = None, optimize_mesh: bool = True, projector: Projector | None = None,
            fixed_degree: int | None = None, report: RemeshReport | None = None):
     """Triangulate a point cloud with near-equilateral, curvature-adapted triangles.
 
@@ -64,8 +64,9 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
         :class:`~splineviz.pointcloud.advancing_front.Cancelled`).
     min_length, max_length : float, optional
         Bounds of the adaptive edge length (defaults 1.5 and 5 times the median spacing).
-    smoothing : float
-        Gaussian width of the local fits in units of the local spacing (raise for noise).
+    smoothing : float, optional
+        Fixed Gaussian width of the local fits in units of the local spacing; by default the
+        width is chosen per point from the noise in the data (:class:`Projector`).
     optimize_mesh : bool
         Run valence flips and tangential relaxation after the front.
     projector : Projector, optional
