@@ -21,6 +21,7 @@ from scipy import sparse
 
 from splineviz.core.errors import SplinevizError
 from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity
+from splineviz.pointcloud.local_fits import smoothing_fits
 
 #: highest polynomial degree tried (thesis: "around 5")
 Q_MAX = 5
@@ -52,7 +53,7 @@ PROJECTION_ITERATIONS = 3
 #: nearest points of the variable-degree fit of clean points in the adaptive mode (3 spacings)
 CLEAN_NEIGHBOURS = 40
 #: points fitted at once (bounds the memory of the (chunk, K, m) basis arrays)
-CHUNK = 4096
+CHUNK = 2048
 #: adaptive mode: nearest points gathered per neighbourhood (the widest scale's support)
 ADAPTIVE_NEIGHBOURS = 80
 #: adaptive mode: Gaussian widths h (in local spacings) and polynomial degrees of the smoothing
@@ -110,22 +111,6 @@ def basis(x: np.ndarray, y: np.ndarray, q: int) -> np.ndarray:
     """Monomial basis ``b(x)`` of eq. (7.3) at points; shape ``x.shape + (m,)``."""
     e = monomial_exponents(q)
     return _powers(x, q)[..., e[:, 0]] * _powers(y, q)[..., e[:, 1]]
-
-
-def _basis_planes(x: np.ndarray, y: np.ndarray, q: int) -> np.ndarray:
-    """:func:`basis` with the monomial axis first, shape ``(m,) + x.shape``: each monomial
-    is one contiguous plane, which the moment sums below read about five times faster."""
-    px, py = [np.ones_like(x)], [np.ones_like(y)]
-    for _ in range(q):
-        px.append(px[-1] * x)
-        py.append(py[-1] * y)
-    out = np.empty((basis_size(q),) + x.shape)
-    col = 0
-    for t in range(q + 1):
-        for b in range(t + 1):
-            np.multiply(px[t - b], py[b], out=out[col])
-            col += 1
-    return out
 
 
 @cache
@@ -322,89 +307,6 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
     return coeffs, degree, cond
 
 
-def _cond_spd(a: np.ndarray) -> np.ndarray:
-    """Condition numbers ``(P,)`` of symmetric positive semi-definite ``(P, m, m)`` matrices
-    from their eigenvalues (a quarter of the cost of the SVD of ``np.linalg.cond``)."""
-    ev = np.linalg.eigvalsh(a)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c = ev[:, -1] / ev[:, 0]
-    return np.where(ev[:, 0] > 0, c, np.inf)
-
-
-@cache
-def _pair_index(q: int) -> np.ndarray:
-    """``(m, m)`` position of the monomial ``b_i b_j`` in the basis of degree ``2 q``."""
-    e = monomial_exponents(q)
-    s = e[:, None, :] + e[None, :, :]
-    t = s.sum(axis=-1)
-    return t * (t + 1) // 2 + s[..., 1]
-
-
-def smoothing_fits(local: np.ndarray, valid: np.ndarray, scales=SCALES,
-                   cond_max: float = COND_MAX, noise: bool = False) -> list:
-    """Weighted least-squares polynomials at several Gaussian widths over one neighbourhood.
-
-    Each fit runs in coordinates divided by its width ``h`` so that the condition number
-    means the same at every width; where it exceeds ``cond_max`` (points near a curve of
-    that degree, Fig. 7.7, e.g. scan lines) the plane (degree 1) is fitted instead.  The
-    normal matrices are gathered from the weighted moments ``sum w x^a y^b`` (``a + b <= 2q``),
-    28 sums per point for degree 3 instead of 100 products.
-
-    Parameters
-    ----------
-    local : (P, K, 3) local coordinates in units of the spacing
-    valid : (P, K) bool, False for padding and points of other sheets
-    scales : sequence of (width h in spacings, degree q)
-    noise : also return the residual noise estimate of each fit
-
-    Returns
-    -------
-    list with one tuple per scale: ``coeffs (P, m)`` in spacing units for the basis of degree
-    ``q``; ``degree (P,)`` (``q`` or 1); ``cond (P,)`` of the scaled normal matrix;
-    ``spread (P,)``, the sum of the squared equivalent-kernel weights of the value at the
-    origin (its variance is ``spread`` times the noise variance); with ``noise``, ``sigma
-    (P,)``, the unbiased residual standard deviation in spacings.
-    """
-    x, y, z = local[..., 0], local[..., 1], local[..., 2]
-    d2 = x * x + y * y + z * z
-    qs = max(q for _, q in scales)
-    mono = _basis_planes(x, y, 2 * qs)  # (M, P, K)
-    out = []
-    for width, q in scales:
-        m, m2 = basis_size(q), basis_size(2 * q)
-        f2 = float(width) ** -monomial_exponents(2 * q).sum(axis=1)
-        f1 = f2[:m]
-        w = np.where(valid, np.exp(-d2 / width**2), 0.0)
-        a = (np.einsum("mpk,pk->pm", mono[:m2], w) * f2)[:, _pair_index(q)]
-        cond = _cond_spd(a)
-        degree = np.where(np.isfinite(cond) & (cond <= cond_max), q, 1)
-        low = degree == 1
-        rhs = np.zeros((len(a), m, 2))
-        rhs[..., 0] = np.einsum("mpk,pk->pm", mono[:m], w * z) * f1
-        rhs[:, 0, 1] = 1.0
-        if low.any() and q > 1:
-            # the plane only: no coupling to the higher monomials, unit diagonal there
-            a[low, 3:, :] = 0.0
-            a[low, :, 3:] = 0.0
-            a[low, 3:, 3:] = np.eye(m - 3)
-            rhs[low, 3:, 0] = 0.0
-            cond[low] = _cond_spd(a[low][:, :3, :3])
-        a += 1e-12 * np.eye(m)  # guards exactly singular plane fits (all points on a line)
-        sol = np.linalg.solve(a, rhs)
-        coeffs = sol[..., 0] * f1  # back to spacing units: (x/h)^a (y/h)^b
-        kernel = w * np.einsum("mpk,pm->pk", mono[:m], sol[..., 1] * f1)
-        spread = np.einsum("pk,pk->p", kernel, kernel)
-        fit = (coeffs, degree, cond, spread)
-        if noise:
-            r = z - np.einsum("mpk,pm->pk", mono[:m], coeffs)
-            # E[sum w r^2] = sigma^2 (sum w - tr(A^-1 B^T W^2 B)) for weighted least squares
-            c2 = (np.einsum("mpk,pk->pm", mono[:m2], w * w) * f2)[:, _pair_index(q)]
-            dof = w.sum(axis=1) - np.einsum("pij,pji->p", np.linalg.inv(a), c2)
-            fit += (np.sqrt(np.einsum("pk,pk->p", w, r * r) / np.maximum(dof, 1e-12)),)
-        out.append(fit)
-    return out
-
-
 def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
                  kappa: float = ICI_KAPPA) -> np.ndarray:
     """Intersection of confidence intervals (Lepski's method): the widest fit whose interval,
@@ -576,32 +478,22 @@ class Projector:
         degree = np.ones(n, dtype=int)
         cond = np.zeros(n)
         reach = np.full(n, CUTOFF)
-        noise = None
+        raw = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES[:1],
+                             cond_max, noise=True)[4]
+        # the median over the nearest points steadies the estimate (a handful of residuals
+        # per point) without blurring where the noise level changes
+        noise = np.median(raw[index[:, :MEDIAN_NEIGHBOURS]], axis=1)
+        self.noise = noise * self.scale
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
-            if noise is None:
-                raw = np.empty(n)
-            for lo in range(0, len(todo), CHUNK):
-                ids = todo[lo:lo + CHUNK]
-                rel = pts[index[ids]] - pts[ids, None, :]
-                local = np.einsum("pij,pkj->pki", frames[ids], rel) / self.scale[ids, None, None]
-                if noise is None:
-                    raw[ids] = smoothing_fits(local, valid[ids], SCALES[:1], cond_max,
-                                              noise=True)[0][4]
-                else:
-                    self._choose(ids, local, valid[ids], noise[ids], cond_max,
-                                 coeffs, degree, cond, reach)
-            if noise is None:
-                # the median over the nearest points steadies the estimate (a handful of
-                # residuals per point) without blurring where the noise level changes
-                noise = np.median(raw[index[:, :MEDIAN_NEIGHBOURS]], axis=1)
-                self.noise = noise * self.scale
-                continue
+            self._choose(todo, index, valid, frames, noise[todo], cond_max,
+                         coeffs, degree, cond, reach)
             zero = np.zeros(len(todo))
             nloc = _local_normals(coeffs[todo], zero, zero)
             bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
             if it == MAX_BISECTIONS or not bad.any():
                 break
+            # Fig. 7.5: the new z-axis bisects the old one and the polynomial normal
             nworld = np.einsum("nji,nj->ni", frames[todo[bad]], nloc[bad])
             frames[todo[bad]] = frames_from_normals(frames[todo[bad], 2] + nworld)
             todo = todo[bad]
@@ -610,30 +502,30 @@ class Projector:
         zero = np.zeros(n)
         self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
 
-    def _choose(self, ids, local, valid, noise, cond_max, coeffs, degree, cond, reach):
-        """Fit points ``ids`` and store the chosen fits (see :meth:`_fit_adaptive`)."""
+    def _choose(self, ids, index, valid, frames, noise, cond_max, coeffs, degree, cond, reach):
+        """Fit points ``ids`` in ``frames`` and store the chosen fits (:meth:`_fit_adaptive`)."""
         clean = noise < CLEAN_NOISE
-        noisy = np.flatnonzero(~clean)
+        noisy = ids[~clean]
         if len(noisy):
-            fits = smoothing_fits(local[noisy], valid[noisy], SCALES, cond_max)
-            values = np.stack([f[0][:, 0] for f in fits], axis=1)
-            spread = np.stack([f[3] for f in fits], axis=1)
-            pick = choose_scale(values, spread, noise[noisy])
-        for s, (width, _q) in enumerate(SCALES if len(noisy) else ()):
-            sel = np.flatnonzero(pick == s)
-            dst = ids[noisy[sel]]
-            c = fits[s][0][sel]
-            coeffs[dst] = 0.0
-            coeffs[dst, :c.shape[1]] = c
-            degree[dst], cond[dst], reach[dst] = fits[s][1][sel], fits[s][2][sel], CUTOFF * width
-        sel = np.flatnonzero(clean)
+            c, q, kc, spread, _ = smoothing_fits(self.points, index, valid, frames, self.scale,
+                                                 noisy, SCALES, cond_max)
+            pick = choose_scale(c[:, :, 0].T, spread.T, noise[~clean])
+            rows = np.arange(len(noisy))
+            coeffs[noisy] = 0.0
+            coeffs[noisy, :c.shape[2]] = c[pick, rows]
+            degree[noisy], cond[noisy] = q[pick, rows], kc[pick, rows]
+            reach[noisy] = CUTOFF * np.array([w for w, _ in SCALES])[pick]
+        sel = ids[clean]
         if len(sel):
-            k = min(CLEAN_NEIGHBOURS, local.shape[1])
-            loc = local[sel, :k]
-            w = np.where(valid[sel, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
-            c, q, kc = fit_polynomials(loc, w, self.q_max, cond_max)
-            coeffs[ids[sel]] = c
-            degree[ids[sel]], cond[ids[sel]], reach[ids[sel]] = q, kc, CUTOFF
+            k = min(CLEAN_NEIGHBOURS, index.shape[1])
+            for lo in range(0, len(sel), CHUNK):
+                part = sel[lo:lo + CHUNK]
+                rel = self.points[index[part, :k]] - self.points[part, None, :]
+                loc = np.einsum("pij,pkj->pki", frames[part], rel) / self.scale[part, None, None]
+                w = np.where(valid[part, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
+                c, q, kc = fit_polynomials(loc, w, self.q_max, cond_max)
+                coeffs[part] = c
+                degree[part], cond[part], reach[part] = q, kc, CUTOFF
 
     def _median_sets(self):
         """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""

@@ -47,7 +47,8 @@ def _as_cloud(pc) -> PointCloud:
 
 def remesh(pc, edge_length: float | None = None, rho: float | None = None, progress=None, *,
            min_length: float | None = None, max_length: float | None = None,
-           smoothing: float | None = None, optimize_mesh: bool = True, projector: Projector | None = None,
+           smoothing: float | None = None, optimize_mesh: bool = True,
+           projector: Projector | None = None,
            fixed_degree: int | None = None, report: RemeshReport | None = None):
     """Triangulate a point cloud with near-equilateral, curvature-adapted triangles.
 
