@@ -21,7 +21,7 @@ from scipy import sparse
 
 from splineviz.core.errors import SplinevizError
 from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity
-from splineviz.pointcloud.local_fits import smoothing_fits
+from splineviz.pointcloud.local_fits import project_on_polynomials, smoothing_fits
 
 #: highest polynomial degree tried (thesis: "around 5")
 Q_MAX = 5
@@ -569,41 +569,8 @@ class Projector:
         -------
         positions (P, 3), normals (P, 3) in world coordinates.
         """
-        f, s, c = self.frames[ids], self.scale[ids], self.coeffs[ids]
-        loc = np.einsum("pij,pj->pi", f, r - self.points[ids]) / s[:, None]
-        u, v = loc[:, 0].copy(), loc[:, 1].copy()
-        limit = 1.0  # at most one spacing per step: damped for far queries
-        reach = self.reach[ids]
-        rad = np.hypot(u, v)
-        shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
-        u *= shrink
-        v *= shrink
-        for _ in range(PROJECTION_ITERATIONS):
-            z, zx, zy = evaluate(c, u, v)
-            res = loc - np.stack([u, v, z], axis=1)
-            # J = [[1,0],[0,1],[zx,zy]];  solve (J^T J) du = J^T res
-            g0 = res[:, 0] + zx * res[:, 2]
-            g1 = res[:, 1] + zy * res[:, 2]
-            a00, a01, a11 = 1 + zx * zx, zx * zy, 1 + zy * zy
-            det = a00 * a11 - a01 * a01
-            du = (a11 * g0 - a01 * g1) / det
-            dv = (a00 * g1 - a01 * g0) / det
-            step = np.hypot(du, dv)
-            factor = np.minimum(1.0, limit / np.maximum(step, 1e-300))
-            u += du * factor
-            v += dv * factor
-            # the polynomial is only valid where its points were: keep the foot point inside
-            # the fitted disc, so that far queries land near their nearest input point
-            rad = np.hypot(u, v)
-            shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
-            u *= shrink
-            v *= shrink
-        z, zx, zy = evaluate(c, u, v)
-        nloc = np.stack([-zx, -zy, np.ones_like(z)], axis=1)
-        nloc /= np.linalg.norm(nloc, axis=1, keepdims=True)
-        foot = np.stack([u, v, z], axis=1) * s[:, None]
-        pos = self.points[ids] + np.einsum("pji,pj->pi", f, foot)
-        return pos, np.einsum("pji,pj->pi", f, nloc)
+        return project_on_polynomials(self.points, self.frames, self.scale, self.coeffs,
+                                      self.degree, self.reach, ids, r, PROJECTION_ITERATIONS)
 
     def project_with_normals(self, points, normal_hint=None):
         """Project points and return the surface normals there.
