@@ -20,7 +20,7 @@ import numpy as np
 from scipy import sparse
 
 from splineviz.core.errors import SplinevizError
-from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity
+from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity, knn_connectivity
 from splineviz.pointcloud.local_fits import project_on_polynomials, smoothing_fits
 
 #: highest polynomial degree tried (thesis: "around 5")
@@ -280,9 +280,9 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
     cond : (N,) condition number of the chosen A
     """
     b = basis(local[..., 0], local[..., 1], q_max)  # (N, K, m)
-    bw = b * weights[..., None]
-    a = np.einsum("nkm,nkl->nml", bw, b)
-    d = np.einsum("nkm,nk->nm", bw, local[..., 2])
+    bwt = (b * weights[..., None]).transpose(0, 2, 1)
+    a = bwt @ b
+    d = (bwt @ local[..., 2, None])[..., 0]
     n, m = d.shape
     degree = np.ones(n, dtype=int)
     cond = np.full(n, np.inf)
@@ -292,8 +292,11 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
         idx = np.flatnonzero(undecided)
         if len(idx) == 0:
             break
+        # A is symmetric positive semi-definite: its 2-norm condition number is the ratio of
+        # its extreme eigenvalues (eigvalsh: a quarter of the cost of np.linalg.cond's SVD)
+        ev = np.linalg.eigvalsh(a[idx, :mq, :mq])
         with np.errstate(all="ignore"):
-            c = np.linalg.cond(a[idx, :mq, :mq])
+            c = np.where(ev[:, 0] > 0, ev[:, -1] / ev[:, 0], np.inf)
         ok = np.isfinite(c) & (c <= cond_max) if q > 1 else np.ones(len(idx), dtype=bool)
         degree[idx[ok]] = q
         cond[idx[ok]] = c[ok]
@@ -375,7 +378,9 @@ class Projector:
         Use this degree everywhere and skip the condition test: an MLS-style ablation (with
         the fixed width ``smoothing``, 1 when not given).
     connectivity : Connectivity, optional
-        Reuse a previously computed :func:`cocone_connectivity`.
+        Reuse a previously computed :func:`cocone_connectivity` (the mesher does); when not
+        given, the adaptive mode builds the faster :func:`knn_connectivity` (a projection
+        needs no Delaunay tetrahedralisation) and the fixed-width mode Cocone's.
 
     Examples
     --------
@@ -397,12 +402,16 @@ class Projector:
             raise ProjectionError(f"q_max must be between 1 and 6, got {q_max}")
         if fixed_degree is not None and not 1 <= int(fixed_degree) <= int(q_max):
             raise ProjectionError(f"fixed_degree must be between 1 and q_max, got {fixed_degree}")
-        self.conn = connectivity if connectivity is not None else cocone_connectivity(cloud)
         self.q_max = int(q_max)
         self.smoothing = None if smoothing is None else float(smoothing)
+        adaptive = self.smoothing is None and fixed_degree is None
+        if connectivity is not None:
+            self.conn = connectivity
+        else:
+            self.conn = knn_connectivity(cloud) if adaptive else cocone_connectivity(cloud)
         self.points = self.conn.points
         self.scale = self.conn.spacing.copy()
-        if self.smoothing is None and fixed_degree is None:
+        if adaptive:
             self._fit_adaptive(cond_max)
         else:
             self.smoothing = 1.0 if self.smoothing is None else self.smoothing

@@ -15,6 +15,7 @@ import numpy as np
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
 from splineviz.pointcloud.advancing_front import AdvancingFront
+from splineviz.pointcloud.cocone import cocone_connectivity
 from splineviz.pointcloud.guidance import guidance_field
 from splineviz.pointcloud.projection import Projector
 from splineviz.pointcloud.relaxation import optimize
@@ -111,7 +112,10 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     t0 = time.perf_counter()
     stage(0.0, "connectivity and local surfaces")
     if projector is None:
-        projector = Projector(cloud, smoothing=smoothing, fixed_degree=fixed_degree)
+        # Cocone's graph keeps the two sides of thin parts apart and its triangles measure
+        # the sampling's gaps for the front (Connectivity.void_ratio)
+        projector = Projector(cloud, smoothing=smoothing, fixed_degree=fixed_degree,
+                              connectivity=cocone_connectivity(cloud))
     t1 = time.perf_counter()
     field_ = guidance_field(projector, edge_length=edge_length, rho=rho, min_length=min_length,
                             max_length=max_length)
