@@ -64,6 +64,9 @@ ICI_KAPPA = 2.0
 #: noise below this fraction of the spacing counts as none: the interpolating variable-degree
 #: fit of §7.2 is kept (its error on clean data is far below what any smoothing fit reaches)
 CLEAN_NOISE = 1e-3
+#: a fit whose weighted neighbourhood centroid lies farther than this many widths from the
+#: point leans on one side (a border of the cloud: half a Gaussian gives 0.56) and is not used
+MAX_BALANCE = 0.35
 #: neighbours whose oriented normal deviates more than this from the point's (cos) belong to
 #: another sheet of the surface (the two sides of a thin part) and are left out
 SHEET_COS = 0.0
@@ -311,7 +314,7 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
 
 
 def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
-                 kappa: float = ICI_KAPPA) -> np.ndarray:
+                 kappa: float = ICI_KAPPA, usable: np.ndarray | None = None) -> np.ndarray:
     """Intersection of confidence intervals (Lepski's method): the widest fit whose interval,
     and those of all narrower fits, still share a point.
 
@@ -324,6 +327,9 @@ def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
     values : (P, S) value at the origin of each fit, narrowest first
     spread : (P, S) variance factors (see :func:`smoothing_fit`)
     sigma : (P,) noise standard deviation
+    usable : (P, S) bool, optional
+        Fits that may be chosen; the widening also stops at the first unusable one (the
+        narrowest fit is always taken).
 
     Returns
     -------
@@ -332,7 +338,11 @@ def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
     half = kappa * sigma[:, None] * np.sqrt(spread)
     lo = np.maximum.accumulate(values - half, axis=1)
     hi = np.minimum.accumulate(values + half, axis=1)
-    ok = np.logical_and.accumulate(lo <= hi, axis=1)
+    ok = lo <= hi
+    if usable is not None:
+        ok &= usable
+    ok[:, 0] = True
+    ok = np.logical_and.accumulate(ok, axis=1)
     return ok.sum(axis=1) - 1
 
 
@@ -488,10 +498,12 @@ class Projector:
         cond = np.zeros(n)
         reach = np.full(n, CUTOFF)
         raw = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES[:1],
-                             cond_max, noise=True)[4]
-        # the median over the nearest points steadies the estimate (a handful of residuals
-        # per point) without blurring where the noise level changes
-        noise = np.median(raw[index[:, :MEDIAN_NEIGHBOURS]], axis=1)
+                             cond_max, noise=True)[5]
+        # residuals also hold the fit's bias where the surface bends sharply (creases, thin
+        # parts): there they would pass for noise and open the intervals to the widest fit;
+        # creases are lines, so the median over the whole neighbourhood is the noise of the
+        # surface around them (and it steadies the estimate from a handful of residuals)
+        noise = np.median(raw[index], axis=1)
         self.noise = noise * self.scale
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
@@ -516,14 +528,17 @@ class Projector:
         clean = noise < CLEAN_NOISE
         noisy = ids[~clean]
         if len(noisy):
-            c, q, kc, spread, _ = smoothing_fits(self.points, index, valid, frames, self.scale,
-                                                 noisy, SCALES, cond_max)
-            pick = choose_scale(c[:, :, 0].T, spread.T, noise[~clean])
+            c, q, kc, spread, balance, _ = smoothing_fits(
+                self.points, index, valid, frames, self.scale, noisy, SCALES, cond_max)
+            # near a border of the cloud a wide fit leans on one side only and extrapolates
+            # across the border: the widening stops there as it does at curvature detail
+            pick = choose_scale(c[:, :, 0].T, spread.T, noise[~clean],
+                                usable=(balance < MAX_BALANCE).T)
             rows = np.arange(len(noisy))
             coeffs[noisy] = 0.0
             coeffs[noisy, :c.shape[2]] = c[pick, rows]
             degree[noisy], cond[noisy] = q[pick, rows], kc[pick, rows]
-            reach[noisy] = CUTOFF * np.array([w for w, _ in SCALES])[pick]
+            reach[noisy] = CUTOFF
         sel = ids[clean]
         if len(sel):
             k = min(CLEAN_NEIGHBOURS, index.shape[1])
