@@ -497,8 +497,10 @@ class Projector:
         degree = np.ones(n, dtype=int)
         cond = np.zeros(n)
         reach = np.full(n, CUTOFF)
-        raw = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES[:1],
-                             cond_max, noise=True)[5]
+        # all widths at once: the first pass serves both the noise and the choice
+        fits = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES,
+                              cond_max, noise=True)
+        raw = fits[5]
         # residuals also hold the fit's bias where the surface bends sharply (creases, thin
         # parts): there they would pass for noise and open the intervals to the widest fit;
         # creases are lines, so the median over the whole neighbourhood is the noise of the
@@ -508,7 +510,7 @@ class Projector:
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
             self._choose(todo, index, valid, frames, noise[todo], cond_max,
-                         coeffs, degree, cond, reach)
+                         coeffs, degree, cond, reach, fits if it == 0 else None)
             zero = np.zeros(len(todo))
             nloc = _local_normals(coeffs[todo], zero, zero)
             bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
@@ -523,13 +525,19 @@ class Projector:
         zero = np.zeros(n)
         self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
 
-    def _choose(self, ids, index, valid, frames, noise, cond_max, coeffs, degree, cond, reach):
-        """Fit points ``ids`` in ``frames`` and store the chosen fits (:meth:`_fit_adaptive`)."""
+    def _choose(self, ids, index, valid, frames, noise, cond_max, coeffs, degree, cond, reach,
+                fits=None):
+        """Fit points ``ids`` in ``frames`` (or take ``fits`` of them) and store the chosen
+        fits (:meth:`_fit_adaptive`)."""
         clean = noise < CLEAN_NOISE
         noisy = ids[~clean]
         if len(noisy):
-            c, q, kc, spread, balance, _ = smoothing_fits(
-                self.points, index, valid, frames, self.scale, noisy, SCALES, cond_max)
+            if fits is None:
+                fits = smoothing_fits(self.points, index, valid, frames, self.scale, noisy,
+                                      SCALES, cond_max)
+            else:
+                fits = tuple(f[:, ~clean] for f in fits[:5])  # axis 1: the points ``ids``
+            c, q, kc, spread, balance = fits[:5]
             # near a border of the cloud a wide fit leans on one side only and extrapolates
             # across the border: the widening stops there as it does at curvature detail
             pick = choose_scale(c[:, :, 0].T, spread.T, noise[~clean],
