@@ -392,6 +392,15 @@ class Projector:
         given, the adaptive mode builds the faster :func:`knn_connectivity` (a projection
         needs no Delaunay tetrahedralisation) and the fixed-width mode Cocone's.
 
+    Attributes
+    ----------
+    noise : (N,) float or None
+        Adaptive mode: the noise standard deviation measured at each point (world units).
+    width : (N,) float
+        Gaussian width of each point's fit in spacings (1 for clean points).
+    degree : (N,) int
+        Degree of each point's polynomial.
+
     Examples
     --------
     >>> import numpy as np
@@ -427,6 +436,7 @@ class Projector:
             self.smoothing = 1.0 if self.smoothing is None else self.smoothing
             self._fit(fixed_degree, cond_max)
             self.reach = np.full(len(self.points), CUTOFF * self.smoothing)
+            self.width = np.full(len(self.points), self.smoothing)
             self.noise = None
         self._median_sets()
 
@@ -497,6 +507,7 @@ class Projector:
         degree = np.ones(n, dtype=int)
         cond = np.zeros(n)
         reach = np.full(n, CUTOFF)
+        width = np.ones(n)
         # all widths at once: the first pass serves both the noise and the choice
         fits = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES,
                               cond_max, noise=True)
@@ -510,7 +521,7 @@ class Projector:
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
             self._choose(todo, index, valid, frames, noise[todo], cond_max,
-                         coeffs, degree, cond, reach, fits if it == 0 else None)
+                         coeffs, degree, cond, reach, width, fits if it == 0 else None)
             zero = np.zeros(len(todo))
             nloc = _local_normals(coeffs[todo], zero, zero)
             bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
@@ -520,13 +531,13 @@ class Projector:
             nworld = np.einsum("nji,nj->ni", frames[todo[bad]], nloc[bad])
             frames[todo[bad]] = frames_from_normals(frames[todo[bad], 2] + nworld)
             todo = todo[bad]
-        self.frames, self.coeffs, self.degree, self.cond, self.reach = (
-            frames, coeffs, degree, cond, reach)
+        self.frames, self.coeffs, self.degree, self.cond, self.reach, self.width = (
+            frames, coeffs, degree, cond, reach, width)
         zero = np.zeros(n)
         self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
 
     def _choose(self, ids, index, valid, frames, noise, cond_max, coeffs, degree, cond, reach,
-                fits=None):
+                width, fits=None):
         """Fit points ``ids`` in ``frames`` (or take ``fits`` of them) and store the chosen
         fits (:meth:`_fit_adaptive`)."""
         clean = noise < CLEAN_NOISE
@@ -546,6 +557,9 @@ class Projector:
             coeffs[noisy] = 0.0
             coeffs[noisy, :c.shape[2]] = c[pick, rows]
             degree[noisy], cond[noisy] = q[pick, rows], kc[pick, rows]
+            width[noisy] = np.array([w for w, _ in SCALES])[pick]
+            # the foot stays within CUTOFF spacings as for the interpolating fits: wider
+            # feet let queries beyond a border of the cloud slide far along the extrapolation
             reach[noisy] = CUTOFF
         sel = ids[clean]
         if len(sel):
@@ -557,7 +571,7 @@ class Projector:
                 w = np.where(valid[part, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
                 c, q, kc = fit_polynomials(loc, w, self.q_max, cond_max)
                 coeffs[part] = c
-                degree[part], cond[part], reach[part] = q, kc, CUTOFF
+                degree[part], cond[part], reach[part], width[part] = q, kc, CUTOFF, 1.0
 
     def _median_sets(self):
         """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""

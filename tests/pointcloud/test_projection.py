@@ -227,7 +227,7 @@ def test_curvature_detail_stops_the_widening():
     pts = np.c_[xy, bump + 0.002 * rng.normal(size=8000)]
     pr = Projector(pts)
     r = np.hypot(pr.points[:, 0], pr.points[:, 1])
-    assert np.median(pr.reach[r < 0.05]) < np.median(pr.reach[r > 0.5])
+    assert np.median(pr.width[r < 0.05]) < np.median(pr.width[r > 0.5])
     top = pr.project(np.array([[0.0, 0.0, 0.1]]))
     assert abs(top[0, 2] - 0.08) < 0.006
 
