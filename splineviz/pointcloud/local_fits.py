@@ -352,3 +352,18 @@ def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r,
                     np.ascontiguousarray(degree, np.int64), np.ascontiguousarray(reach, f64),
                     np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(r, f64),
                     int(iterations))
+
+
+def compile_kernels() -> None:
+    """Compile the kernels into numba's on-disk cache (install.sh runs this once: the first
+    compilation takes 10-20 s, a cached load well under one)."""
+    rng = np.random.default_rng(0)
+    points = rng.normal(size=(12, 3))
+    index = np.argsort(np.linalg.norm(points[:, None] - points[None], axis=-1), axis=1)
+    frames = np.broadcast_to(np.eye(3), (12, 3, 3))
+    scale = np.ones(12)
+    ids = np.arange(12)
+    smoothing_fits(points, index, np.ones(index.shape, dtype=bool), frames, scale, ids,
+                   ((1.6, 3), (2.6, 2)), 1e4, noise=True)
+    project_on_polynomials(points, frames, scale, np.zeros((12, 21)), np.full(12, 5),
+                           np.full(12, 3.0), ids, points, 3)
