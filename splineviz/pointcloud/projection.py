@@ -64,6 +64,8 @@ ICI_KAPPA = 2.0
 #: noise below this fraction of the spacing counts as none: the interpolating variable-degree
 #: fit of §7.2 is kept (its error on clean data is far below what any smoothing fit reaches)
 CLEAN_NOISE = 1e-3
+#: the noise level used at a point is at most this many times the cloud's median level
+NOISE_CAP = 2.0
 #: a fit whose weighted neighbourhood centroid lies farther than this many widths from the
 #: point leans on one side (a border of the cloud: half a Gaussian gives 0.56) and is not used
 MAX_BALANCE = 0.35
@@ -517,6 +519,10 @@ class Projector:
         # creases are lines, so the median over the whole neighbourhood is the noise of the
         # surface around them (and it steadies the estimate from a handful of residuals)
         noise = np.median(raw[index], axis=1)
+        # a scanner's noise varies slowly over a scan; patches of residuals far above the
+        # cloud's typical level are strongly bent surface (ears, tips) the fits cannot follow,
+        # not noise: capped, their narrow fits keep the shape
+        noise = np.minimum(noise, NOISE_CAP * np.median(noise))
         self.noise = noise * self.scale
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
