@@ -53,6 +53,10 @@ class ChunkedVolume:
         Coarser versions, finest first (without the full-resolution level itself).
     name : str
         What the data is called in messages and ``splineviz info``.
+    source : object, optional
+        Region reader of the full level in the same axis order (``source[i0:i1, j0:j1,
+        k0:k1]`` -> ndarray): a zarr array or HDF5 dataset reads just the chunks a brick
+        meets, an analytic field samples just the brick; without it bricks come from dask.
 
     Examples
     --------
@@ -67,6 +71,7 @@ class ChunkedVolume:
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
     levels: tuple = ()
     name: str = "chunked volume"
+    source: object = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -152,7 +157,10 @@ class ChunkedVolume:
             Half-open sample index ranges.
         """
         sl = tuple(slice(int(a), int(b)) for a, b in box)
-        data = np.asarray(self.data[sl].compute(scheduler="synchronous"))
+        if self.source is not None:
+            data = np.asarray(self.source[sl])
+        else:
+            data = np.asarray(self.data[sl].compute(scheduler="synchronous"))
         origin = tuple(o + int(a) * s for o, (a, _), s in zip(self.origin, box, self.spacing,
                                                                 strict=True))
         return Volume(data, spacing=self.spacing, origin=origin)
@@ -163,7 +171,7 @@ class ChunkedVolume:
     def from_dask(cls, array, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0), levels=(),
                   name: str = "dask array") -> ChunkedVolume:
         """A chunked volume of any 3-D dask array (see :meth:`Volume.from_dask`)."""
-        return cls(array, spacing, origin, levels, name)
+        return cls(array, spacing, origin, tuple(levels), name)
 
     @classmethod
     def from_function(cls, func, shape, bounds, chunks=256, name: str = "analytic field",
@@ -183,13 +191,32 @@ class ChunkedVolume:
         """
         shape = tuple(int(n) for n in shape)
         full = _function_level(func, shape, bounds, chunks, dtype)
+        source = FunctionSource(func, shape, bounds, dtype)
         levels = []
         factor = 2
         while max(shape) // factor >= 8:
             coarse = tuple(max(2, (n - 1) // factor + 1) for n in shape)
             levels.append(_function_level(func, coarse, bounds, chunks, dtype))
             factor *= 2
-        return cls(full.data, full.spacing, full.origin, tuple(levels), name)
+        return cls(full.data, full.spacing, full.origin, tuple(levels), name, source)
+
+
+class FunctionSource:
+    """Region reads of an analytic field: ``source[slices]`` samples ``func`` on exactly that
+    box of the grid (a brick never computes the neighbouring chunks its halo meets)."""
+
+    def __init__(self, func, shape, bounds, dtype=np.float32):
+        self.func = func
+        self.shape = tuple(int(n) for n in shape)
+        self.dtype = np.dtype(dtype)
+        self.axes = [np.linspace(lo, hi, n)
+                     for (lo, hi), n in zip(bounds, self.shape, strict=True)]
+
+    def __getitem__(self, key) -> np.ndarray:
+        x, y, z = (ax[k] for ax, k in zip(self.axes, key, strict=True))
+        out = np.empty((len(x), len(y), len(z)), dtype=self.dtype)
+        out[...] = self.func(x[:, None, None], y[None, :, None], z[None, None, :])
+        return out
 
 
 def _function_level(func, shape, bounds, chunks, dtype) -> Level:
