@@ -34,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from splineviz.compute.raycast import RayCaster, RayCastError
 from splineviz.core.bricks import BrickGrid, occluded, screen_footprint, value_margin
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.chunked import ChunkedVolume
@@ -41,7 +42,6 @@ from splineviz.core.compositing import Composite, Fragment
 from splineviz.core.raycast_reference import Frame, normalize_clip_planes
 from splineviz.core.splines.registry import model_spec
 from splineviz.core.volume import Volume
-from splineviz.compute.raycast import RayCaster, RayCastError
 
 #: cells per brick along each axis when none is given (bricks of whole chunks, about 256^3)
 BRICK_CELLS = 256
@@ -161,6 +161,21 @@ def _caster_lock(rc) -> threading.Lock:
 
 _local = {}
 
+#: defaults of casters made without explicit settings (the CLI's ``--scheduler``,
+#: ``--workers`` and progress bar; ``$SPLINEVIZ_SCHEDULER``)
+DEFAULTS = {"scheduler": os.environ.get("SPLINEVIZ_SCHEDULER") or None, "workers": None,
+            "progress": None}
+
+
+def configure(**settings) -> None:
+    """Set :data:`DEFAULTS`: ``scheduler`` (``tcp://host:port`` or None for a
+    LocalCluster), ``workers`` (LocalCluster size), ``progress`` (``progress(done, total)``
+    called after each brick of every frame)."""
+    unknown = set(settings) - set(DEFAULTS)
+    if unknown:
+        raise TypeError(f"unknown bricked rendering settings: {', '.join(sorted(unknown))}")
+    DEFAULTS.update(settings)
+
 
 def get_client(scheduler: str | None = None, workers: int | None = None,
                processes: bool = True):
@@ -279,8 +294,20 @@ class BrickedRayCaster:
     @property
     def client(self):
         if self._client is None:
-            self._client = get_client(self._scheduler, self._workers)
+            self._client = get_client(self._scheduler or DEFAULTS["scheduler"],
+                                      self._workers or DEFAULTS["workers"])
         return self._client
+
+    def preview_caster(self, model: str = "trilinear") -> RayCaster:
+        """A ray caster of the coarse level (:meth:`ChunkedVolume.preview_level`) for
+        previews while the camera moves (an in-memory volume: the volume itself)."""
+        vol = self._volume
+        if isinstance(vol, ChunkedVolume):
+            level = vol.preview_level()
+            vol = Volume(np.asarray(level.data.compute(), dtype=np.float32), level.spacing,
+                         level.origin)
+        options = dict(self._model_kwargs) if model == self.model else {}
+        return RayCaster(vol, model=model, device=self.device, **options)
 
     def set_isovalue(self, value) -> None:
         """Set the isovalue (constant time: bricks are classified where they are rendered)."""
@@ -342,6 +369,7 @@ class BrickedRayCaster:
             ``progress(done, total)`` after each brick.
         """
         frame = None
+        progress = progress or DEFAULTS["progress"]
         for stage, done, total, f in self.frames(camera, size, clip_planes, composite,
                                                  preview=False):
             if progress is not None and stage != "preview":
@@ -462,12 +490,8 @@ class BrickedRayCaster:
 
     def _render_preview(self, camera, size, planes) -> Frame:
         """The coarse level, ray cast here with the same model (its caster is kept)."""
-        level = self._volume.preview_level()
         if self._preview is None:
-            data = np.asarray(level.data.compute(), dtype=np.float32)
-            self._preview = RayCaster(Volume(data, level.spacing, level.origin),
-                                      model=self.model, device=self.device,
-                                      **dict(self._model_kwargs))
+            self._preview = self.preview_caster(self.model)
         self._preview.set_isovalue(self._isovalue)
         return self._preview.render(camera, size=size, clip_planes=planes)
 

@@ -43,7 +43,7 @@ def read_file(path):
     Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
     process."""
     from splineviz.io.opening import open_path
-    from splineviz.model.summaries import log_histogram, median_spacing
+    from splineviz.model.summaries import log_histogram, median_spacing, summary_samples
 
     opened = open_path(path)
     if opened.kind == "session":
@@ -51,7 +51,7 @@ def read_file(path):
     if opened.kind != "volume":
         return opened.kind, opened.value, {"spacing": median_spacing(opened.value.points)}
     _ = opened.value.finite_range
-    return opened.kind, opened.value, {"histogram": log_histogram(opened.value.data)}
+    return opened.kind, opened.value, {"histogram": log_histogram(summary_samples(opened.value))}
 
 
 def scene_from_path(path, *, isovalue=None, model=None, repoint=None) -> Scene:

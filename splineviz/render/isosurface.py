@@ -88,6 +88,21 @@ class Material:
 MATERIALS = {name: Material(*consts) for name, consts in nodes.MATERIALS.items()}
 
 
+def make_caster(volume, model: str, device=None, options=None):
+    """The ray caster of a layer: a :class:`~splineviz.compute.raycast.RayCaster` of an
+    in-memory volume, a :class:`~splineviz.compute.bricked.BrickedRayCaster` (bricks on dask
+    workers) of a :class:`~splineviz.core.chunked.ChunkedVolume`."""
+    from splineviz.core.chunked import ChunkedVolume
+
+    if isinstance(volume, ChunkedVolume):
+        from splineviz.compute.bricked import BrickedRayCaster
+
+        return BrickedRayCaster(volume, model=model, device=device, **dict(options or {}))
+    from splineviz.compute.raycast import RayCaster
+
+    return RayCaster(volume, model=model, device=device, **dict(options or {}))
+
+
 class IsosurfaceLayer:
     """One spline isosurface of a volume (see module docstring).
 
@@ -260,9 +275,12 @@ class IsosurfaceLayer:
             return None, None
         with self._lock:
             if self._caster is None:
-                self._caster = RayCaster(self._volume, model=self._model, device=self._device,
-                                         **self._model_options)
-            if self._caster.stats.get("path") != "opencl" and self._preview is None:
+                self._caster = make_caster(self._volume, self._model, self._device,
+                                           self._model_options)
+            if self._caster.stats.get("path") == "bricked" and self._preview is None:
+                # a chunked volume: previews ray cast its coarse level here
+                self._preview = self._caster.preview_caster()
+            elif self._caster.stats.get("path") != "opencl" and self._preview is None:
                 self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
             return self._caster, self._preview
 
