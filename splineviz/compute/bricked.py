@@ -258,12 +258,13 @@ class BrickedRayCaster:
         self.device = device
         self._model_kwargs = tuple(sorted(model_kwargs.items()))
         self._volume = volume
-        halo = spec.ghost_layers
+        halo, align = spec.ghost_layers, spec.lattice_period
         if bricks is not None:
-            self.grid = BrickGrid.split(volume.shape, bricks, halo)
+            self.grid = BrickGrid.split(volume.shape, bricks, halo, align)
         else:
             chunks = volume.chunks if isinstance(volume, ChunkedVolume) else volume.shape
-            self.grid = BrickGrid(volume.shape, brick_size or default_brick_size(chunks), halo)
+            self.grid = BrickGrid(volume.shape, brick_size or default_brick_size(chunks), halo,
+                                  align)
         self.cull = bool(cull)
         self.cache_bytes = int(cache_bytes)
         self._client = client
@@ -304,7 +305,7 @@ class BrickedRayCaster:
         vol = self._volume
         if isinstance(vol, ChunkedVolume):
             level = vol.preview_level()
-            vol = Volume(np.asarray(level.data.compute(), dtype=np.float32), level.spacing,
+            vol = Volume(np.asarray(level.read_all(), dtype=np.float32), level.spacing,
                          level.origin)
         options = dict(self._model_kwargs) if model == self.model else {}
         return RayCaster(vol, model=model, device=self.device, **options)
@@ -333,16 +334,18 @@ class BrickedRayCaster:
         -------
         dict brick index -> (lo, hi)
         """
-        import dask.array as da
-
-        data = (self._volume.data if isinstance(self._volume, ChunkedVolume)
-                else da.from_array(self._volume.data))
         boxes = list(self.grid)
-        reds = []
-        for b in boxes:
-            sub = data[tuple(slice(a, e) for a, e in b.read)]
-            reds += [sub.min(), sub.max()]
-        values = self.client.compute(reds, sync=True)
+        if isinstance(self._volume, ChunkedVolume):
+            reds = []
+            for b in boxes:
+                sub = self._volume.data[tuple(slice(a, e) for a, e in b.read)]
+                reds += [sub.min(), sub.max()]
+            values = self.client.compute(reds, sync=True)
+        else:  # the samples are here already: no need to ship them anywhere
+            values = []
+            for b in boxes:
+                sub = self._volume.data[tuple(slice(a, e) for a, e in b.read)]
+                values += [sub.min(), sub.max()]
         mass = _negative_mass(self.model, self.device, dict(self._model_kwargs))
         ghost = model_spec(self.model).ghost_layers
         for n, b in enumerate(boxes):
@@ -428,32 +431,38 @@ class BrickedRayCaster:
         # opaque composites can drop hidden bricks; painting back to front needs them all
         cull = self.cull and composite == "nearest"
         fragments, culled, t_comp = [], [], 0.0
+        steps = self.grid.slab_steps(cam.position, vol.spacing, vol.origin)
+        foot = {b.index: screen_footprint(cam, self.grid.world_box(b, vol.spacing, vol.origin),
+                                          (w, h), clip) for b in todo} if cull else {}
         pending = as_completed()
         self._pending = []
+        inflight = {}  # future key -> brick
         queue = list(todo)
         done = 0
         try:
             while queue or self._pending:
                 while queue and len(self._pending) < limit:
-                    brick = queue.pop(0)
-                    box = self.grid.world_box(brick, vol.spacing, vol.origin)
-                    if cull:
-                        rect, nearest = screen_footprint(cam, box, (w, h), clip)
-                        if occluded(comp.depth, comp.hit, rect, nearest):
-                            culled.append(brick.index)
-                            done += 1
-                            continue
+                    n = self._next_brick(queue, inflight, steps, foot, cull)
+                    if n is None:
+                        break  # every brick in reach waits for one in front of it
+                    brick = queue.pop(n)
+                    if cull and occluded(comp.depth, comp.hit, *foot[brick.index]):
+                        culled.append(brick.index)
+                        done += 1
+                        continue
                     task = BrickTask(self._token, brick.index, brick.read, self.model,
                                      self._model_kwargs, self.device, self._isovalue, cam,
                                      (w, h), tuple(user + self.grid.face_planes(
                                          brick, vol.spacing, vol.origin)), self.cache_bytes)
                     fut = client.submit(render_brick, shared, task, pure=False)
                     self._pending.append(fut)
+                    inflight[fut.key] = brick
                     pending.add(fut)
                 if not self._pending:
                     break
                 fut = next(pending)
                 self._pending.remove(fut)
+                inflight.pop(fut.key, None)
                 frag = fut.result()
                 if frag.stats.get("bounds") is not None:
                     self.brick_bounds[frag.index] = frag.stats["bounds"]
@@ -483,6 +492,22 @@ class BrickedRayCaster:
                           workers=nworkers, classified="visible")
         yield "exact", total, total, comp.frame()
 
+    @staticmethod
+    def _next_brick(queue, inflight, steps, foot, cull, window: int = 64):
+        """Index in ``queue`` of the next brick to send: the first one (within ``window``)
+        that no brick still out lies in front of with an overlapping footprint, so that its
+        occlusion test sees every brick that could hide it; None when all wait. Bricks of
+        equal slab steps never hide one another (:meth:`BrickGrid.visibility_order`)."""
+        if not cull or not inflight:
+            return 0
+        out = list(inflight.values())
+        for n, brick in enumerate(queue[:window]):
+            rect = foot[brick.index][0]
+            if not any(steps[a.index] < steps[brick.index]
+                       and _overlap(foot[a.index][0], rect) for a in out):
+                return n
+        return None
+
     def _record(self, frag: Fragment) -> None:
         """Per-brick timings of the last frame (``stats["brick_times"]``)."""
         self.stats["brick_times"].append({"index": frag.index, **{k: frag.stats.get(k) for k in (
@@ -494,6 +519,11 @@ class BrickedRayCaster:
             self._preview = self.preview_caster(self.model)
         self._preview.set_isovalue(self._isovalue)
         return self._preview.render(camera, size=size, clip_planes=planes)
+
+
+def _overlap(a, b) -> bool:
+    """Whether two pixel rectangles (r0, r1, c0, c1) share a pixel."""
+    return a[0] < b[1] and b[0] < a[1] and a[2] < b[3] and b[2] < a[3]
 
 
 _masses: dict = {}

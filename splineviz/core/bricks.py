@@ -62,6 +62,10 @@ class BrickGrid:
         Cells per brick along each axis (the last brick of an axis may be smaller).
     halo : int
         Ghost layers of the spline model (:attr:`ModelSpec.ghost_layers`).
+    align : int
+        The model's lattice period (:attr:`ModelSpec.lattice_period`): brick sizes and the
+        starts of read boxes are multiples of it, so every brick's partition is the global
+        one (a truncated-octahedral spline of a box starting at an odd offset differs).
 
     Examples
     --------
@@ -72,9 +76,10 @@ class BrickGrid:
     (((4, 8), (0, 4), (0, 4)), ((3, 9), (0, 6), (0, 5)))
     """
 
-    def __init__(self, shape, size, halo: int):
+    def __init__(self, shape, size, halo: int, align: int = 1):
         self.shape = tuple(int(n) for n in shape)
-        self.size = tuple(int(s) for s in np.broadcast_to(size, 3))
+        align = max(1, int(align))
+        self.size = tuple(-(-int(s) // align) * align for s in np.broadcast_to(size, 3))
         if min(self.shape) < 2 or min(self.size) < 1 or halo < 0:
             raise ValueError(f"bricks need >= 2 samples and >= 1 cell per axis, got shape "
                              f"{self.shape}, size {self.size}, halo {halo}")
@@ -86,16 +91,17 @@ class BrickGrid:
         self._bricks = {}
         for idx in itertools.product(*(range(c) for c in self.counts)):
             inner = tuple((self.cuts[a][m], self.cuts[a][m + 1]) for a, m in enumerate(idx))
-            read = tuple((max(0, lo - self.halo), min(n, hi + 1 + self.halo))
+            reach = -(-self.halo // align) * align
+            read = tuple((max(0, lo - reach), min(n, hi + 1 + self.halo))
                          for (lo, hi), n in zip(inner, self.shape, strict=True))
             self._bricks[idx] = Brick(idx, inner, read)
 
     @classmethod
-    def split(cls, shape, counts, halo: int) -> BrickGrid:
+    def split(cls, shape, counts, halo: int, align: int = 1) -> BrickGrid:
         """A grid of ``counts`` bricks per axis (as equal as the cells allow)."""
         counts = np.broadcast_to(np.asarray(counts, int), 3)
         size = [-(-(n - 1) // c) for n, c in zip(shape, counts, strict=True)]
-        return cls(shape, size, halo)
+        return cls(shape, size, halo, align)
 
     def __len__(self) -> int:
         return len(self._bricks)
@@ -133,13 +139,18 @@ class BrickGrid:
         those axes and the sum of the steps orders them (exact for axis-aligned bricks under
         any perspective; bricks not hiding one another may come in either order).
         """
+        key = self.slab_steps(eye, spacing, origin)
+        return sorted(self, key=lambda b: (key[b.index], b.index))
+
+    def slab_steps(self, eye, spacing, origin) -> dict:
+        """Brick index -> sum over the axes of the brick steps from the eye's slab (the key of
+        :meth:`visibility_order`: a brick hides only bricks of larger keys)."""
         u = (np.asarray(eye, float) - np.asarray(origin, float)) / np.asarray(spacing, float)
         slab = [int(np.searchsorted(self.cuts[a][1:-1], u[a], side="right"))
                 if 0 <= u[a] <= self.shape[a] - 1
                 else (-1 if u[a] < 0 else self.counts[a]) for a in range(3)]
-        key = {b.index: sum(abs(m - s) for m, s in zip(b.index, slab, strict=True))
-               for b in self}
-        return sorted(self, key=lambda b: (key[b.index], b.index))
+        return {b.index: sum(abs(m - s) for m, s in zip(b.index, slab, strict=True))
+                for b in self}
 
 
 def value_margin(lo: float, hi: float, ghost: int, negative_mass: float,
@@ -174,8 +185,14 @@ def screen_footprint(camera: Camera, box, size, clipping_range):
 
     Returns
     -------
-    (r0, r1, c0, c1) half-open pixel rows/columns (the whole image when the box reaches
-    behind the eye), and the smallest window depth of the box (0 when behind the eye).
+    rect : (r0, r1, c0, c1)
+        Half-open pixel rows/columns holding the projection (the whole image when the box
+        reaches behind the eye).
+    nearest : float
+        The smallest window depth of the box (0 when it reaches behind the eye).
+    hull : (k, 2) float or None
+        Convex polygon (column, row) of the projected box in pixel units, counter-clockwise;
+        the ray through a pixel centre meets the box only inside it. None: the whole image.
     """
     w, h = size
     corners = np.stack(np.meshgrid(*np.asarray(box, float), indexing="ij"),
@@ -185,22 +202,49 @@ def screen_footprint(camera: Camera, box, size, clipping_range):
     ze = rel @ dop
     near, _ = clipping_range
     if ze.min() <= 0.5 * near:
-        return (0, h, 0, w), 0.0
+        return (0, h, 0, w), 0.0, None
     tan_half = np.tan(np.radians(camera.view_angle) / 2.0)
     x = (rel @ right) / (ze * tan_half * w / h)
     y = (rel @ up) / (ze * tan_half)
     cols = (x + 1.0) * 0.5 * w - 0.5
     rows = (1.0 - y) * 0.5 * h - 0.5
-    # one pixel of slack on each side: pixel centres between the projected corners
+    # pixel centres at integer (col, row): a pixel of slack on each side
     c0, c1 = int(np.floor(cols.min())) - 1, int(np.ceil(cols.max())) + 2
     r0, r1 = int(np.floor(rows.min())) - 1, int(np.ceil(rows.max())) + 2
     depth = float(camera.window_depth(corners[np.argmin(ze)], clipping_range))
-    return (max(r0, 0), min(r1, h), max(c0, 0), min(c1, w)), depth
+    return ((max(r0, 0), min(r1, h), max(c0, 0), min(c1, w)), depth,
+            _convex_hull(np.c_[cols, rows]))
 
 
-def occluded(depth: np.ndarray, hit: np.ndarray, rect, nearest: float) -> bool:
-    """Whether every pixel of ``rect`` already shows a hit nearer than ``nearest`` (so
-    nothing inside the box behind it can be seen): the exact early termination of
+def _cross2(o, a, b) -> float:
+    """z of the cross product (a - o) x (b - o) of 2-D points."""
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def _convex_hull(points: np.ndarray) -> np.ndarray | None:
+    """(k, 2) counter-clockwise hull of (n, 2) points (Andrew's monotone chain); None when
+    the points are collinear (no area: no pixel test, the bounding rectangle serves)."""
+    pts = sorted(map(tuple, points))
+
+    def half(seq):
+        out = []
+        for p in seq:
+            while len(out) >= 2 and _cross2(out[-2], out[-1], p) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    hull = half(pts)[:-1] + half(pts[::-1])[:-1]
+    return np.asarray(hull, float) if len(hull) >= 3 else None
+
+
+#: pixels of slack of the hull test (rounding of projected corners)
+HULL_SLACK = 1e-3
+
+
+def occluded(depth: np.ndarray, hit: np.ndarray, rect, nearest: float, hull=None) -> bool:
+    """Whether every pixel whose ray can meet a box already shows a hit nearer than the box's
+    nearest point (so nothing inside the box can be seen): the exact early termination of
     front-to-back sort-last rendering of opaque surfaces.
 
     Parameters
@@ -209,8 +253,19 @@ def occluded(depth: np.ndarray, hit: np.ndarray, rect, nearest: float) -> bool:
     hit : (H, W) bool
     rect : (r0, r1, c0, c1)
     nearest : float, the box's nearest window depth
+    hull : (k, 2) counter-clockwise (column, row) polygon of the box, or None (all of rect)
     """
     r0, r1, c0, c1 = rect
     if r0 >= r1 or c0 >= c1:
         return True  # the box projects outside the image
-    return bool(np.all(hit[r0:r1, c0:c1] & (depth[r0:r1, c0:c1] < nearest)))
+    covered = hit[r0:r1, c0:c1] & (depth[r0:r1, c0:c1] < nearest)
+    if hull is None:
+        return bool(np.all(covered))
+    cc, rr = np.meshgrid(np.arange(c0, c1, dtype=float), np.arange(r0, r1, dtype=float))
+    inside = np.ones(cc.shape, bool)
+    for (xa, ya), (xb, yb) in zip(hull, np.roll(hull, -1, axis=0), strict=True):
+        # left of every edge of a counter-clockwise polygon (rows grow downwards: the sign
+        # of the cross product is the same for every edge, whichever it is)
+        cross = (xb - xa) * (rr - ya) - (yb - ya) * (cc - xa)
+        inside &= cross >= -HULL_SLACK * np.hypot(xb - xa, yb - ya)
+    return bool(np.all(covered | ~inside))

@@ -39,6 +39,11 @@ class Level:
     def shape(self) -> tuple[int, int, int]:
         return tuple(int(n) for n in self.data.shape)
 
+    def read_all(self) -> np.ndarray:
+        """All samples of this (small, coarse) level, read here by dask's threads: a preview
+        is wanted at once, not after a round trip through a cluster's queue."""
+        return np.asarray(self.data.compute(scheduler="threads"))
+
 
 @dataclass(frozen=True, eq=False)
 class ChunkedVolume:
@@ -141,7 +146,7 @@ class ChunkedVolume:
         the range, not every sample (extremes finer than the coarse level may lie outside).
         """
         if "range" not in self._cache:
-            d = np.asarray(self.preview_level().data.compute(), dtype=np.float64)
+            d = np.asarray(self.preview_level().read_all(), dtype=np.float64)
             finite = d[np.isfinite(d)]
             if finite.size == 0:
                 raise VolumeError(f"{self.name} has no finite samples in its coarse level")

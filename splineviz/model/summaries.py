@@ -52,7 +52,7 @@ def summary_samples(volume) -> np.ndarray:
     from splineviz.core.chunked import ChunkedVolume
 
     if isinstance(volume, ChunkedVolume):
-        return np.asarray(volume.preview_level().data.compute())
+        return np.asarray(volume.preview_level().read_all())
     return volume.data
 
 

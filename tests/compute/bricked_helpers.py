@@ -1,0 +1,54 @@
+"""Helpers of the bricked-rendering tests: a small LocalCluster and the comparison of a
+bricked frame with a single ray caster's (the acceptance metrics of issue 15)."""
+
+from __future__ import annotations
+
+import contextlib
+
+import numpy as np
+
+#: hit masks agree on at least this share of pixels
+HIT_AGREEMENT = 0.9999
+#: window depth tolerance on pixels both frames hit
+DEPTH_TOL = 1e-6
+#: colour tolerance (8-bit steps)
+COLOR_TOL = 1
+
+
+@contextlib.contextmanager
+def local_client(workers: int = 2, processes: bool = False):
+    """A dask.distributed client of a LocalCluster of ``workers`` single-thread workers (in
+    this process unless ``processes``), closed afterwards."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client
+
+
+def compare_frames(single, bricked, opacity: float | None = None) -> dict:
+    """The metrics of a bricked frame against the single ray caster's; with ``opacity`` the
+    translucent pictures (first hit blended over the background) are compared too."""
+    from splineviz.core.compositing import blend
+
+    both = single.hit & bricked.hit
+    out = {"hit_agreement": float(np.mean(single.hit == bricked.hit)),
+           "hits": int(single.hit.sum()),
+           "depth_max": float(np.max(np.abs(single.depth[both] - bricked.depth[both]),
+                                     initial=0.0)),
+           "color_max": int(np.max(np.abs(single.color[both].astype(int)
+                                          - bricked.color[both].astype(int)), initial=0))}
+    if opacity is not None:
+        a, b = blend(single, opacity), blend(bricked, opacity)
+        same = single.hit == bricked.hit
+        out["blend_max"] = int(np.max(np.abs(a[same].astype(int) - b[same].astype(int)),
+                                      initial=0))
+    return out
+
+
+def assert_same_picture(metrics: dict) -> None:
+    assert metrics["hits"] > 100, metrics
+    assert metrics["hit_agreement"] >= HIT_AGREEMENT, metrics
+    assert metrics["depth_max"] <= DEPTH_TOL, metrics
+    assert metrics["color_max"] <= COLOR_TOL, metrics
+    assert metrics.get("blend_max", 0) <= COLOR_TOL, metrics
