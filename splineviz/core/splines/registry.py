@@ -85,7 +85,8 @@ def _builtin() -> dict[str, ModelSpec]:
         ModelSpec("cubic-c1", p + "cubic_c1:CubicC1Spline", "Cubic C1 (type-6)", 3, "C1",
                   "type6", 1),
         ModelSpec("to-quadratic", p + "to_quadratic:TOQuadraticSpline",
-                  "Quadratic C1 (truncated octahedra)", 2, "C1", "to", 3, {"k": 2}, lattice_period=2),
+                  "Quadratic C1 (truncated octahedra)", 2, "C1", "to", 3, {"k": 2},
+                  lattice_period=2),
     )
     return {s.name: s for s in specs}
 
