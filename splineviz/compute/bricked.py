@@ -191,10 +191,15 @@ def get_client(scheduler: str | None = None, workers: int | None = None,
     from distributed import Client, LocalCluster
 
     if scheduler:
-        try:
-            return Client(scheduler, timeout="10s")
-        except (OSError, TimeoutError) as exc:
-            raise RayCastError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
+        client = _local.get(scheduler)
+        if client is None or client.status != "running":
+            try:
+                client = Client(scheduler, timeout="10s")
+            except (OSError, TimeoutError) as exc:
+                raise RayCastError(f"cannot reach the dask scheduler {scheduler}: "
+                                   f"{exc}") from None
+            _local[scheduler] = client
+        return client
     n = workers or max(1, min(4, os.cpu_count() or 1))
     key = (n, processes)
     client = _local.get(key)
@@ -204,6 +209,17 @@ def get_client(scheduler: str | None = None, workers: int | None = None,
         client = Client(cluster)
         _local[key] = client
     return client
+
+
+def close_clients() -> None:
+    """Close the clients (and LocalClusters) :func:`get_client` opened, e.g. when a command
+    ends: their workers' data go without errors in the log."""
+    while _local:
+        _, client = _local.popitem()
+        cluster = client.cluster
+        client.close()
+        if cluster is not None:
+            cluster.close()
 
 
 # -- the caster ---------------------------------------------------------------------------

@@ -43,8 +43,8 @@ def make_camera(spec: str | None, bounds, view_angle: float) -> Camera:
 
 def _configure_bricks(scene, args):
     """For chunked volumes: the dask scheduler (``--scheduler``, else a LocalCluster of
-    ``--workers``) and a bricks-done progress bar on stderr; returns the bar (None when the
-    scene holds no chunked volume)."""
+    ``--workers``) and a bricks-done progress bar on stderr; returns the bar and the settings
+    to restore afterwards (None when the scene holds no chunked volume)."""
     from splineviz.core.chunked import ChunkedVolume
 
     if not any(isinstance(v.data, ChunkedVolume) for v in scene.volumes):
@@ -61,8 +61,10 @@ def _configure_bricks(scene, args):
         bar.n = done
         bar.refresh()
 
-    bricked.configure(scheduler=args.scheduler, workers=args.workers, progress=progress)
-    return bar
+    saved = dict(bricked.DEFAULTS)
+    bricked.configure(scheduler=args.scheduler or saved["scheduler"], workers=args.workers,
+                      progress=progress)
+    return bar, saved
 
 
 def run(args) -> int:
@@ -97,7 +99,12 @@ def run(args) -> int:
         render_scene(scene, size, args.output, device=args.device)
     finally:
         if chunked is not None:
-            chunked.close()
+            bar, saved = chunked
+            bar.close()
+            from splineviz.compute import bricked
+
+            bricked.configure(**saved)
+            bricked.close_clients()
     iso = scene.isosurfaces[0]
     print(f"{args.output}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
     return 0
