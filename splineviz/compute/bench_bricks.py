@@ -116,9 +116,10 @@ def measure(n: int, workers: int, model: str = "cubic-c1", size=(1024, 768),
             cam = default_camera(vol.bounds)
             t = time.perf_counter()
             stages = []
-            for stage, _, _, frame in rc.frames(cam, size):
+            for stage, _, _, shown in rc.frames(cam, size):
                 if not stages or stages[-1] != stage:
                     stages.append(stage)
+                frame = shown
             wall = time.perf_counter() - t
             stats = dict(rc.stats)
     return {"n": n, "workers": workers, "model": model, "size": tuple(size),

@@ -240,6 +240,11 @@ def _read_hdf5(path: Path):
 register_format("ome-zarr", (".ome.zarr", ".zarr"), _read_zarr, None, kind="volume",
                 folder=True, sniff=_is_zarr_folder,
                 description="OME-Zarr image or Zarr array (folder; read lazily)")
+register_format("zarr-metadata", (".json", ".zgroup", ".zattrs", ".zarray"),
+                lambda p: _read_zarr(p.parent), None, kind="volume",
+                sniff=lambda h: b'"zarr_format"' in h or b'"multiscales"' in h,
+                description="the metadata file of a Zarr/OME-Zarr folder (opens the folder: "
+                "file dialogs pick files)")
 register_format("hdf5", (".h5", ".hdf5", ".hdf", ".he5"), _read_hdf5, None, kind="volume",
                 sniff=lambda h: h.startswith(HDF5_SIGNATURE),
                 description="HDF5 3-D dataset (read lazily)")

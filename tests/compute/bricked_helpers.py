@@ -52,3 +52,32 @@ def assert_same_picture(metrics: dict) -> None:
     assert metrics["depth_max"] <= DEPTH_TOL, metrics
     assert metrics["color_max"] <= COLOR_TOL, metrics
     assert metrics.get("blend_max", 0) <= COLOR_TOL, metrics
+
+
+def write_ball_ome_zarr(path, n: int, chunk: int, levels: int = 2):
+    """An ``n^3`` uint8 OME-Zarr (chunks ``chunk^3``) of a wavy ball, computed and written
+    chunk by chunk through dask (never whole in memory), with ``levels`` coarser levels."""
+    import warnings
+
+    import dask.array as da
+    import zarr
+    from ome_zarr.io import parse_url
+
+    with warnings.catch_warnings():
+        # ome-zarr 0.18 warns about its own deprecated Scaler at import
+        warnings.simplefilter("ignore", DeprecationWarning)
+        from ome_zarr.writer import write_image
+
+    def block(block_info=None):
+        (z0, z1), (y0, y1), (x0, x1) = block_info[None]["array-location"]
+        c = np.linspace(-1, 1, n, dtype=np.float32)
+        z, y, x = c[z0:z1, None, None], c[None, y0:y1, None], c[None, None, x0:x1]
+        r = np.sqrt((x - 0.1) ** 2 + 1.3 * y**2 + 0.8 * z**2) + 0.08 * np.sin(7 * x + 3 * z)
+        return np.clip(255 * (1.2 - r), 0, 255).astype(np.uint8)
+
+    zyx = da.map_blocks(block, chunks=da.core.normalize_chunks(chunk, (n,) * 3),
+                        dtype=np.uint8, meta=np.empty((0, 0, 0), np.uint8))
+    root = zarr.group(store=parse_url(str(path), mode="w").store)
+    write_image(zyx, root, axes="zyx", storage_options={"chunks": (chunk,) * 3},
+                scale_factors=[{a: 2**k for a in "zyx"} for k in range(1, levels + 1)])
+    return path

@@ -64,6 +64,9 @@ def test_ome_zarr_opens_lazily_with_its_levels(ome):
     assert vol.read(box).origin == (5.0, 33 * 1.5, 50.0)
     lo, hi = vol.finite_range  # from the coarsest level, not the data
     assert 0 <= lo < hi <= 255
+    # a file dialog picks the folder's metadata file: it opens the folder
+    same = sv.read_volume(path / "zarr.json")
+    assert isinstance(same, ChunkedVolume) and same.shape == vol.shape
 
 
 def test_info_reads_no_samples(ome, tmp_path, capsys):
