@@ -103,7 +103,7 @@ def measure(n: int, workers: int, model: str = "cubic-c1", size=(1024, 768),
     vol = gyroid_volume(n, chunks=brick)
     with PeakRSS() as rss:
         with LocalCluster(n_workers=workers, threads_per_worker=1, processes=processes,
-                          dashboard_address=None) as cluster, Client(cluster) as client:
+                          dashboard_address=":0") as cluster, Client(cluster) as client:
             # warm the workers (imports, OpenCL context and kernel builds) on a tiny volume
             # so that the frame's time is the bricks', not the start-up's
             warm = BrickedRayCaster(gyroid_volume(33, chunks=16), model=model, device=device,

@@ -29,6 +29,7 @@ from __future__ import annotations
 import os
 import threading
 import time
+import weakref
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -149,12 +150,13 @@ def render_brick(volume, task: BrickTask) -> Fragment:
         "device": rc.stats.get("device")})
 
 
-_locks: dict = {}
+_locks = weakref.WeakKeyDictionary()
 
 
 def _caster_lock(rc) -> threading.Lock:
+    """The lock of one brick caster (gone with the caster when the cache drops it)."""
     with _cache_lock:
-        return _locks.setdefault(id(rc), threading.Lock())
+        return _locks.setdefault(rc, threading.Lock())
 
 
 # -- cluster ------------------------------------------------------------------------------
@@ -205,7 +207,7 @@ def get_client(scheduler: str | None = None, workers: int | None = None,
     client = _local.get(key)
     if client is None or client.status != "running":
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=processes,
-                               dashboard_address=None)
+                               dashboard_address=":0")
         client = Client(cluster)
         _local[key] = client
     return client

@@ -41,7 +41,7 @@ def bricks_on(request):
         from distributed import LocalCluster
 
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                          dashboard_address=None) as cluster:
+                          dashboard_address=":0") as cluster:
             bricked.configure(scheduler=cluster.scheduler_address)
             yield
             bricked.close_clients()

@@ -151,7 +151,7 @@ def test_render_command_on_ome_zarr_matches_the_array(ome, tmp_path):
     # the OME-Zarr's spacing differs: give the array's (1, 1, 1) by rewriting it
     plain = write_ome_zarr(tmp_path / "plain.ome.zarr", data, CHUNK)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                      dashboard_address=None) as cluster:
+                      dashboard_address=":0") as cluster:
         assert main(["render", str(plain), *common, "--scheduler",
                      cluster.scheduler_address, "-o", str(tmp_path / "b.png")]) == 0
     np.testing.assert_array_equal(_read_png(tmp_path / "a.png"), _read_png(tmp_path / "b.png"))
