@@ -41,7 +41,7 @@ from splineviz.core.camera import Camera, parse_size
 from splineviz.core.chunked import ChunkedVolume
 from splineviz.core.compositing import Composite, Fragment
 from splineviz.core.raycast_reference import Frame, normalize_clip_planes
-from splineviz.core.splines.registry import model_spec
+from splineviz.core.splines.registry import MODELS, model_spec
 from splineviz.core.volume import Volume
 
 #: cells per brick along each axis when none is given (bricks of whole chunks, about 256^3)
@@ -270,6 +270,12 @@ class BrickedRayCaster:
         from dask.base import tokenize
 
         spec = model_spec(model)
+        if spec.family is None:
+            # only the kernel models declare how far their stencils reach; a plugin model
+            # may be global (an interpolating B-spline's prefilter reads the whole volume)
+            raise RayCastError(f"the {model} model has no OpenCL kernel and cannot be "
+                               f"rendered in bricks; choose one of "
+                               f"{', '.join(m for m, s in MODELS.items() if s.family)}")
         if not isinstance(volume, ChunkedVolume | Volume):
             volume = Volume(volume)
         self.model = model

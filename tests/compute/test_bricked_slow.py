@@ -22,6 +22,7 @@ from .bricked_helpers import (
     write_ball_ome_zarr,
 )
 from .helpers import HAVE_CL
+from .test_bricked import ISO
 
 pytestmark = pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device")
 
@@ -41,11 +42,13 @@ def test_every_model_in_8_bricks_on_2_worker_processes(bonsai):
     size = (256, 192)
     rows = []
     with local_client(workers=2, processes=True) as client:
-        for model in MODELS:
+        # every model with a kernel: the plugin's tricubic B-spline interpolant is global (a
+        # prefilter over the whole volume), so no finite halo makes a brick's spline its own
+        for model in [m for m, spec in MODELS.items() if spec.family is not None]:
             rc = sv.RayCaster(bonsai, model=model)
-            rc.set_isovalue(40.0)
+            rc.set_isovalue(ISO)
             brc = BrickedRayCaster(bonsai, model=model, client=client, bricks=2)
-            brc.set_isovalue(40.0)
+            brc.set_isovalue(ISO)
             for name, planes in clips.items():
                 single = rc.render(cam, size, clip_planes=planes)
                 for composite in ("nearest", "back-to-front"):
@@ -57,8 +60,9 @@ def test_every_model_in_8_bricks_on_2_worker_processes(bonsai):
                     assert_same_picture(m)
     for model, name, composite, m in rows:
         print(f"{model:>16} clip {name:>5} {composite:>13}: hits {m['hits']} agreement "
-              f"{100 * m['hit_agreement']:.4f} % depth {m['depth_max']:.1e} colour "
-              f"{m['color_max']} blended {m['blend_max']}")
+              f"{100 * m['hit_agreement']:.4f} % depth <= 1e-6 on "
+              f"{100 * m['depth_within']:.3f} %, max {m['depth_max']:.1e}, colour "
+              f"{m['color_max']}, blended {m['blend_max']}")
 
 
 @pytest.mark.slow
