@@ -52,6 +52,10 @@ WORKER_CACHE_BYTES = int(float(os.environ.get("SPLINEVIZ_BRICK_CACHE", 2**30)))
 INFLIGHT_PER_WORKER = 2
 
 
+class RenderCancelled(RayCastError):
+    """A bricked frame given up for a newer one (:meth:`BrickedRayCaster.render`)."""
+
+
 def default_brick_size(chunks, target: int = BRICK_CELLS) -> tuple[int, int, int]:
     """Cells per brick: the largest whole number of storage chunks up to ``target`` per axis
     (a brick's halo then reads into its neighbours' chunks on its faces only)."""
@@ -381,7 +385,7 @@ class BrickedRayCaster:
     # -- frames ------------------------------------------------------------------------
 
     def render(self, camera: Camera, size=(640, 480), clip_planes=(),
-               composite: str = "nearest", progress=None) -> Frame:
+               composite: str = "nearest", progress=None, cancelled=None) -> Frame:
         """Ray cast one exact frame (all bricks).
 
         Parameters
@@ -394,13 +398,19 @@ class BrickedRayCaster:
             brick order once all arrived (translucent layers).
         progress : callable, optional
             ``progress(done, total)`` after each brick.
+        cancelled : callable, optional
+            Asked after each brick; True (e.g. the camera moved on) cancels the bricks still
+            out and raises :class:`RenderCancelled`.
         """
         frame = None
         progress = progress or DEFAULTS["progress"]
-        for stage, done, total, f in self.frames(camera, size, clip_planes, composite,
-                                                 preview=False):
+        frames = self.frames(camera, size, clip_planes, composite, preview=False)
+        for stage, done, total, f in frames:
             if progress is not None and stage != "preview":
                 progress(done, total)
+            if cancelled is not None and stage == "bricks" and cancelled():
+                frames.close()  # cancels what is still out
+                raise RenderCancelled("the frame was cancelled before its bricks arrived")
             frame = f
         return frame
 

@@ -290,7 +290,8 @@ class IsosurfaceLayer:
         return self._casters()[0].stats.get("path", "numpy")
 
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
-                blocking: bool = True) -> RenderedFrame | None:
+                blocking: bool = True, progress=None,
+                cancelled=None) -> RenderedFrame | None:
         """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
 
         Parameters
@@ -303,6 +304,9 @@ class IsosurfaceLayer:
         blocking : bool
             If False, return None instead of waiting while another thread uses the caster
             or instead of building the casters (the GUI thread's previews).
+        progress, cancelled : callable, optional
+            A chunked volume's exact frame, made in bricks on dask workers: ``progress(done,
+            total)`` after each brick; ``cancelled()`` True gives up the frame (None).
 
         A new isovalue costs nothing here: the ray caster classifies only the cells the rays
         of this frame reach (visible-first), so a reduced-resolution preview of a new
@@ -324,8 +328,19 @@ class IsosurfaceLayer:
             if rc.isovalue != self._isovalue:
                 rc.set_isovalue(self._isovalue)
             t = time.perf_counter()
-            frame = rc.render(view.camera, size=(sw, sh),
-                              clip_planes=tuple(view.clip_planes) + self.clip_planes)
+            extra = {}
+            if rc.stats.get("path") == "bricked":
+                extra = {"progress": progress, "cancelled": cancelled}
+            try:
+                frame = rc.render(view.camera, size=(sw, sh),
+                                  clip_planes=tuple(view.clip_planes) + self.clip_planes,
+                                  **extra)
+            except SplinevizError as exc:
+                from splineviz.compute.bricked import RenderCancelled
+
+                if isinstance(exc, RenderCancelled):
+                    return None
+                raise
             seconds = time.perf_counter() - t
             stats = dict(rc.stats)
         finally:
