@@ -56,9 +56,11 @@ class RenderCancelled(RayCastError):
     """A bricked frame given up for a newer one (:meth:`BrickedRayCaster.render`)."""
 
 
-def default_brick_size(chunks, target: int = BRICK_CELLS) -> tuple[int, int, int]:
+def default_brick_size(chunks, target: int | None = None) -> tuple[int, int, int]:
     """Cells per brick: the largest whole number of storage chunks up to ``target`` per axis
-    (a brick's halo then reads into its neighbours' chunks on its faces only)."""
+    (default :data:`BRICK_CELLS`; a brick's halo then reads into its neighbours' chunks on
+    its faces only)."""
+    target = BRICK_CELLS if target is None else target
     return tuple(max(c, (target // c) * c) for c in chunks)
 
 

@@ -142,3 +142,33 @@ def test_models_without_a_kernel_are_refused(monkeypatch):
     monkeypatch.setitem(MODELS, "global-model", ModelSpec("global-model", "m:C"))
     with pytest.raises(RayCastError, match="cannot be rendered in bricks"):
         BrickedRayCaster(np.zeros((4, 4, 4), np.float32), model="global-model")
+
+
+def test_a_layer_of_a_chunked_volume_reports_bricks_and_gives_up_old_views(bonsai, client,
+                                                                          monkeypatch):
+    import dask.array as da
+
+    from splineviz.compute import bricked
+    from splineviz.core.chunked import ChunkedVolume
+    from splineviz.render.isosurface import IsosurfaceLayer, ViewState
+
+    monkeypatch.setattr(bricked, "BRICK_CELLS", 128)  # 8 bricks of bonsai
+    saved = dict(bricked.DEFAULTS)
+    bricked.configure(scheduler=client.scheduler.address)
+    try:
+        vol = ChunkedVolume(da.from_array(bonsai.data, chunks=128), bonsai.spacing,
+                            bonsai.origin)
+        layer = IsosurfaceLayer(vol, model="trilinear", isovalue=ISO)
+        view = ViewState(default_camera(vol.bounds), (64, 48))
+        seen = []
+        rf = layer.compute(view, progress=lambda done, total: seen.append((done, total)))
+        assert rf.path == "bricked" and rf.final and rf.frame.hit.any()
+        assert seen[-1] == (8, 8) and len(seen) >= 2
+        # a camera that moved on: the frame is given up, its bricks cancelled
+        assert layer.compute(view, cancelled=lambda: True) is None
+        # previews while the camera moves: the coarse level, ray cast here
+        pre = layer.compute(view, scale=0.5, preview=True)
+        assert pre.path == "preview" and pre.frame.hit.any()
+    finally:
+        bricked.close_clients()
+        bricked.configure(**saved)
