@@ -451,13 +451,14 @@ class BrickedRayCaster:
         self.stats.update(preview_s=None, brick_times=[])
         if preview and isinstance(vol, ChunkedVolume) and vol.levels:
             t = time.perf_counter()
-            yield "preview", 0, len(self.grid), self._render_preview(cam, (w, h), user)
+            coarse = self._render_preview(cam, (w, h), user)
             self.stats["preview_s"] = time.perf_counter() - t
+            yield "preview", 0, len(self.grid), coarse
         order = self.grid.visibility_order(cam.position, vol.spacing, vol.origin)
-        empty = [b for b in order if b.index in self.brick_bounds
+        empty = {b.index for b in order if b.index in self.brick_bounds
                  and not (self.brick_bounds[b.index][0] <= self._isovalue
-                          <= self.brick_bounds[b.index][1])]
-        todo = [b for b in order if b not in empty]
+                          <= self.brick_bounds[b.index][1])}
+        todo = [b for b in order if b.index not in empty]
         total = len(todo)
         comp = Composite((w, h))
         shared = self._volume_future()
