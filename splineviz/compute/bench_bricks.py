@@ -171,9 +171,11 @@ def _print(results, out) -> None:
         out(f"speed-up 2 workers / 1 worker: {by[1]['wall_s'] / by[2]['wall_s']:.2f}x "
             "(one machine: the workers share its cores, and each brick's OpenCL kernels "
             "already use all of them)")
-    base = results[-1]
+    # the fewest workers' per-brick times: those of workers not sharing their cores
+    base = results[0]
     proj = ", ".join(f"{w}: {project(base, w):.1f} s" for w in (1, 2, 4, 8, 16, 64))
-    out(f"projected from the per-brick times (one core-set per worker): {proj}")
+    out(f"projected from the per-brick times of {base['workers']} worker(s), for N workers "
+        f"each on its own cores: {proj}")
     per = [b["read_s"] + b["build_s"] + b["render_s"] for b in base["brick_times"]]
     if per:
         parts = {k: sum(b[k] for b in base["brick_times"]) / sum(per)

@@ -551,9 +551,11 @@ class BrickedRayCaster:
             "read_s", "build_s", "render_s", "cached", "worker")}})
 
     def _render_preview(self, camera, size, planes) -> Frame:
-        """The coarse level, ray cast here with the same model (its caster is kept)."""
+        """The coarse level, ray cast here (its caster is kept for later frames)."""
         if self._preview is None:
-            self._preview = self.preview_caster(self.model)
+            # trilinear, as the window's previews while the camera moves (thesis §6.3): the
+            # cheapest kernel to build and run; the bricks bring the model's own surface
+            self._preview = self.preview_caster("trilinear")
         self._preview.set_isovalue(self._isovalue)
         return self._preview.render(camera, size=size, clip_planes=planes)
 
