@@ -694,6 +694,24 @@ class RayCaster:
             return np.flatnonzero(((vmin <= iso) & (iso <= vmax)).ravel()).astype(np.int32)
         return self.classify_all().cells
 
+    @property
+    def negative_mass(self) -> float:
+        """Largest sum of negative weights of a B-coefficient as an affine combination of
+        samples (0 for trilinear; OpenCL path): the widening of the octree's value bounds."""
+        if self._device is None:
+            raise RayCastError("the negative weight mass is known on the OpenCL path")
+        return float(self._negmass)
+
+    def value_bounds(self) -> tuple[float, float]:
+        """Conservative (min, max) of the spline over the whole data box: the root of the
+        min-max octree (OpenCL path), e.g. to skip a brick of a bigger volume at another
+        isovalue without reading it again."""
+        if self._device is None:
+            raise RayCastError("value bounds come from the octree of the OpenCL path")
+        root = self._levels[-1][0]
+        lo, hi = self._bounds[2 * root:2 * root + 2].get(queue=self._device.queue)
+        return float(lo), float(hi)
+
     def skip_volume(self) -> np.ndarray:
         """(cx, cy, cz) uint8 skip codes (255 = candidate, else the empty macro level) that the
         ray kernel derives from the min-max octree at the current isovalue; OpenCL path."""

@@ -22,6 +22,7 @@ import numpy as np
 from psygnal import EventedModel
 from pydantic import ConfigDict, Field, ValidationError, field_validator
 
+from splineviz.core.chunked import ChunkedVolume
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
 from splineviz.core.volume import Volume
@@ -111,7 +112,8 @@ class VolumeNode(Node):
     source: str | None = None
     sigma: Annotated[float, Field(ge=0.0, le=MAX_SIGMA, allow_inf_nan=False)] = 0.0
     show_outline: bool = True
-    data: Volume | None = Field(default=None, exclude=True, repr=False)
+    #: in-memory samples, or a lazily read chunked volume (rendered in bricks)
+    data: Volume | ChunkedVolume | None = Field(default=None, exclude=True, repr=False)
     smoothed: Volume | None = Field(default=None, exclude=True, repr=False)
     #: the sigma ``smoothed`` was made with
     smoothed_sigma: float = Field(default=0.0, exclude=True)

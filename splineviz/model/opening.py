@@ -46,7 +46,7 @@ def read_file(path, *, allow_outside: bool = False):
     Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
     process. ``allow_outside`` as in :func:`splineviz.io.opening.open_path`."""
     from splineviz.io.opening import open_path
-    from splineviz.model.summaries import log_histogram, median_spacing
+    from splineviz.model.summaries import log_histogram, median_spacing, summary_samples
 
     opened = open_path(path, allow_outside=allow_outside)
     if opened.kind == "session":
@@ -54,7 +54,7 @@ def read_file(path, *, allow_outside: bool = False):
     if opened.kind != "volume":
         return opened.kind, opened.value, {"spacing": median_spacing(opened.value.points)}
     _ = opened.value.finite_range
-    return opened.kind, opened.value, {"histogram": log_histogram(opened.value.data)}
+    return opened.kind, opened.value, {"histogram": log_histogram(summary_samples(opened.value))}
 
 
 @dataclass(frozen=True)

@@ -89,6 +89,21 @@ class Material:
 MATERIALS = {name: Material(*consts) for name, consts in nodes.MATERIALS.items()}
 
 
+def make_caster(volume, model: str, device=None, options=None):
+    """The ray caster of a layer: a :class:`~splineviz.compute.raycast.RayCaster` of an
+    in-memory volume, a :class:`~splineviz.compute.bricked.BrickedRayCaster` (bricks on dask
+    workers) of a :class:`~splineviz.core.chunked.ChunkedVolume`."""
+    from splineviz.core.chunked import ChunkedVolume
+
+    if isinstance(volume, ChunkedVolume):
+        from splineviz.compute.bricked import BrickedRayCaster
+
+        return BrickedRayCaster(volume, model=model, device=device, **dict(options or {}))
+    from splineviz.compute.raycast import RayCaster
+
+    return RayCaster(volume, model=model, device=device, **dict(options or {}))
+
+
 class IsosurfaceLayer:
     """One spline isosurface of a volume (see module docstring).
 
@@ -261,9 +276,12 @@ class IsosurfaceLayer:
             return None, None
         with self._lock:
             if self._caster is None:
-                self._caster = RayCaster(self._volume, model=self._model, device=self._device,
-                                         **self._model_options)
-            if self._caster.stats.get("path") != "opencl" and self._preview is None:
+                self._caster = make_caster(self._volume, self._model, self._device,
+                                           self._model_options)
+            if self._caster.stats.get("path") == "bricked" and self._preview is None:
+                # a chunked volume: previews ray cast its coarse level here
+                self._preview = self._caster.preview_caster()
+            elif self._caster.stats.get("path") != "opencl" and self._preview is None:
                 self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
             return self._caster, self._preview
 
@@ -273,7 +291,8 @@ class IsosurfaceLayer:
         return self._casters()[0].stats.get("path", "numpy")
 
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
-                blocking: bool = True) -> RenderedFrame | None:
+                blocking: bool = True, progress=None,
+                cancelled=None) -> RenderedFrame | None:
         """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
 
         Parameters
@@ -286,13 +305,16 @@ class IsosurfaceLayer:
         blocking : bool
             If False, return None instead of waiting while another thread uses the caster
             or instead of building the casters (the GUI thread's previews).
+        progress, cancelled : callable, optional
+            A chunked volume's exact frame, made in bricks on dask workers: ``progress(done,
+            total)`` after each brick; ``cancelled()`` True gives up the frame (None).
 
         A new isovalue costs nothing here: the ray caster classifies only the cells the rays
         of this frame reach (visible-first), so a reduced-resolution preview of a new
         isovalue is as cheap as any other preview.
         """
         try:
-            return self._compute(view, scale, preview, blocking)
+            return self._compute(view, scale, preview, blocking, progress, cancelled)
         except Exception as exc:  # noqa: BLE001 - pyopencl's errors, matched by module
             if not _is_opencl_error(exc) or self._device == "numpy":
                 raise
@@ -304,9 +326,9 @@ class IsosurfaceLayer:
             with self._lock, self._preview_lock:
                 self._device = "numpy"
                 self._caster = self._preview = None
-            return self._compute(view, scale, preview, blocking)
+            return self._compute(view, scale, preview, blocking, progress, cancelled)
 
-    def _compute(self, view, scale, preview, blocking):
+    def _compute(self, view, scale, preview, blocking, progress, cancelled):
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
         exact, fast = self._casters(build=blocking)
@@ -323,8 +345,19 @@ class IsosurfaceLayer:
             if rc.isovalue != self._isovalue:
                 rc.set_isovalue(self._isovalue)
             t = time.perf_counter()
-            frame = rc.render(view.camera, size=(sw, sh),
-                              clip_planes=tuple(view.clip_planes) + self.clip_planes)
+            extra = {}
+            if rc.stats.get("path") == "bricked":
+                extra = {"progress": progress, "cancelled": cancelled}
+            try:
+                frame = rc.render(view.camera, size=(sw, sh),
+                                  clip_planes=tuple(view.clip_planes) + self.clip_planes,
+                                  **extra)
+            except SplinevizError as exc:
+                from splineviz.compute.bricked import RenderCancelled
+
+                if isinstance(exc, RenderCancelled):
+                    return None
+                raise
             seconds = time.perf_counter() - t
             stats = dict(rc.stats)
         finally:

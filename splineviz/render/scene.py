@@ -102,6 +102,8 @@ class SplineScene:
         self.progressive = progressive
         #: called with no argument when exact frames are due (progressive mode)
         self.request_refine = None
+        #: key of the view the last render was for (a refining worker compares its own)
+        self._latest_key = None
         self.layers: list[IsosurfaceLayer] = []
         self._views: dict[int, _LayerView] = {}
         self.props: dict[str, PropRecord] = {}
@@ -245,6 +247,8 @@ class SplineScene:
         t0 = time.perf_counter()
         self._reset_clipping_range()
         view = self.view_state()
+        # read by refine() in a worker: a bricked frame of an older view is given up
+        self._latest_key = view.key()
         stale = []
         for layer in self.layers:
             lv = self._views[id(layer)]
@@ -311,7 +315,7 @@ class SplineScene:
                 return True
         return False
 
-    def refine(self, view: ViewState | None = None, cancelled=None):
+    def refine(self, view: ViewState | None = None, cancelled=None, job=None):
         """Exact frames of all visible layers that show a preview (thread safe).
 
         Parameters
@@ -321,6 +325,10 @@ class SplineScene:
             thread before starting a worker).
         cancelled : callable or None
             Returns True to stop between layers.
+        job : object with ``progress(fraction, message)``, optional
+            Told the bricks done of a chunked volume's frame (the GUI's job runner passes
+            its job); such a frame is also given up once the view moved on (bricks still
+            out are cancelled) and refined again for the new view.
 
         Returns
         -------
@@ -336,7 +344,8 @@ class SplineScene:
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
-            rf = layer.compute(view)
+            rf = layer.compute(view, progress=_brick_progress(job, layer),
+                               cancelled=lambda: self._latest_key not in (None, view.key()))
             if rf is not None:
                 _prepare(rf)  # the textures, here in the worker, not in the GUI thread
                 out.append((layer, rf))
@@ -365,6 +374,17 @@ class SplineScene:
         self.renderer.RemoveObserver(self._observer)
         for layer in list(self.layers):
             self.remove_layer(layer)
+
+
+def _brick_progress(job, layer):
+    """``progress(done, total)`` of a chunked layer's bricks for a job, or None."""
+    if job is None:
+        return None
+
+    def progress(done, total):
+        job.progress(done / max(total, 1), f"{layer.name}: bricks {done}/{total}")
+
+    return progress
 
 
 def _prepare(rf: RenderedFrame) -> None:
