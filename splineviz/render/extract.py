@@ -9,44 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def project_to_isosurface(spline, points: np.ndarray, iso: float, steps: int = 6):
-    """Newton steps x <- x - (s(x) - iso) grad s / |grad s|^2, kept inside the data box.
-
-    Parameters
-    ----------
-    spline : Spline
-    points : (N, 3) starting points near the isosurface
-    iso : float
-
-    Returns
-    -------
-    points : (N, 3) projected points
-    normals : (N, 3) unit normals -grad s / |grad s| there (VTK's contour convention: they point
-        to lower values); zero where the gradient vanishes
-    """
-    lo = np.array([b[0] for b in spline.bounds])
-    hi = np.array([b[1] for b in spline.bounds])
-    x = np.asarray(points, dtype=np.float64).copy()
-    # vertices on a face of the box slide within that face (the cut of the surface stays exact)
-    tol = 1e-9 * np.max(hi - lo)
-    free = ~((np.abs(x - lo) < tol) | (np.abs(x - hi) < tol))
-    step_limit = 0.5 * np.min(spline.volume.spacing)
-    for _ in range(steps):
-        v, g = spline.value_gradient(x)
-        g = g * free
-        g2 = np.einsum("nc,nc->n", g, g)
-        ok = g2 > 1e-30
-        delta = np.zeros_like(x)
-        delta[ok] = ((v[ok] - iso) / g2[ok])[:, None] * g[ok]
-        # never move further than half a voxel: a vertex belongs to the sheet it started on
-        norm = np.linalg.norm(delta, axis=1)
-        scale = np.minimum(1.0, step_limit / np.maximum(norm, 1e-300))
-        x = np.clip(x - delta * scale[:, None], lo, hi)
-    g = spline.gradient(x)
-    n = np.linalg.norm(g, axis=1)
-    normals = np.divide(-g, n[:, None], out=np.zeros_like(g), where=n[:, None] > 0)
-    return x, normals
+from splineviz.core.isosurface import project_to_isosurface
 
 
 #: most spline samples taken to mesh the isosurface (bounds the time of a mesh export)

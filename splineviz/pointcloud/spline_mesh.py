@@ -1,0 +1,282 @@
+"""Meshes of spline isosurfaces by the advancing front of chapter 7, with the spline itself as
+the projector (thesis §7.3 with the volume's spline in place of the local polynomials).
+
+* Projection: Newton steps onto ``s = iso`` along the exact spline gradient
+  (:func:`splineviz.core.isosurface.project_to_isosurface`); normals ``-grad s / |grad s|``.
+* Edge lengths: ``2 sin(rho / 2) / kappa`` with ``kappa`` the larger absolute principal
+  curvature of the spline's isosurface (:mod:`splineviz.core.curvature`) at surface samples,
+  clamped and graded like the point-cloud guidance field
+  (:func:`splineviz.pointcloud.guidance.limit_gradation`).
+* Samples: where the data cross the isovalue along grid edges, one per grid cell, projected
+  onto the spline surface. They tell the front where the surface is (seeds, the data box's
+  border) exactly as the input points of a scan do.
+* Clip planes: the front runs a little past each plane, then the mesh is cut there; vertices
+  on the cut are put onto the exact section curve (plane and isosurface,
+  :func:`splineviz.core.sections.project`), vertices closer than ``SNAP`` edge lengths to the
+  plane are moved onto it first so that the cut leaves no slivers.
+
+Conventions: ``vertices (V, 3)`` float64, ``faces (F, 3)`` int64 counter-clockwise seen from the
+normals, ``normals (V, 3)`` unit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.spatial import cKDTree
+
+from splineviz.core import sections
+from splineviz.core.curvature import spline_curvatures
+from splineviz.core.errors import SplinevizError
+from splineviz.core.isosurface import project_to_isosurface
+from splineviz.pointcloud.advancing_front import AdvancingFront
+from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
+from splineviz.pointcloud.relaxation import optimize
+
+#: default angle (radians) one edge subtends on the osculating circle
+DEFAULT_RHO = 0.3
+#: default edge-length bounds, in grid steps
+DEFAULT_MIN_LENGTH = 0.4
+DEFAULT_MAX_LENGTH = 6.0
+#: growth of the target length per unit distance
+GRADATION = 0.3
+#: a vertex within this many target lengths of a clip plane is moved onto the plane
+SNAP = 0.3
+#: neighbours per sample in the gradation graph
+GRAPH_NEIGHBOURS = 8
+#: value tolerance of a vertex, relative to the data range
+VALUE_TOL = 1e-9
+#: at most this many surface samples (one per grid cell; coarser cells beyond)
+MAX_SAMPLES = 600_000
+
+
+class SplineMeshError(SplinevizError, ValueError):
+    """No spline mesh can be made (the isovalue is not crossed, bad parameters)."""
+
+
+@dataclass(frozen=True, eq=False)
+class _Samples:
+    """What the front reads of a point cloud's connectivity: the k-d tree and how irregular
+    the sampling is (grid samples are regular)."""
+
+    tree: cKDTree
+    graph: sparse.csr_matrix
+
+    def void_ratio(self) -> float:
+        return 1.0
+
+
+class SplineProjector:
+    """The projector interface of :class:`~splineviz.pointcloud.advancing_front.AdvancingFront`
+    for the isosurface ``s = iso`` of a spline.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    points : (N, 3) samples on the surface
+    normals : (N, 3) their unit normals
+    spacing : float, the samples' spacing
+    """
+
+    def __init__(self, spline, iso, points, normals, spacing):
+        self.spline = spline
+        self.iso = float(iso)
+        self.points = points
+        self.normals = normals
+        self.scale = np.full(len(points), float(spacing))
+        lo, hi = spline.volume.finite_range
+        self.tol = VALUE_TOL * max(hi - lo, 1e-300)
+        tree = cKDTree(points)
+        dist, idx = tree.query(points, k=GRAPH_NEIGHBOURS + 1)
+        rows = np.repeat(np.arange(len(points)), GRAPH_NEIGHBOURS)
+        graph = sparse.csr_matrix((dist[:, 1:].ravel(), (rows, idx[:, 1:].ravel())),
+                                  shape=(len(points), len(points)))
+        self.conn = _Samples(tree, graph.maximum(graph.T).tocsr())
+
+    def project_with_normals(self, points, normal_hint=None):
+        """Newton projection onto ``s = iso``: points ``(M, 3)`` and unit normals ``(M, 3)``;
+        ``normal_hint`` is not needed (the spline's normals are consistent everywhere)."""
+        return project_to_isosurface(self.spline, points, self.iso, steps=10, tol=self.tol)
+
+    def project(self, points):
+        """Newton projection onto ``s = iso`` of ``(M, 3)`` points."""
+        return self.project_with_normals(points)[0]
+
+
+def surface_samples(spline, iso: float, cell: float | None = None):
+    """Points on ``s = iso`` near every grid edge whose data cross the isovalue.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    cell : float, optional
+        One sample per cube of this size (default one grid step, coarser when there would be
+        more than ``MAX_SAMPLES``).
+
+    Returns
+    -------
+    points : (N, 3), normals : (N, 3), cell : float
+    """
+    vol = spline.volume
+    data = vol.data
+    found = []
+    for axis in range(3):
+        a = np.moveaxis(data, axis, 0)
+        lo_v, hi_v = a[:-1], a[1:]
+        hits = np.argwhere(((lo_v - iso) * (hi_v - iso) <= 0) & (lo_v != hi_v))
+        if len(hits) == 0:
+            continue
+        i, j, k = hits.T
+        f0, f1 = lo_v[i, j, k].astype(np.float64), hi_v[i, j, k].astype(np.float64)
+        t = np.divide(iso - f0, f1 - f0, out=np.full_like(f0, 0.5), where=f1 != f0)
+        idx = np.stack([i, j, k], axis=1).astype(np.float64)
+        idx[:, 0] += t
+        found.append(np.roll(idx, axis, axis=1) if axis else idx)
+    if not found:
+        raise SplineMeshError(f"the isovalue {iso:g} is not crossed by the data")
+    index = np.concatenate(found)
+    world = vol.index_to_world(index)
+    step = float(np.min(vol.spacing))
+    cell = step if cell is None else float(cell)
+    while True:
+        keys = np.floor(world / cell).astype(np.int64)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        if len(first) <= MAX_SAMPLES:
+            break
+        cell *= 1.5
+    pts, normals = project_to_isosurface(spline, world[np.sort(first)], iso, steps=10)
+    lo, hi = vol.finite_range
+    ok = (np.abs(spline.evaluate(pts) - iso) <= VALUE_TOL * (hi - lo)) & \
+        (np.linalg.norm(normals, axis=1) > 0.5)
+    return pts[ok], normals[ok], cell
+
+
+def _guidance(projector, rho, min_length, max_length):
+    k1, k2 = spline_curvatures(projector.spline, projector.points)
+    kappa = np.nan_to_num(np.maximum(np.abs(k1), np.abs(k2)), nan=0.0)
+    ideal = 2.0 * np.sin(rho / 2.0) / np.maximum(kappa, 1e-300)
+    lengths = np.clip(ideal, min_length, max_length)
+    lengths = limit_gradation(lengths, projector.conn.graph, GRADATION)
+    return GuidanceField(lengths, projector.conn.tree)
+
+
+def clip_mesh(spline, iso, vertices, faces, origin, normal, snap_length):
+    """Cut a mesh on ``s = iso`` by a plane, keeping the side ``normal`` points to.
+
+    New vertices on the cut lie on the exact section curve (on the plane and on ``s = iso``).
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    vertices : (V, 3)
+    faces : (F, 3)
+    origin, normal : (3,) the plane
+    snap_length : float, vertices closer than this to the plane are moved onto it
+
+    Returns
+    -------
+    vertices : (V', 3), faces : (F', 3)
+    """
+    level = sections.Level(spline, iso)
+    plane = sections.Plane(origin, normal, float(np.linalg.norm(level.hi - level.lo)))
+    limit = sections.STEP_LIMIT * level.step
+    v = np.array(vertices, dtype=np.float64, copy=True)
+    d = (v - plane.origin) @ plane.normal
+    near = np.abs(d) < snap_length
+    if near.any():
+        moved, ok = sections.project(level, plane, v[near], level.lo, level.hi, limit)
+        idx = np.flatnonzero(near)[ok]
+        v[idx] = moved[ok]
+        d[idx] = 0.0
+    side = np.sign(d)
+    fs = side[faces]
+    keep = faces[(fs >= 0).all(axis=1)]
+    cut = faces[(fs > 0).any(axis=1) & (fs < 0).any(axis=1)]
+    new_points: list[np.ndarray] = []
+    edge_vertex: dict[tuple[int, int], int] = {}
+
+    def on_edge(a, b):
+        key = (a, b) if a < b else (b, a)
+        if key not in edge_vertex:
+            t = d[a] / (d[a] - d[b])
+            edge_vertex[key] = len(v) + len(new_points)
+            new_points.append(v[a] + t * (v[b] - v[a]))
+        return edge_vertex[key]
+
+    tris = []
+    for tri in cut:
+        poly = []
+        for i in range(3):
+            a, b = int(tri[i]), int(tri[(i + 1) % 3])
+            if d[a] >= 0:
+                poly.append(a)
+            if d[a] * d[b] < 0:
+                poly.append(on_edge(a, b))
+        tris += [(poly[0], poly[m], poly[m + 1]) for m in range(1, len(poly) - 1)]
+    if new_points:
+        moved, _ok = sections.project(level, plane, np.array(new_points), level.lo, level.hi,
+                                      limit)
+        v = np.concatenate([v, moved])
+    f = np.concatenate([keep, np.array(tris, dtype=np.int64).reshape(-1, 3)])
+    used = np.unique(f)
+    remap = np.full(len(v), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return v[used], remap[f]
+
+
+def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
+                      min_length: float | None = None, max_length: float | None = None,
+                      progress=None):
+    """Triangulate ``s = iso`` with the advancing front on the spline.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    planes : sequence of (origin (3,), normal (3,))
+        Clip planes; the side each normal points to is kept.
+    rho : float
+        Angle (radians) one edge subtends on the osculating circle: smaller is finer.
+    min_length, max_length : float, optional
+        Edge-length bounds (default ``DEFAULT_MIN_LENGTH`` / ``DEFAULT_MAX_LENGTH`` grid steps).
+    progress : callable, optional
+        ``progress(fraction, message)``; returning False cancels.
+
+    Returns
+    -------
+    vertices : (V, 3), faces : (F, 3), normals : (V, 3)
+    """
+    if not (np.isfinite(rho) and 0 < rho < np.pi):
+        raise SplineMeshError(f"rho must be an angle in (0, pi) radians, got {rho}")
+    step = float(np.min(spline.volume.spacing))
+    lo_len = DEFAULT_MIN_LENGTH * step if min_length is None else float(min_length)
+    hi_len = DEFAULT_MAX_LENGTH * step if max_length is None else float(max_length)
+    if not 0 < lo_len <= hi_len:
+        raise SplineMeshError(f"need 0 < min_length <= max_length, got {lo_len} and {hi_len}")
+    pts, nrm, cell = surface_samples(spline, iso)
+    planes = [(np.asarray(o, dtype=np.float64), np.asarray(n, dtype=np.float64) /
+               np.linalg.norm(n)) for o, n in planes]
+    # the front runs two longest edges past each plane so that the cut finds whole triangles
+    for origin, normal in planes:
+        keep = (pts - origin) @ normal >= -2.0 * hi_len
+        pts, nrm = pts[keep], nrm[keep]
+    if len(pts) < 3:
+        raise SplineMeshError("the clip planes leave no part of the isosurface")
+    proj = SplineProjector(spline, iso, pts, nrm, cell)
+    guide = _guidance(proj, rho, lo_len, hi_len)
+    front = AdvancingFront(proj, guide, progress)
+    vertices, faces = front.run()
+    # valence flips and tangential relaxation, every moved vertex put back onto the spline
+    vertices, faces, _flips = optimize(vertices, faces, proj)
+    for origin, normal in planes:
+        snap = SNAP * float(np.median(guide.lengths))
+        vertices, faces = clip_mesh(spline, iso, vertices, faces, origin, normal, snap)
+    g = spline.gradient(vertices)
+    norm = np.linalg.norm(g, axis=1)
+    normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)
+    return vertices, faces, normals
