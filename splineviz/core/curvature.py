@@ -76,6 +76,7 @@ def curvature_field(measure: str, k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
 
 
 def spline_curvatures(spline, points: np.ndarray):
-    """Principal curvatures ``k1, k2 (N,)`` of the spline's isosurfaces at ``(N, 3)`` points."""
+    """Principal curvatures ``k1, k2 (N,)`` of the spline's isosurfaces at ``(N, 3)`` points
+    (one pass for gradient and Hessian)."""
     out = spline._run(points, 2)
     return principal_curvatures(out[:, 1:4], out[:, 4:].reshape(-1, 3, 3))

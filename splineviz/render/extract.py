@@ -11,7 +11,6 @@ import numpy as np
 
 from splineviz.core.isosurface import project_to_isosurface
 
-
 #: most spline samples taken to mesh the isosurface (bounds the time of a mesh export)
 MAX_SAMPLES = 4_000_000
 
