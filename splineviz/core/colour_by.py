@@ -17,6 +17,10 @@ from splineviz.core.errors import SplinevizError
 
 #: what an isosurface can be coloured by ("none": its flat colour)
 FIELDS = ("none", *MEASURES, "gradient-magnitude", "volume")
+#: colour maps offered (matplotlib names): the perceptually uniform sequential maps and a few
+#: diverging ones for signed values such as curvatures
+COLORMAPS = ("viridis", "plasma", "inferno", "magma", "cividis", "turbo", "coolwarm",
+             "RdBu_r", "PuOr_r", "twilight")
 #: how the colour range is chosen: the frame's values, given numbers, or symmetric about 0
 RANGE_MODES = ("auto", "manual", "symmetric")
 #: percentiles of the frame's values the automatic range spans (a few extreme pixels at

@@ -4,7 +4,7 @@ Document layout (schema :data:`SCHEMA_VERSION`)::
 
     {
       "format": "splineviz-session",
-      "schema_version": 3,
+      "schema_version": 4,
       "app_version": "0.1.0",
       "objects": [                          # pipeline, inputs before outputs
         {"id": "vol1", "type": "VolumeFile", "name": "bonsai",
@@ -57,11 +57,12 @@ from pydantic import (
     model_validator,
 )
 
+from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
 from splineviz.io._util import atomic_output
 from splineviz.io.errors import SessionError, SessionPathError, SessionVersionError
 
 FORMAT = "splineviz-session"
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: largest session file read, in bytes (a scene description, not data)
 MAX_SESSION_BYTES = 16 * 2**20
 #: largest coordinate or value magnitude accepted (beyond it float32 rendering breaks down)
@@ -167,6 +168,19 @@ class IsosurfaceProps(_Model):
     opacity: Unit = 1.0
     visible: bool = True
     material: Literal["default", "matte", "shiny", "metal"] = "default"
+    #: colour by (splineviz.core.colour_by): the field, its map, range and second volume
+    color_by: Literal[FIELDS] = "none"
+    color_map: Literal[COLORMAPS] = "viridis"
+    color_range: Literal[RANGE_MODES] = "auto"
+    color_min: Finite = 0.0
+    color_max: Finite = 1.0
+    color_volume: Annotated[str, Field(pattern=_ID)] | None = None
+
+    @model_validator(mode="after")
+    def _range_order(self):
+        if not self.color_min < self.color_max:
+            raise ValueError("color_min must be below color_max")
+        return self
 
 
 class RemeshProps(_Model):
@@ -332,7 +346,7 @@ class Session(_Model):
     """
 
     format: Literal["splineviz-session"] = FORMAT
-    schema_version: Literal[3] = SCHEMA_VERSION
+    schema_version: Literal[4] = SCHEMA_VERSION
     app_version: Annotated[str, Field(max_length=64)] = ""
     objects: Annotated[list[PipelineObject], Field(max_length=MAX_OBJECTS)] = []
     views: Annotated[list[View], Field(max_length=MAX_VIEWS)] = Field(
@@ -562,8 +576,14 @@ def _v2_to_v3(doc: dict) -> dict:
     return {**doc, "schema_version": 3}
 
 
+def _v3_to_v4(doc: dict) -> dict:
+    """Schema 4 adds the colour-by properties of isosurfaces (defaults: the flat colour of
+    schema 3), so a schema-3 document means the same under schema 4."""
+    return {**doc, "schema_version": 4}
+
+
 #: schema version -> function lifting a document of that version to the next one
-MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2, 2: _v2_to_v3}
+MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2, 2: _v2_to_v3, 3: _v3_to_v4}
 
 
 def migrate(doc: dict) -> dict:

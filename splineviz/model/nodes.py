@@ -152,6 +152,41 @@ class IsosurfaceNode(Node):
     color: RGB = PALETTE[0]
     opacity: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False)] = 1.0
     material: str = "default"
+    #: colour by (:mod:`splineviz.core.colour_by`): field, map, range mode, manual range and
+    #: the volume node whose values colour the surface when ``color_by == "volume"``
+    color_by: str = "none"
+    color_map: str = "viridis"
+    color_range: str = "auto"
+    color_min: Finite = 0.0
+    color_max: Finite = 1.0
+    color_volume_id: str | None = None
+
+    @field_validator("color_by")
+    @classmethod
+    def _known_field(cls, v: str) -> str:
+        from splineviz.core.colour_by import FIELDS
+
+        if v not in FIELDS:
+            raise ValueError(f"unknown colour-by field {v!r}; choose one of {', '.join(FIELDS)}")
+        return v
+
+    @field_validator("color_map")
+    @classmethod
+    def _known_map(cls, v: str) -> str:
+        from splineviz.core.colour_by import COLORMAPS
+
+        if v not in COLORMAPS:
+            raise ValueError(f"unknown colour map {v!r}; choose one of {', '.join(COLORMAPS)}")
+        return v
+
+    @field_validator("color_range")
+    @classmethod
+    def _known_range(cls, v: str) -> str:
+        from splineviz.core.colour_by import RANGE_MODES
+
+        if v not in RANGE_MODES:
+            raise ValueError(f"unknown range mode {v!r}; choose one of {', '.join(RANGE_MODES)}")
+        return v
 
     @field_validator("model")
     @classmethod

@@ -67,8 +67,12 @@ def to_session(scene: Scene) -> Session:
                 raise SessionError(f"volume {node.name!r} has no file; save the session with "
                                    "save_scene, which writes it")
         elif isinstance(node, IsosurfaceNode):
+            colour_by = _props(node, "color_by", "color_map", "color_range", "color_min",
+                               "color_max")
+            if node.color_volume_id is not None:
+                colour_by["color_volume"] = node.color_volume_id
             s.add("Isosurface", {**_props(node, "isovalue", "model", "k", "opacity", "visible",
-                                          "material"), "color": list(node.color)},
+                                          "material"), "color": list(node.color), **colour_by},
                   inputs=[node.volume_id], **common)
         elif isinstance(node, PointsNode):
             if node.path is None:
@@ -182,9 +186,18 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
                                  sigma=p.sigma, show_outline=p.show_outline, visible=p.visible,
                                  data=data[obj.id], **common))
         elif obj.type == "Isosurface":
+            kinds = {o.id: o.type for o in session.objects}
+            if p.color_volume is not None and \
+                    kinds.get(p.color_volume) not in ("VolumeFile", "Source"):
+                raise SessionError(f"isosurface {obj.id!r} is coloured by {p.color_volume!r}, "
+                                   "which is not a volume")
             scene.add(IsosurfaceNode(volume_id=obj.inputs[0], model=p.model, k=p.k,
                                      isovalue=p.isovalue, color=p.color, opacity=p.opacity,
-                                     visible=p.visible, material=p.material, **common))
+                                     visible=p.visible, material=p.material,
+                                     color_by=p.color_by, color_map=p.color_map,
+                                     color_range=p.color_range, color_min=p.color_min,
+                                     color_max=p.color_max, color_volume_id=p.color_volume,
+                                     **common))
         elif obj.type == "PointsFile":
             scene.add(PointsNode(path=p.path, color=p.color, point_size=p.point_size,
                                  opacity=p.opacity, visible=p.visible, data=data[obj.id],

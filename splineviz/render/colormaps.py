@@ -1,4 +1,5 @@
-"""Colour maps by name (matplotlib's tables) and the colouring of frames by a scalar.
+"""Colour maps by name (matplotlib's tables; the offered names are
+:data:`splineviz.core.colour_by.COLORMAPS`) and the colouring of frames by a scalar.
 
 The maps offered are the perceptually uniform sequential ones and a few diverging ones for
 signed values (curvatures); the tables are matplotlib's, not copies.
@@ -12,11 +13,9 @@ from functools import cache
 
 import numpy as np
 
+from splineviz.core.colour_by import COLORMAPS
 from splineviz.core.errors import SplinevizError
 
-#: names offered in the GUI and accepted in sessions (matplotlib names)
-COLORMAPS = ("viridis", "plasma", "inferno", "magma", "cividis", "turbo", "coolwarm",
-             "RdBu_r", "PuOr_r", "twilight")
 #: entries of a lookup table
 LUT_SIZE = 256
 #: colour of a hit without a value (outside the second volume, vanishing gradient)

@@ -163,6 +163,16 @@ class SceneView:
         layer.set_clip_planes(self._volume_planes(vol.id))
         self.layers[node.id] = layer
         self.spline_scene.add_layer(layer)
+        self._apply_colour_by(node, layer)
+
+    def _apply_colour_by(self, node: IsosurfaceNode, layer: IsosurfaceLayer) -> None:
+        other = None
+        if node.color_volume_id is not None and node.color_volume_id in self.scene:
+            other = self.scene.get(node.color_volume_id).active
+        # the manual range while one end is being edited past the other: keep the last valid
+        limits = (node.color_min, node.color_max) if node.color_min < node.color_max else None
+        layer.set_color_map(node.color_map, node.color_range, limits)
+        layer.set_color_by(node.color_by, other)
 
     def _update_layer(self, node: IsosurfaceNode, what: str) -> None:
         layer = self.layers[node.id]
@@ -180,6 +190,9 @@ class SceneView:
             layer.set_visible(node.visible and self.scene.volume_of(node).visible)
         elif what == "name":
             layer.name = node.name
+        elif what in ("color_by", "color_volume_id", "color_map", "color_range", "color_min",
+                      "color_max"):
+            self._apply_colour_by(node, layer)
 
     # -- clip planes ---------------------------------------------------------------------
 
