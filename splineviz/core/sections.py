@@ -43,7 +43,7 @@ class SectionError(SplinevizError, ValueError):
     """A cross section that cannot be computed (degenerate plane, disjoint volumes)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SectionCurve:
     """One connected cross-section curve.
 

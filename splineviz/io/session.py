@@ -205,6 +205,15 @@ class ClipPlaneProps(_Model):
     _nonzero = field_validator("normal")(classmethod(lambda cls, v: nonzero_normal(v)))
 
 
+class SectionProps(_Model):
+    """Exact cross-section curves of its first input (an isosurface) with its second (a clip
+    plane or another isosurface), drawn as lines."""
+
+    color: RGB = (0.95, 0.25, 0.2)
+    line_width: Annotated[float, Field(gt=0, le=20, allow_inf_nan=False)] = 3.0
+    visible: bool = True
+
+
 # ---------------------------------------------------------------------------- objects
 class _Object(_Model):
     id: Annotated[str, Field(pattern=_ID)]
@@ -247,8 +256,13 @@ class ClipPlane(_Object):
     properties: ClipPlaneProps = Field(default_factory=ClipPlaneProps)
 
 
+class Section(_Object):
+    type: Literal["Section"] = "Section"
+    properties: SectionProps = Field(default_factory=SectionProps)
+
+
 PipelineObject = Annotated[
-    VolumeFile | Source | PointsFile | MeshFile | Isosurface | Remesh | ClipPlane,
+    VolumeFile | Source | PointsFile | MeshFile | Isosurface | Remesh | ClipPlane | Section,
     Field(discriminator="type"),
 ]
 
@@ -262,11 +276,12 @@ INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
     "Remesh": ((1, 1), ("PointsFile",)),
     "ClipPlane": ((0, 64), ("VolumeFile", "Source", "Isosurface", "PointsFile", "MeshFile",
                             "Remesh")),
+    "Section": ((2, 2), ("Isosurface", "ClipPlane")),
 }
 
 #: type name -> model class (for :meth:`Session.add`)
 OBJECT_TYPES = {c.__name__: c for c in (VolumeFile, Source, PointsFile, MeshFile, Isosurface,
-                                        Remesh, ClipPlane)}
+                                        Remesh, ClipPlane, Section)}
 
 #: object types whose ``properties.path`` names a data file
 FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
@@ -578,7 +593,7 @@ def _v2_to_v3(doc: dict) -> dict:
 
 def _v3_to_v4(doc: dict) -> dict:
     """Schema 4 adds the colour-by properties of isosurfaces (defaults: the flat colour of
-    schema 3), so a schema-3 document means the same under schema 4."""
+    schema 3) and Section objects, so a schema-3 document means the same under schema 4."""
     return {**doc, "schema_version": 4}
 
 
@@ -651,7 +666,7 @@ def _describe(err: ValidationError) -> str:
     e = err.errors()[0]
     loc = ".".join(str(p) for p in e.get("loc", ()) if not (isinstance(p, str) and p in (
         "VolumeFile", "Source", "PointsFile", "MeshFile", "Isosurface", "Remesh",
-        "ClipPlane")))
+        "ClipPlane", "Section")))
     msg = e.get("msg", "invalid value").rstrip(".")
     return f"{loc or 'document'}: {msg}"
 
@@ -677,6 +692,8 @@ def validate_document(doc: dict) -> Session:
                                    "before it")
             if seen[i] not in allowed:
                 raise SessionError(f"{o.type} {o.id!r} cannot take the {seen[i]} {i!r} as input")
+        if o.type == "Section" and seen[o.inputs[0]] != "Isosurface":
+            raise SessionError(f"section {o.id!r} must take an isosurface as its first input")
         seen[o.id] = o.type
     view_ids = [v.id for v in session.views]
     if len(view_ids) != len(set(view_ids)):

@@ -279,6 +279,29 @@ class ClipPlaneNode(Node):
         return tuple(self.origin), tuple(self.normal)
 
 
+class SectionNode(Node):
+    """Exact cross-section curves (:mod:`splineviz.core.sections`) of an isosurface with a
+    clip plane (``plane_id``) or with another isosurface (``other_id``), shown as lines.
+
+    ``curves`` holds the last computed :class:`~splineviz.core.sections.SectionCurve` list
+    (derived data: never written to sessions, recomputed when an input changes).
+    """
+
+    kind: str = Field(default="section", exclude=True, frozen=True)
+    isosurface_id: str = ""
+    plane_id: str | None = None
+    other_id: str | None = None
+    color: RGB = (0.95, 0.25, 0.2)
+    line_width: Annotated[float, Field(gt=0.0, le=20.0, allow_inf_nan=False)] = 3.0
+    curves: list | None = Field(default=None, exclude=True, repr=False)
+
+    @property
+    def inputs(self) -> list[str]:
+        """The isosurface and the plane or second isosurface it intersects."""
+        return [self.isosurface_id, self.plane_id if self.plane_id is not None
+                else self.other_id]
+
+
 class CameraNode(Node):
     """The view's camera, VTK conventions (like :class:`splineviz.core.camera.Camera`)."""
 

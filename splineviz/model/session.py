@@ -25,6 +25,7 @@ from splineviz.model.nodes import (
     IsosurfaceNode,
     MeshNode,
     PointsNode,
+    SectionNode,
     VolumeNode,
     mesh_arrays,
 )
@@ -88,6 +89,9 @@ def to_session(scene: Scene) -> Session:
             s.add("MeshFile", {"path": node.path, "color": list(node.color),
                                **_props(node, "opacity", "show_edges", "visible"),
                                **provenance}, inputs=inputs, **common)
+        elif isinstance(node, SectionNode):
+            s.add("Section", {"color": list(node.color), **_props(node, "line_width", "visible")},
+                  inputs=node.inputs, **common)
         elif isinstance(node, ClipPlaneNode):
             s.add("ClipPlane", {"origin": list(node.origin), "normal": list(node.normal),
                                 **_props(node, "enabled", "show_widget")},
@@ -212,6 +216,12 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
             scene.add(ClipPlaneNode(volume_id=_plane_volume(session, obj), origin=p.origin,
                                     normal=p.normal, enabled=p.enabled,
                                     show_widget=p.show_widget, **common))
+        elif obj.type == "Section":
+            first, second = obj.inputs
+            is_plane = session.object(second).type == "ClipPlane"
+            scene.add(SectionNode(isosurface_id=first, plane_id=second if is_plane else None,
+                                  other_id=None if is_plane else second, color=p.color,
+                                  line_width=p.line_width, visible=p.visible, **common))
     view = session.views[0]
     c = view.camera
     scene.camera.update(position=c.position, focal_point=c.focal_point, view_up=c.view_up,

@@ -23,6 +23,7 @@ from splineviz.model import (
     Node,
     PointsNode,
     Scene,
+    SectionNode,
     VolumeNode,
 )
 from splineviz.render.isosurface import IsosurfaceLayer
@@ -78,6 +79,8 @@ class SceneView:
             self._show_prop(node)
         elif isinstance(node, ClipPlaneNode):
             self._update_planes()
+        elif isinstance(node, SectionNode):
+            self._show_section(node, recompute=node.curves is None)
 
         def changed(info, node=node):
             self._node_changed(node, info.signal.name)
@@ -116,6 +119,16 @@ class SceneView:
             self._show_prop(node)
         elif isinstance(node, ClipPlaneNode):
             self._update_planes()
+        elif isinstance(node, SectionNode):
+            if what != "curves":
+                self._show_section(node, recompute=False)
+        # the curves follow their inputs: a new isovalue, model, plane position or data
+        if what in ("isovalue", "model", "k", "origin", "normal", "data", "smoothed", "sigma"):
+            for sec in self.scene.sections:
+                volumes = [self.scene.volume_of(self.scene.get(i)).id for i in sec.inputs
+                           if isinstance(self.scene.get(i), IsosurfaceNode)]
+                if node.id in sec.inputs or node.id in volumes:
+                    self._show_section(sec, recompute=True)
 
     def _show_outline(self, node: VolumeNode) -> None:
         import pyvista as pv
@@ -152,6 +165,25 @@ class SceneView:
         self.spline_scene.add_mesh(name, data, kind=node.kind, **opts)
         self.spline_scene.set_prop_visible(name, node.visible)
         self._update_grid()
+
+    def _show_section(self, node: SectionNode, recompute: bool) -> None:
+        """(Re)draw a section's curves as lines, computing them first if asked."""
+        from splineviz.io.curves import curves_polydata
+        from splineviz.model.analysis import section_curves
+
+        if recompute:
+            section_curves(self.scene, node)
+        name = f"{node.kind}:{node.id}"
+        if not node.curves:
+            self._props.pop(node.id, None)
+            if name in self.spline_scene.props:
+                self.spline_scene.remove_prop(name)
+            return
+        self._props[node.id] = name
+        self.spline_scene.add_mesh(name, curves_polydata(node.curves), kind=node.kind,
+                                   color=node.color, line_width=node.line_width,
+                                   lighting=False)
+        self.spline_scene.set_prop_visible(name, node.visible)
 
     def _add_layer(self, node: IsosurfaceNode) -> None:
         vol = self.scene.volume_of(node)
