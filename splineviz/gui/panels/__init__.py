@@ -9,5 +9,5 @@ from splineviz.gui.panels.log import LogPanel
 from splineviz.gui.panels.remesh import RemeshPanel
 from splineviz.gui.panels.smoothing import Smoother, SmoothingPanel
 
-__all__ = ["AnalysisPanel", "ClippingPanel", "DataPanel", "IsosurfacePanel", "LogPanel", "PlaneWidgets",
-           "RemeshPanel", "Smoother", "SmoothingPanel"]
+__all__ = ["AnalysisPanel", "ClippingPanel", "DataPanel", "IsosurfacePanel", "LogPanel",
+           "PlaneWidgets", "RemeshPanel", "Smoother", "SmoothingPanel"]
