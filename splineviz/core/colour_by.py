@@ -16,7 +16,7 @@ from splineviz.core.curvature import MEASURES, curvature_field, spline_curvature
 from splineviz.core.errors import SplinevizError
 
 #: what an isosurface can be coloured by ("none": its flat colour)
-FIELDS = ("none", *MEASURES, "gradient-magnitude", "volume")
+FIELDS = ("none", *MEASURES, "gradient-magnitude", "volume", "distance")
 #: colour maps offered (matplotlib names): the perceptually uniform sequential maps and a few
 #: diverging ones for signed values such as curvatures
 COLORMAPS = ("viridis", "plasma", "inferno", "magma", "cividis", "turbo", "coolwarm",
@@ -32,7 +32,30 @@ class ColourByError(SplinevizError, ValueError):
     """Colour-by settings that cannot be used (unknown field, missing second volume)."""
 
 
-def hit_scalars(spline, points: np.ndarray, field: str, other=None) -> np.ndarray:
+def surface_distance(spline, iso: float, points: np.ndarray) -> np.ndarray:
+    """Signed distance ``(N,)`` from points to the isosurface ``s = iso`` of another spline:
+    the length of the Newton projection onto it, positive where ``s > iso``; NaN where the
+    projection does not reach it (farther than a few grid steps, or no gradient).
+
+    This is how two models (or two isovalues) of one volume differ, surface to surface: the
+    comparison figures of the thesis as a colouring.
+    """
+    from splineviz.core.isosurface import project_to_isosurface
+
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    if not len(p):
+        return np.empty(0)
+    lo, hi = spline.volume.finite_range
+    tol = 1e-7 * max(hi - lo, 1e-300)
+    proj, _ = project_to_isosurface(spline, p, iso, steps=12, tol=tol)
+    value = spline.evaluate(p) - iso
+    dist = np.linalg.norm(proj - p, axis=1) * np.sign(value)
+    dist[np.abs(spline.evaluate(proj) - iso) > tol] = np.nan
+    return dist
+
+
+def hit_scalars(spline, points: np.ndarray, field: str, other=None,
+                other_iso: float = 0.0) -> np.ndarray:
     """The scalar ``field`` at ``(N, 3)`` points of the isosurface of ``spline``.
 
     Parameters
@@ -42,7 +65,9 @@ def hit_scalars(spline, points: np.ndarray, field: str, other=None) -> np.ndarra
     points : (N, 3)
     field : str, one of :data:`FIELDS` other than ``"none"``
     other : Spline, optional
-        The second volume's spline, for ``field == "volume"``.
+        The second volume's spline (``"volume"``), or the spline of the surface to measure the
+        distance to (``"distance"``, at ``other_iso``).
+    other_iso : float
 
     Returns
     -------
@@ -59,6 +84,10 @@ def hit_scalars(spline, points: np.ndarray, field: str, other=None) -> np.ndarra
         if inside.any():
             out[inside] = other.evaluate(p[inside])
         return out
+    if field == "distance":
+        if other is None:
+            raise ColourByError("colouring by distance needs the other isosurface")
+        return surface_distance(other, other_iso, p)
     if field == "gradient-magnitude":
         return np.linalg.norm(spline.gradient(p), axis=1) if len(p) else np.empty(0)
     if field in MEASURES:

@@ -175,6 +175,7 @@ class IsosurfaceProps(_Model):
     color_min: Finite = 0.0
     color_max: Finite = 1.0
     color_volume: Annotated[str, Field(pattern=_ID)] | None = None
+    color_isosurface: Annotated[str, Field(pattern=_ID)] | None = None
 
     @model_validator(mode="after")
     def _range_order(self):

@@ -160,6 +160,8 @@ class IsosurfaceNode(Node):
     color_min: Finite = 0.0
     color_max: Finite = 1.0
     color_volume_id: str | None = None
+    #: the isosurface node whose surface the distance is measured to (``"distance"``)
+    color_isosurface_id: str | None = None
 
     @field_validator("color_by")
     @classmethod

@@ -202,6 +202,10 @@ class Scene:
                 self.remove(dep)
         for dep in [n for n in self.of_kind(SectionNode) if node.id in n.inputs]:
             self.remove(dep)
+        # colourings that refer to it fall back to the flat colour
+        for iso in self.of_kind(IsosurfaceNode):
+            if node.id in (iso.color_volume_id, iso.color_isosurface_id):
+                iso.update(color_by="none", color_volume_id=None, color_isosurface_id=None)
         if isinstance(node, PointsNode):
             for mesh in self.of_kind(MeshNode):
                 if mesh.points_id == node.id:

@@ -72,6 +72,8 @@ def to_session(scene: Scene) -> Session:
                                "color_max")
             if node.color_volume_id is not None:
                 colour_by["color_volume"] = node.color_volume_id
+            if node.color_isosurface_id is not None:
+                colour_by["color_isosurface"] = node.color_isosurface_id
             s.add("Isosurface", {**_props(node, "isovalue", "model", "k", "opacity", "visible",
                                           "material"), "color": list(node.color), **colour_by},
                   inputs=[node.volume_id], **common)
@@ -195,12 +197,17 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
                     kinds.get(p.color_volume) not in ("VolumeFile", "Source"):
                 raise SessionError(f"isosurface {obj.id!r} is coloured by {p.color_volume!r}, "
                                    "which is not a volume")
+            if p.color_isosurface is not None and \
+                    kinds.get(p.color_isosurface) != "Isosurface":
+                raise SessionError(f"isosurface {obj.id!r} measures the distance to "
+                                   f"{p.color_isosurface!r}, which is not an isosurface")
             scene.add(IsosurfaceNode(volume_id=obj.inputs[0], model=p.model, k=p.k,
                                      isovalue=p.isovalue, color=p.color, opacity=p.opacity,
                                      visible=p.visible, material=p.material,
                                      color_by=p.color_by, color_map=p.color_map,
                                      color_range=p.color_range, color_min=p.color_min,
                                      color_max=p.color_max, color_volume_id=p.color_volume,
+                                     color_isosurface_id=p.color_isosurface,
                                      **common))
         elif obj.type == "PointsFile":
             scene.add(PointsNode(path=p.path, color=p.color, point_size=p.point_size,

@@ -141,6 +141,7 @@ class IsosurfaceLayer:
         self.color_range = "auto"
         self.color_limits = (0.0, 1.0)
         self._color_volume: Volume | None = None
+        self._color_reference: tuple | None = None  # (volume, model, options, isovalue)
         self._splines: dict = {}  # "own" / "other" -> Spline for the colour-by values
 
     # -- events --------------------------------------------------------------------------
@@ -252,19 +253,34 @@ class IsosurfaceLayer:
         self.material_name = name
         self._emit("appearance")
 
-    def set_color_by(self, field: str, volume: Volume | None = None) -> None:
-        """Colour the surface by ``field`` (:data:`splineviz.core.colour_by.FIELDS`;
-        ``"volume"``: the value of ``volume``'s spline of this layer's model at the hits)."""
+    def set_color_by(self, field: str, volume: Volume | None = None,
+                     reference: tuple | None = None) -> None:
+        """Colour the surface by ``field`` (:data:`splineviz.core.colour_by.FIELDS`).
+
+        ``"volume"``: the value of ``volume``'s spline (of this layer's model) at the hits;
+        ``"distance"``: the signed distance to the surface ``reference = (volume, model,
+        model_options, isovalue)``, e.g. another model or isovalue of the same data.
+        """
         from splineviz.core.colour_by import FIELDS
 
         if field not in FIELDS:
             raise LayerError(f"unknown colour-by field {field!r}; choose one of "
                              f"{', '.join(FIELDS)}")
-        if field == self.color_by and volume is self._color_volume:
+        if reference is not None:
+            vol, model, options, iso = reference
+            self._check_model(model)
+            reference = (vol, model, dict(options or {}), float(iso))
+        same_ref = (reference is None and self._color_reference is None) or (
+            reference is not None and self._color_reference is not None
+            and reference[0] is self._color_reference[0]
+            and reference[1:] == self._color_reference[1:])
+        if field == self.color_by and volume is self._color_volume and same_ref:
             return
         self.color_by = field
         self._color_volume = volume
+        self._color_reference = reference
         self._splines.pop("other", None)
+        self._splines.pop("reference", None)
         self._emit("frame")
 
     def set_color_map(self, name: str | None = None, range_mode: str | None = None,
@@ -300,13 +316,18 @@ class IsosurfaceLayer:
         return scalar_range(values, self.color_range, *self.color_limits)
 
     def _spline(self, which: str):
-        """This layer's spline (``"own"``) or the colour-by volume's (``"other"``), built
-        once; the NumPy derivatives at the hits come from it."""
+        """This layer's spline (``"own"``), the colour-by volume's (``"other"``) or the
+        reference surface's (``"reference"``), built once; the values at the hits come from
+        it."""
         from splineviz.plugins import build_spline
 
         if which not in self._splines:
-            vol = self._volume if which == "own" else self._color_volume
-            self._splines[which] = build_spline(vol, self._model, **self._model_options)
+            if which == "reference":
+                vol, model, options, _iso = self._color_reference
+                self._splines[which] = build_spline(vol, model, **options)
+            else:
+                vol = self._volume if which == "own" else self._color_volume
+                self._splines[which] = build_spline(vol, self._model, **self._model_options)
         return self._splines[which]
 
     def hit_scalars(self, frame: Frame) -> np.ndarray | None:
@@ -317,12 +338,16 @@ class IsosurfaceLayer:
             return None
         out = np.full(frame.hit.shape, np.nan)
         pts = frame.position[frame.hit]
-        other = None
+        other, other_iso = None, 0.0
         if self.color_by == "volume":
             if self._color_volume is None:
                 return out
             other = self._spline("other")
-        out[frame.hit] = hit_scalars(self._spline("own"), pts, self.color_by, other)
+        elif self.color_by == "distance":
+            if self._color_reference is None:
+                return out
+            other, other_iso = self._spline("reference"), self._color_reference[3]
+        out[frame.hit] = hit_scalars(self._spline("own"), pts, self.color_by, other, other_iso)
         return out
 
     @property

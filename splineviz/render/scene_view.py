@@ -201,10 +201,16 @@ class SceneView:
         other = None
         if node.color_volume_id is not None and node.color_volume_id in self.scene:
             other = self.scene.get(node.color_volume_id).active
+        reference = None
+        ref_id = node.color_isosurface_id
+        if node.color_by == "distance" and ref_id is not None and ref_id in self.scene:
+            ref = self.scene.get(ref_id)
+            reference = (self.scene.volume_of(ref).active, ref.model, ref.model_options(),
+                         ref.isovalue)
         # the manual range while one end is being edited past the other: keep the last valid
         limits = (node.color_min, node.color_max) if node.color_min < node.color_max else None
         layer.set_color_map(node.color_map, node.color_range, limits)
-        layer.set_color_by(node.color_by, other)
+        layer.set_color_by(node.color_by, other, reference)
 
     def _update_layer(self, node: IsosurfaceNode, what: str) -> None:
         layer = self.layers[node.id]
@@ -222,9 +228,14 @@ class SceneView:
             layer.set_visible(node.visible and self.scene.volume_of(node).visible)
         elif what == "name":
             layer.name = node.name
-        elif what in ("color_by", "color_volume_id", "color_map", "color_range", "color_min",
-                      "color_max"):
+        elif what in ("color_by", "color_volume_id", "color_isosurface_id", "color_map",
+                      "color_range", "color_min", "color_max"):
             self._apply_colour_by(node, layer)
+        if what in ("isovalue", "model", "k"):
+            # surfaces coloured by their distance to this one follow it
+            for other in self.scene.isosurfaces:
+                if other.color_isosurface_id == node.id and other.id in self.layers:
+                    self._apply_colour_by(other, self.layers[other.id])
 
     # -- clip planes ---------------------------------------------------------------------
 

@@ -123,7 +123,7 @@ def _every_kind(tmp_path):
     skin.update(color_by="volume", color_volume_id=vb.id, color_map="coolwarm",
                 color_range="symmetric")
     scene.add_isosurface(vb, isovalue=0.55, model="tricubic-bspline", material="metal",
-                         visible=False)
+                         visible=False, color_by="distance", color_isosurface_id=skin.id)
     scene.add_isosurface(mem, isovalue=0.5, model="super-quadratic", material="matte",
                          color_by="mean", color_map="magma", color_range="manual",
                          color_min=-3.0, color_max=2.5)

@@ -56,6 +56,18 @@ def test_curvature_at_hits_of_a_sphere():
     np.testing.assert_allclose(hit_scalars(s, pts, "gradient-magnitude"), 1.0, atol=0.02)
 
 
+def test_distance_to_another_isovalue_of_an_exact_sphere():
+    # cubic-c1 of x^2 + y^2 + z^2 is exact up to + 3 h^2 / 4: radii 0.6 and 0.7 exactly
+    vol = grid(31, -1.5, 1.5)
+    c = 0.75 * 0.1**2
+    layer = IsosurfaceLayer(vol, model="cubic-c1", isovalue=0.36 + c)
+    layer.set_color_by("distance", reference=(vol, "cubic-c1", {}, 0.49 + c))
+    rf = layer.compute(ViewState(CAMERA, (W, H)))
+    d = rf.scalars[rf.frame.hit]
+    assert rf.frame.hit.sum() > 300
+    np.testing.assert_allclose(d, -0.1, atol=1e-6)  # inside the larger sphere: negative
+
+
 def test_ranges_and_maps():
     v = np.r_[np.linspace(-1, 3, 1001), np.nan]
     lo, hi = scalar_range(v, "auto")

@@ -28,7 +28,8 @@ from splineviz.model import IsosurfaceNode, Scene, SectionNode, VolumeNode
 FIELD_LABELS = {"none": "Flat colour", "mean": "Mean curvature", "gaussian": "Gaussian curvature",
                 "k1": "Principal curvature k1", "k2": "Principal curvature k2",
                 "shape-index": "Shape index", "curvedness": "Curvedness",
-                "gradient-magnitude": "Gradient magnitude", "volume": "Another volume"}
+                "gradient-magnitude": "Gradient magnitude", "volume": "Another volume",
+                "distance": "Distance to another isosurface"}
 
 
 def curve_summary(curves) -> str:
@@ -63,6 +64,9 @@ class AnalysisPanel(QWidget):
                               "ray hit: curvatures from its exact gradient and Hessian")
         self.volume = QComboBox()
         self.volume.setToolTip("The volume whose values colour the surface")
+        self.reference = QComboBox()
+        self.reference.setToolTip("The isosurface (another model or isovalue) whose distance "
+                                  "colours this one: the thesis' comparison figures")
         self.cmap = QComboBox()
         self.cmap.addItems(list(COLORMAPS))
         self.cmap.setToolTip("Colour map (matplotlib's tables)")
@@ -92,6 +96,7 @@ class AnalysisPanel(QWidget):
         form.addRow(self.title)
         form.addRow("Colour by", self.field)
         form.addRow("Volume", self.volume)
+        form.addRow("Surface", self.reference)
         form.addRow("Colour map", self.cmap)
         form.addRow("Range", self.range_mode)
         form.addRow("Minimum", self.vmin)
@@ -103,6 +108,7 @@ class AnalysisPanel(QWidget):
         form.addRow(self.export)
         self.field.currentIndexChanged.connect(lambda _i: self._write_colour())
         self.volume.currentIndexChanged.connect(lambda _i: self._write_colour())
+        self.reference.currentIndexChanged.connect(lambda _i: self._write_colour())
         self.cmap.currentTextChanged.connect(lambda _t: self._write_colour())
         self.range_mode.currentTextChanged.connect(lambda _t: self._write_colour())
         self.vmin.valueChanged.connect(lambda _v: self._write_colour())
@@ -137,8 +143,9 @@ class AnalysisPanel(QWidget):
         if self.node is not None:
             self.node.events.disconnect(self._node_changed)
         self.node = node
-        for w in (self.field, self.volume, self.cmap, self.range_mode, self.vmin, self.vmax,
-                  self.section_with, self.add_section, self.sections, self.export):
+        for w in (self.field, self.volume, self.reference, self.cmap, self.range_mode,
+                  self.vmin, self.vmax, self.section_with, self.add_section, self.sections,
+                  self.export):
             w.setEnabled(node is not None)
         if node is None:
             self.title.setText("Select an isosurface")
@@ -163,8 +170,13 @@ class AnalysisPanel(QWidget):
                 self.volume.addItem(v.name, v.id)
             self.section_with.clear()
             self.sections.clear()
+            self.reference.clear()
             if self.node is None:
                 return
+            for iso in self.scene.isosurfaces:
+                if iso is not self.node:
+                    self.reference.addItem(f"{iso.name} ({iso.model} @ {iso.isovalue:g})",
+                                           iso.id)
             for p in self.scene.clip_planes:
                 self.section_with.addItem(f"plane {p.name}", p.id)
             for iso in self.scene.isosurfaces:
@@ -193,6 +205,9 @@ class AnalysisPanel(QWidget):
             if n.color_volume_id is not None:
                 self.volume.setCurrentIndex(self.volume.findData(n.color_volume_id))
             self.volume.setEnabled(n.color_by == "volume")
+            if n.color_isosurface_id is not None:
+                self.reference.setCurrentIndex(self.reference.findData(n.color_isosurface_id))
+            self.reference.setEnabled(n.color_by == "distance")
             self.cmap.setCurrentText(n.color_map)
             self.range_mode.setCurrentText(n.color_range)
             self.vmin.setValue(n.color_min)
@@ -222,6 +237,8 @@ class AnalysisPanel(QWidget):
             values.update(color_min=self.vmin.value(), color_max=self.vmax.value())
         if values["color_by"] == "volume":
             values["color_volume_id"] = self.volume.currentData()
+        if values["color_by"] == "distance":
+            values["color_isosurface_id"] = self.reference.currentData()
         self._syncing = True
         try:
             self.node.update(values)
