@@ -276,6 +276,8 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
     for origin, normal in planes:
         snap = SNAP * float(np.median(guide.lengths))
         vertices, faces = clip_mesh(spline, iso, vertices, faces, origin, normal, snap)
+        if len(faces) == 0:
+            raise SplineMeshError("the clip planes leave no part of the isosurface")
     g = spline.gradient(vertices)
     norm = np.linalg.norm(g, axis=1)
     normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)

@@ -41,12 +41,33 @@ def spline_isosurface(spline, iso: float, refine: int = 2):
     return mesh
 
 
-def export_mesh(scene, node, path, clip: bool = True) -> str:
+def front_isosurface(spline, iso: float, planes=(), **options):
+    """pyvista.PolyData of the spline isosurface meshed by the advancing front on the spline
+    (:func:`splineviz.pointcloud.spline_mesh.spline_front_mesh`: vertices on s = iso,
+    curvature-adapted, well-shaped triangles, exact cuts by ``planes``), with normals."""
+    import pyvista as pv
+
+    from splineviz.pointcloud.spline_mesh import spline_front_mesh
+
+    v, f, n = spline_front_mesh(spline, iso, planes=planes, **options)
+    mesh = pv.PolyData(v, np.hstack([np.full((len(f), 1), 3), f]).astype(np.int64).ravel())
+    mesh.point_data.active_normals = n
+    return mesh
+
+
+#: mesh export methods for isosurfaces
+EXPORT_METHODS = ("flying-edges", "front")
+
+
+def export_mesh(scene, node, path, clip: bool = True, method: str = "flying-edges") -> str:
     """Write a mesh node, or an isosurface node meshed on a refined grid
-    (:func:`spline_isosurface`), with normals; returns the path written.
+    (:func:`spline_isosurface`, ``method="flying-edges"``, fast) or by the advancing front on
+    the spline (:func:`front_isosurface`, ``method="front"``), with normals; returns the path
+    written.
 
     ``clip``: cut the mesh by the planes that cut the object in the view
-    (:meth:`splineviz.model.Scene.planes_cutting`; ParaView's Clip before Save Data).
+    (:meth:`splineviz.model.Scene.planes_cutting`; ParaView's Clip before Save Data). The
+    front cuts exactly: the new vertices lie on the plane and on the spline surface.
     """
     import pyvista as pv
 
@@ -57,9 +78,15 @@ def export_mesh(scene, node, path, clip: bool = True) -> str:
     if isinstance(node, MeshNode):
         mesh = node.to_polydata()
     elif isinstance(node, IsosurfaceNode):
+        if method not in EXPORT_METHODS:
+            raise SplinevizError(f"unknown mesh export method {method!r}; choose one of "
+                                 f"{', '.join(EXPORT_METHODS)}")
         vol = scene.volume_of(node)
-        mesh = spline_isosurface(sv.build_spline(vol.active, node.model, **node.model_options()),
-                                 node.isovalue)
+        spline = sv.build_spline(vol.active, node.model, **node.model_options())
+        if method == "front":
+            planes = scene.planes_cutting(node) if clip else []
+            return str(sv.write_mesh(path, front_isosurface(spline, node.isovalue, planes)))
+        mesh = spline_isosurface(spline, node.isovalue)
     else:
         raise SplinevizError("select a mesh or an isosurface to export")
     planes = scene.planes_cutting(node) if clip else []
