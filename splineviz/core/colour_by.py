@@ -12,7 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from splineviz.core.curvature import MEASURES, curvature_field, spline_curvatures
+from splineviz.core.curvature import (
+    MEASURES,
+    curvature_field,
+    principal_curvatures,
+    spline_curvatures,
+)
 from splineviz.core.errors import SplinevizError
 
 #: what an isosurface can be coloured by ("none": its flat colour)
@@ -95,6 +100,21 @@ def hit_scalars(spline, points: np.ndarray, field: str, other=None,
             return np.empty(0)
         return curvature_field(field, *spline_curvatures(spline, p))
     raise ColourByError(f"unknown colour-by field {field!r}; choose one of {', '.join(FIELDS)}")
+
+
+#: the fields that need only the gradient and Hessian at the hit (the ray caster's kernel
+#: can return them: no spline evaluation after the cast)
+DERIVATIVE_FIELDS = (*MEASURES, "gradient-magnitude")
+
+
+def derivative_scalars(field: str, gradient: np.ndarray, hessian: np.ndarray) -> np.ndarray:
+    """A field of :data:`DERIVATIVE_FIELDS` from gradients ``(N, 3)`` and Hessians
+    ``(N, 3, 3)`` at the hits (e.g. from the kernel: ``Frame.hessian``) -> ``(N,)``."""
+    if field == "gradient-magnitude":
+        return np.linalg.norm(gradient, axis=1)
+    if field not in MEASURES:
+        raise ColourByError(f"{field!r} is not computed from derivatives")
+    return curvature_field(field, *principal_curvatures(gradient, hessian))
 
 
 def scalar_range(values: np.ndarray, mode: str = "auto", vmin: float = 0.0,

@@ -331,12 +331,20 @@ class IsosurfaceLayer:
         return self._splines[which]
 
     def hit_scalars(self, frame: Frame) -> np.ndarray | None:
-        """(H, W) colour-by values at the frame's hits (NaN elsewhere), or None."""
-        from splineviz.core.colour_by import hit_scalars
+        """(H, W) colour-by values at the frame's hits (NaN elsewhere), or None.
+
+        Curvatures and the gradient magnitude come from the frame's kernel derivatives when it
+        has them (``Frame.hessian``), else from the spline evaluated at the hits."""
+        from splineviz.core.colour_by import DERIVATIVE_FIELDS, derivative_scalars, hit_scalars
 
         if self.color_by == "none":
             return None
         out = np.full(frame.hit.shape, np.nan)
+        if self.color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
+            hit = frame.hit
+            grad = frame.normal[hit] * frame.gradient_norm[hit][:, None]
+            out[hit] = derivative_scalars(self.color_by, grad, frame.hessian[hit])
+            return out
         pts = frame.position[frame.hit]
         other, other_iso = None, 0.0
         if self.color_by == "volume":
@@ -414,9 +422,16 @@ class IsosurfaceLayer:
                 return None  # the model changed meanwhile
             if rc.isovalue != self._isovalue:
                 rc.set_isovalue(self._isovalue)
+            from splineviz.core.colour_by import DERIVATIVE_FIELDS
+
+            # curvature and gradient magnitude from the kernel's derivatives at the hits, when
+            # this model's own kernel casts the frame (not the trilinear preview caster)
+            kernel_derivs = (self.color_by in DERIVATIVE_FIELDS and rc is exact
+                             and exact.stats.get("path") == "opencl")
             t = time.perf_counter()
             frame = rc.render(view.camera, size=(sw, sh),
-                              clip_planes=tuple(view.clip_planes) + self.clip_planes)
+                              clip_planes=tuple(view.clip_planes) + self.clip_planes,
+                              hessian=kernel_derivs)
             seconds = time.perf_counter() - t
             stats = dict(rc.stats)
         finally:
