@@ -164,6 +164,101 @@ def _guidance(projector, rho, min_length, max_length):
     return GuidanceField(lengths, projector.conn.tree)
 
 
+def border_loops(faces: np.ndarray) -> list[list[int]]:
+    """Closed loops of border edges, each as vertex indices in the direction the faces give
+    their edges (the open side lies to the right).
+
+    Parameters
+    ----------
+    faces : (F, 3)
+
+    Returns
+    -------
+    list of vertex-index lists
+    """
+    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    key = np.sort(directed, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    border = directed[counts[inverse.ravel()] == 1]
+    nxt: dict[int, list[int]] = {}
+    for a, b in border.tolist():
+        nxt.setdefault(a, []).append(b)
+    loops, used = [], set()
+    for a, b in border.tolist():
+        if (a, b) in used:
+            continue
+        loop, u, v = [], a, b
+        while (u, v) not in used:
+            used.add((u, v))
+            loop.append(u)
+            cands = [w for w in nxt.get(v, []) if (v, w) not in used]
+            if not cands:
+                break
+            u, v = v, cands[0]
+        if v == a and len(loop) >= 3:
+            loops += _simple(loop)
+    return loops
+
+
+def _simple(loop: list[int]) -> list[list[int]]:
+    """Split a loop pinched at repeated vertices into loops without repeats (a fan over a
+    pinched loop would give one edge four triangles)."""
+    out, stack, first = [], [], {}
+    for v in loop:
+        if v in first:
+            i = first[v]
+            out.append(stack[i:])
+            for w in stack[i + 1:]:
+                del first[w]
+            del stack[i + 1:]
+        else:
+            first[v] = len(stack)
+            stack.append(v)
+    out.append(stack)
+    return [part for part in out if len(part) >= 3]
+
+
+def fill_holes(spline, iso, vertices, faces, keep_open):
+    """Close the border loops the front left inside the surface (edges it gave up).
+
+    A loop of 3 vertices becomes a triangle; a larger one a fan around its centroid moved
+    onto ``s = iso`` (no diagonal between loop vertices, which could exist already; the flips
+    and relaxation that follow even the fan out).
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    vertices : (V, 3)
+    faces : (F, 3)
+    keep_open : callable ``(M, 3) points -> bool``: a loop through any such point is a real
+        border (the data box, beyond a clip plane) and stays open
+
+    Returns
+    -------
+    vertices : (V', 3), faces : (F', 3), filled : int number of loops closed
+    """
+    new_v, new_f, filled = [], [], 0
+    for loop in border_loops(faces):
+        pts = vertices[loop]
+        if keep_open(pts):
+            continue
+        rev = loop[::-1]  # the hole's side: the reversed border direction
+        if len(loop) == 3:
+            new_f.append(rev)
+        else:
+            c, _ = project_to_isosurface(spline, pts.mean(axis=0)[None], iso, steps=10)
+            ci = len(vertices) + len(new_v)
+            new_v.append(c[0])
+            k = len(rev)
+            new_f += [[rev[i], rev[(i + 1) % k], ci] for i in range(k)]
+        filled += 1
+    if not filled:
+        return vertices, faces, 0
+    v = np.concatenate([vertices, np.array(new_v).reshape(-1, 3)])
+    return v, np.concatenate([faces, np.array(new_f, dtype=np.int64)]), filled
+
+
 def clip_mesh(spline, iso, vertices, faces, origin, normal, snap_length):
     """Cut a mesh on ``s = iso`` by a plane, keeping the side ``normal`` points to.
 
@@ -271,6 +366,17 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
     guide = _guidance(proj, rho, lo_len, hi_len)
     front = AdvancingFront(proj, guide, progress)
     vertices, faces = front.run()
+    # the front gives up a few edges where its point-cloud tests misjudge the surface (sharp
+    # folds); those holes are closed, borders at the data box and past clip planes are not
+    box_lo = np.array([b[0] for b in spline.bounds]) + 1.5 * cell
+    box_hi = np.array([b[1] for b in spline.bounds]) - 1.5 * cell
+
+    def keep_open(p):
+        if np.any((p <= box_lo) | (p >= box_hi)):
+            return True
+        return any(np.any((p - o) @ n < 0) for o, n in planes)
+
+    vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
     # valence flips and tangential relaxation, every moved vertex put back onto the spline
     vertices, faces, _flips = optimize(vertices, faces, proj)
     for origin, normal in planes:

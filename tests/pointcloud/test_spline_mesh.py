@@ -87,3 +87,21 @@ def test_export_mesh_by_the_front(tmp_path):
     pts = np.asarray(mesh.points)
     assert pts[:, 0].min() > -1e-6 and mesh.point_data.active_normals is not None
     np.testing.assert_allclose(np.linalg.norm(pts, axis=1), 10.0, rtol=1e-6)
+
+
+def test_holes_the_front_leaves_are_closed(spline, closed):
+    from splineviz.pointcloud.spline_mesh import border_loops, fill_holes
+
+    v, f, _n = closed
+    # open two holes: the faces around one vertex, and a strip of faces near another
+    around = np.flatnonzero((f == 0).any(axis=1))
+    near = np.argsort(np.linalg.norm(v[f].mean(axis=1) - v[f[-1, 0]], axis=1))[:9]
+    holed = np.delete(f, np.r_[around, near], axis=0)
+    assert len(border_loops(holed)) == 2
+    v2, f2, n = fill_holes(spline, ISO, v, holed, lambda p: False)
+    assert n == 2
+    edges, counts = edge_face_counts(f2)
+    assert (counts == 2).all()
+    np.testing.assert_allclose(np.linalg.norm(v2, axis=1), 10.0, rtol=1e-8)
+    # a border marked as real stays open
+    assert fill_holes(spline, ISO, v, holed, lambda p: True)[2] == 0
