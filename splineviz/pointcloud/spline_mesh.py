@@ -218,12 +218,30 @@ def _simple(loop: list[int]) -> list[list[int]]:
     return [part for part in out if len(part) >= 3]
 
 
+def _zip(a: list[int], b: list[int]) -> list[list[int]]:
+    """Triangles joining the closed ring ``a`` to the closed ring ``b`` inside it (both in the
+    same turning direction), walking both by their fraction of a turn."""
+    na, nb = len(a), len(b)
+    tris, i, j = [], 0, 0
+    while i < na or j < nb:
+        # advance on the ring whose next vertex comes first along the turn
+        if j >= nb or (i < na and (i + 1) / na <= (j + 1) / nb):
+            tris.append([a[i % na], a[(i + 1) % na], b[j % nb]])
+            i += 1
+        else:
+            tris.append([a[i % na], b[(j + 1) % nb], b[j % nb]])
+            j += 1
+    return tris
+
+
 def fill_holes(spline, iso, vertices, faces, keep_open):
     """Close the border loops the front left inside the surface (edges it gave up).
 
-    A loop of 3 vertices becomes a triangle; a larger one a fan around its centroid moved
-    onto ``s = iso`` (no diagonal between loop vertices, which could exist already; the flips
-    and relaxation that follow even the fan out).
+    A loop of 3 vertices becomes a triangle. A larger one is closed by rings: shrunk copies
+    of the loop towards its centroid, about one edge length apart, with fewer vertices as
+    they shrink, every new vertex moved onto ``s = iso``; ring to ring by a zipper, the last
+    ring as a fan around the centroid (no diagonal between loop vertices, which could exist
+    already). The flips and relaxation that follow even the rings out.
 
     Parameters
     ----------
@@ -244,19 +262,35 @@ def fill_holes(spline, iso, vertices, faces, keep_open):
         if keep_open(pts):
             continue
         rev = loop[::-1]  # the hole's side: the reversed border direction
+        filled += 1
         if len(loop) == 3:
             new_f.append(rev)
-        else:
-            c, _ = project_to_isosurface(spline, pts.mean(axis=0)[None], iso, steps=10)
-            ci = len(vertices) + len(new_v)
-            new_v.append(c[0])
-            k = len(rev)
-            new_f += [[rev[i], rev[(i + 1) % k], ci] for i in range(k)]
-        filled += 1
+            continue
+        p = vertices[rev]
+        centre = p.mean(axis=0)
+        edge = float(np.mean(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1)))
+        radius = float(np.mean(np.linalg.norm(p - centre, axis=1)))
+        n_rings = max(1, int(round(radius / max(edge, 1e-300))))
+        outer, k = rev, len(rev)
+        for j in range(1, n_rings):
+            frac = 1.0 - j / n_rings
+            m = max(3, int(round(k * frac)))
+            # the ring's vertices sample the loop evenly, pulled towards the centre
+            src = p[np.floor(np.arange(m) * k / m).astype(int)]
+            ring, _ = project_to_isosurface(spline, centre + frac * (src - centre), iso,
+                                            steps=10)
+            ids = list(range(len(vertices) + len(new_v), len(vertices) + len(new_v) + m))
+            new_v += list(ring)
+            new_f += _zip(outer, ids)
+            outer = ids
+        c, _ = project_to_isosurface(spline, centre[None], iso, steps=10)
+        ci = len(vertices) + len(new_v)
+        new_v.append(c[0])
+        new_f += [[outer[i], outer[(i + 1) % len(outer)], ci] for i in range(len(outer))]
     if not filled:
         return vertices, faces, 0
     v = np.concatenate([vertices, np.array(new_v).reshape(-1, 3)])
-    return v, np.concatenate([faces, np.array(new_f, dtype=np.int64)]), filled
+    return v, np.concatenate([faces, np.array(new_f, dtype=np.int64).reshape(-1, 3)]), filled
 
 
 def clip_mesh(spline, iso, vertices, faces, origin, normal, snap_length):
