@@ -10,6 +10,10 @@ the projector (thesis §7.3 with the volume's spline in place of the local polyn
 * Samples: where the data cross the isovalue along grid edges, one per grid cell, projected
   onto the spline surface. They tell the front where the surface is (seeds, the data box's
   border) exactly as the input points of a scan do.
+* Holes: where the front gives up edges (its point-cloud tests misjudge sharp folds), the
+  border loops left inside the surface are closed by rings on the surface
+  (:func:`fill_holes`); then valence flips and tangential relaxation
+  (:func:`splineviz.pointcloud.relaxation.optimize`) with the spline as projector.
 * Clip planes: the front runs a little past each plane, then the mesh is cut there; vertices
   on the cut are put onto the exact section curve (plane and isosurface,
   :func:`splineviz.core.sections.project`), vertices closer than ``SNAP`` edge lengths to the
