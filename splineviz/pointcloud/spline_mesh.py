@@ -260,41 +260,58 @@ def fill_holes(spline, iso, vertices, faces, keep_open):
     -------
     vertices : (V', 3), faces : (F', 3), filled : int number of loops closed
     """
+    lo, hi = spline.volume.finite_range
+    tol = VALUE_TOL * max(hi - lo, 1e-300)
     new_v, new_f, filled = [], [], 0
     for loop in border_loops(faces):
         pts = vertices[loop]
         if keep_open(pts):
             continue
         rev = loop[::-1]  # the hole's side: the reversed border direction
-        filled += 1
         if len(loop) == 3:
             new_f.append(rev)
+            filled += 1
             continue
-        p = vertices[rev]
-        centre = p.mean(axis=0)
-        edge = float(np.mean(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1)))
-        radius = float(np.mean(np.linalg.norm(p - centre, axis=1)))
-        n_rings = max(1, int(round(radius / max(edge, 1e-300))))
-        outer, k = rev, len(rev)
-        for j in range(1, n_rings):
-            frac = 1.0 - j / n_rings
-            m = max(3, int(round(k * frac)))
-            # the ring's vertices sample the loop evenly, pulled towards the centre
-            src = p[np.floor(np.arange(m) * k / m).astype(int)]
-            ring, _ = project_to_isosurface(spline, centre + frac * (src - centre), iso,
-                                            steps=10)
-            ids = list(range(len(vertices) + len(new_v), len(vertices) + len(new_v) + m))
-            new_v += list(ring)
-            new_f += _zip(outer, ids)
-            outer = ids
-        c, _ = project_to_isosurface(spline, centre[None], iso, steps=10)
-        ci = len(vertices) + len(new_v)
-        new_v.append(c[0])
-        new_f += [[outer[i], outer[(i + 1) % len(outer)], ci] for i in range(len(outer))]
+        loop_v, loop_f = _rings(spline, iso, vertices, rev, len(vertices) + len(new_v))
+        # a hole whose rings do not lie on the surface (it spans a fold or a gap of the
+        # surface) stays open rather than be closed off the surface
+        if len(loop_v) and np.abs(spline.evaluate(np.array(loop_v)) - iso).max() > tol:
+            continue
+        new_v += loop_v
+        new_f += loop_f
+        filled += 1
     if not filled:
         return vertices, faces, 0
     v = np.concatenate([vertices, np.array(new_v).reshape(-1, 3)])
     return v, np.concatenate([faces, np.array(new_f, dtype=np.int64).reshape(-1, 3)]), filled
+
+
+def _rings(spline, iso, vertices, rev, first):
+    """New vertices (list of (3,)) and triangles closing the loop ``rev`` by rings (see
+    :func:`fill_holes`); new vertex indices start at ``first``."""
+    new_v, new_f = [], []
+    p = vertices[rev]
+    centre = p.mean(axis=0)
+    edge = float(np.mean(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1)))
+    radius = float(np.mean(np.linalg.norm(p - centre, axis=1)))
+    n_rings = max(1, int(round(radius / max(edge, 1e-300))))
+    outer, k = rev, len(rev)
+    for j in range(1, n_rings):
+        frac = 1.0 - j / n_rings
+        m = max(3, int(round(k * frac)))
+        # the ring's vertices sample the loop evenly, pulled towards the centre
+        src = p[np.floor(np.arange(m) * k / m).astype(int)]
+        ring, _ = project_to_isosurface(spline, centre + frac * (src - centre), iso,
+                                        steps=10)
+        ids = list(range(first + len(new_v), first + len(new_v) + m))
+        new_v += list(ring)
+        new_f += _zip(outer, ids)
+        outer = ids
+    c, _ = project_to_isosurface(spline, centre[None], iso, steps=10)
+    ci = first + len(new_v)
+    new_v.append(c[0])
+    new_f += [[outer[i], outer[(i + 1) % len(outer)], ci] for i in range(len(outer))]
+    return new_v, new_f
 
 
 def clip_mesh(spline, iso, vertices, faces, origin, normal, snap_length):
