@@ -103,7 +103,9 @@ class SplineProjector:
     def project_with_normals(self, points, normal_hint=None):
         """Newton projection onto ``s = iso``: points ``(M, 3)`` and unit normals ``(M, 3)``;
         ``normal_hint`` is not needed (the spline's normals are consistent everywhere)."""
-        return project_to_isosurface(self.spline, points, self.iso, steps=10, tol=self.tol)
+        # most points converge in one or two steps; a guess far off the surface needs more
+        # of the half-voxel-limited steps
+        return project_to_isosurface(self.spline, points, self.iso, steps=30, tol=self.tol)
 
     def project(self, points):
         """Newton projection onto ``s = iso`` of ``(M, 3)`` points."""
@@ -439,6 +441,12 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         vertices, faces = clip_mesh(spline, iso, vertices, faces, origin, normal, snap)
         if len(faces) == 0:
             raise SplineMeshError("the clip planes leave no part of the isosurface")
+    # vertices the relaxation or the front left short of the surface (a step limit reached):
+    # more Newton steps for those alone
+    off = np.abs(spline.evaluate(vertices) - iso) > proj.tol
+    if off.any():
+        vertices[off], _ = project_to_isosurface(spline, vertices[off], iso, steps=60,
+                                                 tol=proj.tol)
     g = spline.gradient(vertices)
     norm = np.linalg.norm(g, axis=1)
     normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)
