@@ -730,7 +730,8 @@ class RayCaster:
 
     # -- rendering -----------------------------------------------------------------------
 
-    def render(self, camera: Camera, size=(640, 480), clip_planes=()) -> ref.Frame:
+    def render(self, camera: Camera, size=(640, 480), clip_planes=(),
+               hessian: bool = False) -> ref.Frame:
         """Ray cast one frame.
 
         Parameters
@@ -738,6 +739,10 @@ class RayCaster:
         camera : Camera
         size : (width, height) or "WxH"
         clip_planes : sequence of (origin, normal); each keeps the side its normal points to
+        hessian : bool
+            Also return the spline's Hessian and gradient norm at every hit
+            (``Frame.hessian``, ``Frame.gradient_norm``), computed in the kernel from the hit
+            piece's B-coefficients (colour by curvature). The NumPy path leaves them None.
 
         Returns
         -------
@@ -755,7 +760,7 @@ class RayCaster:
         if self._device is None:
             frame = ref.reference_raycast(self.spline, camera, (w, h), self._isovalue, planes)
         else:
-            frame = self._render_cl(camera, w, h, planes)
+            frame = self._render_cl(camera, w, h, planes, hessian)
         self.stats["render_s"] = time.perf_counter() - t
         return frame
 
@@ -786,7 +791,7 @@ class RayCaster:
         used = int(self._counts[2:3].get(queue=q)[0])
         self._counts[2:3].set(np.array([min(used, old)], np.int32), queue=q)
 
-    def _render_cl(self, camera, w, h, planes) -> ref.Frame:
+    def _render_cl(self, camera, w, h, planes, hessian: bool = False) -> ref.Frame:
         import pyopencl.array as cla
         from pyopencl import cltypes
 
@@ -818,6 +823,8 @@ class RayCaster:
         nor = cla.empty(q, (n, 4), np.float32)
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
+        # one float8 per pixel only when asked for (32 bytes a pixel otherwise unused)
+        hess = cla.empty(q, (n if hessian else 1, 8), np.float32)
         nx, ny, nz = vol.shape
         model_args = []
         if self._family == "MODEL_TYPE6":
@@ -844,7 +851,7 @@ class RayCaster:
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
               planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
               np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data,
-              np.int32(w), np.int32(h))
+              np.int32(bool(hessian)), hess.data, np.int32(w), np.int32(h))
         if self._family in CACHED:
             cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
             if self.stats.get("classified") == "visible":
@@ -855,8 +862,16 @@ class RayCaster:
         position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
                             np.nan)
         normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
+        hess_w = grad_norm = None
+        if hessian:
+            hv = hess.get(queue=q).reshape(h, w, 8).astype(np.float64)
+            i, j = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+            hess_w = np.empty((h, w, 3, 3))
+            hess_w[..., i, j] = hv[..., :6]
+            hess_w[..., j, i] = hv[..., :6]
+            grad_norm = hv[..., 6]
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
-                         color.get(queue=q).reshape(h, w, 4))
+                         color.get(queue=q).reshape(h, w, 4), hess_w, grad_norm)
 
 
 def _to_k(model_kwargs: dict) -> float:

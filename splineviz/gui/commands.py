@@ -234,8 +234,9 @@ class Commands(QObject):
         self.saved.emit(str(path))
         return img
 
-    def export_mesh(self, path, node=None, clip: bool = True):
-        """Write the selected mesh or isosurface as a mesh file in a job."""
+    def export_mesh(self, path, node=None, clip: bool = True, method: str = "flying-edges"):
+        """Write the selected mesh or isosurface as a mesh file in a job (``method``: how an
+        isosurface is meshed, see :func:`splineviz.render.extract.export_mesh`)."""
         node = node if node is not None else self.scene.selected
         if isinstance(node, VolumeNode):
             isos = self.scene.isosurfaces_of(node)
@@ -245,4 +246,5 @@ class Commands(QObject):
         from splineviz.render.extract import export_mesh
 
         return self.jobs.run(f"Exporting {Path(path).name}", export_mesh, self.scene, node,
-                             str(path), clip=clip, on_done=lambda p: self.saved.emit(p))
+                             str(path), clip=clip, method=method,
+                             on_done=lambda p: self.saved.emit(p))

@@ -29,6 +29,7 @@ from splineviz.gui.commands import Commands
 from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
 from splineviz.gui.panels import (
+    AnalysisPanel,
     ClippingPanel,
     DataPanel,
     IsosurfacePanel,
@@ -126,6 +127,7 @@ class MainWindow(QMainWindow):
         self.clip_panel = ClippingPanel(self.scene)
         self.smooth_panel = SmoothingPanel(self.scene)
         self.remesh_panel = RemeshPanel(self.scene, self.jobs)
+        self.analysis_panel = AnalysisPanel(self.scene)
         self.log = LogPanel()
         left, right = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
         self.docks = {
@@ -134,11 +136,13 @@ class MainWindow(QMainWindow):
             "Clipping": self._dock("Clipping", self.clip_panel, right),
             "Smoothing": self._dock("Smoothing", self.smooth_panel, right),
             "Remeshing": self._dock("Remeshing", self.remesh_panel, right),
+            "Analysis": self._dock("Analysis", self.analysis_panel, right),
             "Log": self._dock("Log", self.log, Qt.DockWidgetArea.BottomDockWidgetArea),
         }
         # the right column as tabs: narrower, so the 3-D view keeps its room
         self.tabifyDockWidget(self.docks["Clipping"], self.docks["Smoothing"])
         self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Remeshing"])
+        self.tabifyDockWidget(self.docks["Remeshing"], self.docks["Analysis"])
         self.docks["Clipping"].raise_()
         self.docks["Log"].hide()
 

@@ -25,6 +25,7 @@ from splineviz.model.nodes import (
     IsosurfaceNode,
     MeshNode,
     PointsNode,
+    SectionNode,
     VolumeNode,
     mesh_arrays,
 )
@@ -79,8 +80,14 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
                 raise SessionError(f"volume {node.name!r} has no file; save the session with "
                                    "save_scene, which writes it")
         elif isinstance(node, IsosurfaceNode):
+            colour_by = _props(node, "color_by", "color_map", "color_range", "color_min",
+                               "color_max")
+            if node.color_volume_id is not None:
+                colour_by["color_volume"] = node.color_volume_id
+            if node.color_isosurface_id is not None:
+                colour_by["color_isosurface"] = node.color_isosurface_id
             s.add("Isosurface", {**_props(node, "isovalue", "model", "k", "opacity", "visible",
-                                          "material"), "color": list(node.color)},
+                                          "material"), "color": list(node.color), **colour_by},
                   inputs=[node.volume_id], **common)
         elif isinstance(node, PointsNode):
             if path is None:
@@ -96,6 +103,9 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
             s.add("MeshFile", {"path": path, "color": list(node.color),
                                **_props(node, "opacity", "show_edges", "visible"),
                                **provenance}, inputs=inputs, **common)
+        elif isinstance(node, SectionNode):
+            s.add("Section", {"color": list(node.color), **_props(node, "line_width", "visible")},
+                  inputs=node.inputs, **common)
         elif isinstance(node, ClipPlaneNode):
             s.add("ClipPlane", {"origin": list(node.origin), "normal": list(node.normal),
                                 **_props(node, "enabled", "show_widget")},
@@ -232,9 +242,23 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
                                  sigma=p.sigma, show_outline=p.show_outline, visible=p.visible,
                                  data=data[obj.id], **common))
         elif obj.type == "Isosurface":
+            kinds = {o.id: o.type for o in session.objects}
+            if p.color_volume is not None and \
+                    kinds.get(p.color_volume) not in ("VolumeFile", "Source"):
+                raise SessionError(f"isosurface {obj.id!r} is coloured by {p.color_volume!r}, "
+                                   "which is not a volume")
+            if p.color_isosurface is not None and \
+                    kinds.get(p.color_isosurface) != "Isosurface":
+                raise SessionError(f"isosurface {obj.id!r} measures the distance to "
+                                   f"{p.color_isosurface!r}, which is not an isosurface")
             scene.add(IsosurfaceNode(volume_id=obj.inputs[0], model=p.model, k=p.k,
                                      isovalue=p.isovalue, color=p.color, opacity=p.opacity,
-                                     visible=p.visible, material=p.material, **common))
+                                     visible=p.visible, material=p.material,
+                                     color_by=p.color_by, color_map=p.color_map,
+                                     color_range=p.color_range, color_min=p.color_min,
+                                     color_max=p.color_max, color_volume_id=p.color_volume,
+                                     color_isosurface_id=p.color_isosurface,
+                                     **common))
         elif obj.type == "PointsFile":
             scene.add(PointsNode(path=p.path, color=p.color, point_size=p.point_size,
                                  opacity=p.opacity, visible=p.visible, data=data[obj.id],
@@ -249,6 +273,12 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
             scene.add(ClipPlaneNode(volume_id=_plane_volume(session, obj), origin=p.origin,
                                     normal=p.normal, enabled=p.enabled,
                                     show_widget=p.show_widget, **common))
+        elif obj.type == "Section":
+            first, second = obj.inputs
+            is_plane = session.object(second).type == "ClipPlane"
+            scene.add(SectionNode(isosurface_id=first, plane_id=second if is_plane else None,
+                                  other_id=None if is_plane else second, color=p.color,
+                                  line_width=p.line_width, visible=p.visible, **common))
     view = session.views[0]
     c = view.camera
     scene.camera.update(position=c.position, focal_point=c.focal_point, view_up=c.view_up,

@@ -69,6 +69,8 @@ class RenderedFrame:
     #: made the frame when it can)
     textures: tuple | None = None
     mean_depth: float = 1.0
+    #: (H, W) colour-by scalars at the hits (NaN elsewhere), None when not coloured by one
+    scalars: np.ndarray | None = None
 
     @property
     def final(self) -> bool:
@@ -149,6 +151,14 @@ class IsosurfaceLayer:
         self._isovalue = (0.5 * sum(volume.finite_range) if isovalue is None
                           else float(isovalue))
         self.last_stats: dict = {}
+        #: colour by (core.colour_by.FIELDS), its map, range mode and manual limits
+        self.color_by = "none"
+        self.color_map = "viridis"
+        self.color_range = "auto"
+        self.color_limits = (0.0, 1.0)
+        self._color_volume: Volume | None = None
+        self._color_reference: tuple | None = None  # (volume, model, options, isovalue)
+        self._splines: dict = {}  # "own" / "other" -> Spline for the colour-by values
 
     # -- events --------------------------------------------------------------------------
 
@@ -197,6 +207,7 @@ class IsosurfaceLayer:
         self._volume = volume
         self._caster = None
         self._preview = None
+        self._splines = {}
         self._emit("frame")
 
     @staticmethod
@@ -215,6 +226,7 @@ class IsosurfaceLayer:
         self._model_options = options
         self._caster = None
         self._preview = None
+        self._splines = {}
         self._emit("frame")
 
     def set_clip_planes(self, planes) -> None:
@@ -256,6 +268,111 @@ class IsosurfaceLayer:
             raise LayerError(f"unknown material {name!r}; choose one of {list(MATERIALS)}")
         self.material_name = name
         self._emit("appearance")
+
+    def set_color_by(self, field: str, volume: Volume | None = None,
+                     reference: tuple | None = None) -> None:
+        """Colour the surface by ``field`` (:data:`splineviz.core.colour_by.FIELDS`).
+
+        ``"volume"``: the value of ``volume``'s spline (of this layer's model) at the hits;
+        ``"distance"``: the signed distance to the surface ``reference = (volume, model,
+        model_options, isovalue)``, e.g. another model or isovalue of the same data.
+        """
+        from splineviz.core.colour_by import FIELDS
+
+        if field not in FIELDS:
+            raise LayerError(f"unknown colour-by field {field!r}; choose one of "
+                             f"{', '.join(FIELDS)}")
+        if reference is not None:
+            vol, model, options, iso = reference
+            self._check_model(model)
+            reference = (vol, model, dict(options or {}), float(iso))
+        same_ref = (reference is None and self._color_reference is None) or (
+            reference is not None and self._color_reference is not None
+            and reference[0] is self._color_reference[0]
+            and reference[1:] == self._color_reference[1:])
+        if field == self.color_by and volume is self._color_volume and same_ref:
+            return
+        self.color_by = field
+        self._color_volume = volume
+        self._color_reference = reference
+        self._splines.pop("other", None)
+        self._splines.pop("reference", None)
+        self._emit("frame")
+
+    def set_color_map(self, name: str | None = None, range_mode: str | None = None,
+                      limits=None) -> None:
+        """Colour map by name, range mode (``auto``, ``manual``, ``symmetric``) and the
+        manual ``(lo, hi)``; only the colouring of shown frames changes, no new ray cast."""
+        from splineviz.core.colour_by import RANGE_MODES
+        from splineviz.render.colormaps import ColormapError, lut
+
+        if name is not None:
+            try:
+                lut(name)
+            except ColormapError as exc:
+                raise LayerError(str(exc)) from None
+            self.color_map = name
+        if range_mode is not None:
+            if range_mode not in RANGE_MODES:
+                raise LayerError(f"unknown range mode {range_mode!r}; choose one of "
+                                 f"{', '.join(RANGE_MODES)}")
+            self.color_range = range_mode
+        if limits is not None:
+            lo, hi = (float(v) for v in limits)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise LayerError(f"a colour range needs finite lo < hi, got {limits!r}")
+            self.color_limits = (lo, hi)
+        self._emit("appearance")
+
+    def color_range_of(self, scalars) -> tuple[float, float]:
+        """The ``(lo, hi)`` the colour map spans for a frame's ``scalars``."""
+        from splineviz.core.colour_by import scalar_range
+
+        values = np.empty(0) if scalars is None else scalars
+        return scalar_range(values, self.color_range, *self.color_limits)
+
+    def _spline(self, which: str):
+        """This layer's spline (``"own"``), the colour-by volume's (``"other"``) or the
+        reference surface's (``"reference"``), built once; the values at the hits come from
+        it."""
+        from splineviz.plugins import build_spline
+
+        if which not in self._splines:
+            if which == "reference":
+                vol, model, options, _iso = self._color_reference
+                self._splines[which] = build_spline(vol, model, **options)
+            else:
+                vol = self._volume if which == "own" else self._color_volume
+                self._splines[which] = build_spline(vol, self._model, **self._model_options)
+        return self._splines[which]
+
+    def hit_scalars(self, frame: Frame) -> np.ndarray | None:
+        """(H, W) colour-by values at the frame's hits (NaN elsewhere), or None.
+
+        Curvatures and the gradient magnitude come from the frame's kernel derivatives when it
+        has them (``Frame.hessian``), else from the spline evaluated at the hits."""
+        from splineviz.core.colour_by import DERIVATIVE_FIELDS, derivative_scalars, hit_scalars
+
+        if self.color_by == "none":
+            return None
+        out = np.full(frame.hit.shape, np.nan)
+        if self.color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
+            hit = frame.hit
+            grad = frame.normal[hit] * frame.gradient_norm[hit][:, None]
+            out[hit] = derivative_scalars(self.color_by, grad, frame.hessian[hit])
+            return out
+        pts = frame.position[frame.hit]
+        other, other_iso = None, 0.0
+        if self.color_by == "volume":
+            if self._color_volume is None:
+                return out
+            other = self._spline("other")
+        elif self.color_by == "distance":
+            if self._color_reference is None:
+                return out
+            other, other_iso = self._spline("reference"), self._color_reference[3]
+        out[frame.hit] = hit_scalars(self._spline("own"), pts, self.color_by, other, other_iso)
+        return out
 
     @property
     def material(self) -> Material:
@@ -344,10 +461,17 @@ class IsosurfaceLayer:
                 return None  # the model changed meanwhile
             if rc.isovalue != self._isovalue:
                 rc.set_isovalue(self._isovalue)
+            from splineviz.core.colour_by import DERIVATIVE_FIELDS
+
+            # curvature and gradient magnitude from the kernel's derivatives at the hits, when
+            # this model's own kernel casts the frame (not the trilinear preview caster)
+            kernel_derivs = (self.color_by in DERIVATIVE_FIELDS and rc is exact
+                             and exact.stats.get("path") == "opencl")
             t = time.perf_counter()
-            extra = {}
             if rc.stats.get("path") == "bricked":
                 extra = {"progress": progress, "cancelled": cancelled}
+            else:
+                extra = {"hessian": kernel_derivs}
             try:
                 frame = rc.render(view.camera, size=(sw, sh),
                                   clip_planes=tuple(view.clip_planes) + self.clip_planes,
@@ -364,7 +488,12 @@ class IsosurfaceLayer:
             lock.release()
         path = "preview" if rc is not exact else stats.get("path", "numpy")
         self.last_stats = stats
-        return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats)
+        # colour-by values from the spline's exact derivatives at the hits (per hit, no pass
+        # over the volume); under the caster lock: the spline cache is shared
+        with self._lock:
+            scalars = self.hit_scalars(frame)
+        return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats,
+                             scalars=scalars)
 
 
 def _is_opencl_error(exc: BaseException) -> bool:

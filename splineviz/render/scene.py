@@ -30,8 +30,9 @@ import numpy as np
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import normalize_clip_planes
+from splineviz.render.colormaps import colorize, lut
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
-from splineviz.render.quad import FrameQuad, frame_textures
+from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
 
 #: seconds a synchronous preview may take (keeps the window responsive while dragging)
 PREVIEW_BUDGET_S = 0.045
@@ -73,6 +74,10 @@ class _LayerView:
     preview_seconds: float | None = None
     callback: object = None
     pending: dict = field(default_factory=dict)
+    #: the colour-by legend of this layer (a vtkScalarBarActor, shown while colouring by)
+    scalar_bar: object = None
+    #: the (lo, hi) the colour map spans in the shown frame
+    color_range: tuple | None = None
 
 
 def view_state_of(renderer, size, clip_planes=()) -> ViewState:
@@ -130,6 +135,8 @@ class SplineScene:
         self.layers.append(layer)
         self._views[id(layer)] = lv
         self.renderer.AddActor(quad.actor)
+        lv.scalar_bar = _scalar_bar(len(self.layers) - 1)
+        self.renderer.AddActor(lv.scalar_bar)
         self._apply_appearance(layer, lv)
 
     def remove_layer(self, layer: IsosurfaceLayer) -> None:
@@ -139,6 +146,7 @@ class SplineScene:
         layer.disconnect(lv.callback)
         self.layers.remove(layer)
         self.renderer.RemoveActor(lv.quad.actor)
+        self.renderer.RemoveActor(lv.scalar_bar)
 
     def quad(self, layer: IsosurfaceLayer) -> FrameQuad:
         return self._views[id(layer)].quad
@@ -200,6 +208,42 @@ class SplineScene:
         q.set_appearance(layer.color, layer.opacity)
         q.set_material(m.ambient, m.diffuse, m.specular, m.shininess)
         q.actor.SetVisibility(bool(layer.visible and q.has_image))
+        self._apply_colors(layer, lv)
+
+    def _apply_colors(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
+        """Colour the shown frame by its scalars with the layer's map and range, and update
+        the layer's scalar bar (no new ray cast: the scalars are kept with the frame)."""
+        rf = lv.shown
+        scalars = None if rf is None or layer.color_by == "none" else rf.scalars
+        if scalars is None:
+            lv.quad.set_colors(None, None)
+            lv.color_range = None
+        else:
+            lo, hi = layer.color_range_of(scalars[rf.frame.hit])
+            lv.color_range = (lo, hi)
+            lv.quad.set_colors(scalars.shape[::-1],
+                               frame_colors(colorize(scalars, layer.color_map, lo, hi)))
+            _update_scalar_bar(lv.scalar_bar, layer.color_map, lo, hi,
+                               f"{layer.name}: {layer.color_by}")
+        lv.scalar_bar.SetVisibility(bool(layer.visible and lv.color_range is not None))
+
+    def color_range(self, layer: IsosurfaceLayer) -> tuple | None:
+        """The ``(lo, hi)`` the layer's colour map spans in the shown frame (None: flat)."""
+        return self._views[id(layer)].color_range
+
+    def picked_value(self, layer: IsosurfaceLayer, x: int, y: int) -> float | None:
+        """The colour-by value under window pixel ``(x, y)`` (VTK display coordinates,
+        origin bottom left) in the shown frame; None where there is no hit or no colouring."""
+        lv = self._views[id(layer)]
+        rf = lv.shown
+        if rf is None or rf.scalars is None:
+            return None
+        w, h = rf.view.size
+        fh, fw = rf.scalars.shape
+        col = int(np.clip(x * fw / w, 0, fw - 1))
+        row = int(np.clip((h - 1 - y) * fh / h, 0, fh - 1))
+        value = float(rf.scalars[row, col])
+        return value if np.isfinite(value) else None
 
     def _show(self, layer: IsosurfaceLayer, rf: RenderedFrame) -> None:
         lv = self._views.get(id(layer))
@@ -210,6 +254,8 @@ class SplineScene:
         if rf.textures is None:
             _prepare(rf)
         lv.quad.set_textures(f.hit.shape[::-1], *rf.textures)
+        lv.shown = rf
+        self._apply_colors(layer, lv)
         w, h = rf.view.size
         t = np.tan(np.radians(cam.view_angle) / 2.0)
         lv.quad.set_view_scale(t * w / h, t)
@@ -385,6 +431,40 @@ def _brick_progress(job, layer):
         job.progress(done / max(total, 1), f"{layer.name}: bricks {done}/{total}")
 
     return progress
+
+
+def _scalar_bar(index: int):
+    """A hidden horizontal scalar bar for the ``index``-th layer (stacked from the bottom)."""
+    import vtk
+
+    bar = vtk.vtkScalarBarActor()
+    bar.SetOrientationToHorizontal()
+    bar.SetLookupTable(vtk.vtkLookupTable())
+    bar.SetNumberOfLabels(5)
+    bar.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+    bar.SetPosition(0.25, 0.02 + 0.11 * index)
+    bar.SetWidth(0.5)
+    bar.SetHeight(0.1)
+    bar.UnconstrainedFontSizeOn()
+    for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
+        prop.SetFontSize(12)
+        prop.ShadowOff()
+        prop.BoldOff()
+        prop.ItalicOff()
+    bar.VisibilityOff()
+    return bar
+
+
+def _update_scalar_bar(bar, cmap: str, lo: float, hi: float, title: str) -> None:
+    table = lut(cmap)
+    lt = bar.GetLookupTable()
+    lt.SetNumberOfTableValues(len(table))
+    for i, (r, g, b) in enumerate(table):
+        lt.SetTableValue(i, r / 255.0, g / 255.0, b / 255.0, 1.0)
+    lt.SetRange(lo, hi)
+    lt.Build()
+    bar.SetTitle(title)
+    bar.Modified()
 
 
 def _prepare(rf: RenderedFrame) -> None:
