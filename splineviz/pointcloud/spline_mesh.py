@@ -274,10 +274,19 @@ def fill_holes(spline, iso, vertices, faces, keep_open):
             new_f.append(rev)
             filled += 1
             continue
-        loop_v, loop_f = _rings(spline, iso, vertices, rev, len(vertices) + len(new_v))
-        # a hole whose rings do not lie on the surface (it spans a fold or a gap of the
-        # surface) stays open rather than be closed off the surface
-        if len(loop_v) and np.abs(spline.evaluate(np.array(loop_v)) - iso).max() > tol:
+        first = len(vertices) + len(new_v)
+        loop_v, loop_f = _rings(spline, iso, vertices, rev, first)
+        # a hole whose rings do not lie on the surface, or whose triangles stand off it by
+        # more than half the loop's edge length (it spans a gap between sheets, e.g. leaves),
+        # stays open rather than be closed off the surface
+        ring = np.array(loop_v).reshape(-1, 3)
+        if len(ring) and np.abs(spline.evaluate(ring) - iso).max() > tol:
+            continue
+        allv = np.concatenate([vertices, np.array(new_v).reshape(-1, 3), ring])
+        centres = allv[np.array(loop_f)].mean(axis=1)
+        on, _ = project_to_isosurface(spline, centres, iso, steps=12)
+        edge = float(np.mean(np.linalg.norm(pts - np.roll(pts, -1, axis=0), axis=1)))
+        if np.linalg.norm(on - centres, axis=1).max() > 0.5 * edge:
             continue
         new_v += loop_v
         new_f += loop_f
