@@ -88,7 +88,7 @@ def _check_flat(rows, what: str) -> None:
     assert end["buffer_mb"] == pytest.approx(half["buffer_mb"], rel=1e-6), rows
 
 
-@pytest.mark.parametrize("changes", [30, pytest.param(1000, marks=pytest.mark.slow)])
+@pytest.mark.parametrize("changes", [20, pytest.param(1000, marks=pytest.mark.slow)])
 def test_isovalue_camera_and_model_soak_keeps_memory_and_buffers_flat(window, changes):
     vol = window.open_default()
     iso = window.scene.isosurfaces_of(vol)[0]
