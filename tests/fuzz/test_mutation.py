@@ -10,6 +10,7 @@ never another exception, a hang or a file read outside the folder.
 The default run is derandomized and small (CI-deterministic); ``-m slow`` runs many more.
 """
 
+import copy
 import json
 import re
 import time
@@ -291,7 +292,7 @@ def _edit_session(doc, edit):
             parent = parent[key]
         del parent[path[-1]]
         return doc
-    return _replace(doc, path, value)
+    return _replace(doc, path, copy.deepcopy(value))  # never the shared constant itself
 
 
 @pytest.fixture(scope="module")
