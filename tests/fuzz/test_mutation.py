@@ -225,7 +225,7 @@ def _fuzz_files(examples):
     return test
 
 
-test_mutated_files = _fuzz_files(12)
+test_mutated_files = _fuzz_files(30)
 test_mutated_files_many = pytest.mark.slow(_fuzz_files(300))
 
 
@@ -347,5 +347,5 @@ def _fuzz_sessions(examples):
     return test
 
 
-test_mutated_sessions = _fuzz_sessions(400)
-test_mutated_sessions_many = pytest.mark.slow(_fuzz_sessions(3000))
+test_mutated_sessions = _fuzz_sessions(800)
+test_mutated_sessions_many = pytest.mark.slow(_fuzz_sessions(10000))
