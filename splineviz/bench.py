@@ -1,7 +1,7 @@
 """``splineviz bench``: the benchmarks, each printing ratios against baselines run in the same
 run (VTK flying edges and trilinear ray casting for ``raycast``; flying edges + an offscreen
-render of its mesh for ``isovalue``; Open3D Poisson, ball pivoting and Poisson + pymeshlab
-remeshing for ``remesh``)."""
+render of its mesh for ``isovalue``; 1 against 2 dask workers for ``bricks``; Open3D Poisson,
+ball pivoting and Poisson + pymeshlab remeshing for ``remesh``)."""
 
 from __future__ import annotations
 
@@ -23,6 +23,13 @@ def _run(args) -> int:
         models = tuple(args.models.split(",")) if args.models else MODELS
         run_isovalue_bench(data, sizes=sizes, models=models, size=(w, h), preview=(pw, ph),
                            device=args.device, timeout=args.timeout or 600.0)
+    elif args.which == "bricks":
+        from splineviz.compute.bench_bricks import run_bricks_bench
+
+        workers = tuple(int(n) for n in args.workers.split(","))
+        model = args.models.split(",")[0] if args.models else "cubic-c1"
+        run_bricks_bench(n=args.n, model=model, size=(w, h), brick=args.brick,
+                         workers=workers, device=args.device)
     else:
         from splineviz.pointcloud.bench import CLOUDS, run_bench
 
@@ -34,7 +41,8 @@ def _run(args) -> int:
 def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
-    p.add_argument("which", choices=["raycast", "isovalue", "remesh"], help="benchmark to run")
+    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh"],
+                   help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points)")
     p.add_argument("--size", default="512x512", help="raycast, isovalue: image size WxH")
@@ -44,6 +52,11 @@ def register(subparsers) -> None:
     p.add_argument("--models", default=None,
                    help="isovalue: comma-separated spline models (default: all four)")
     p.add_argument("--repeats", type=int, default=3, help="raycast: frames per measurement")
+    p.add_argument("--n", type=int, default=512,
+                   help="bricks: samples per axis of the lazy gyroid (2048: 32 GiB as float32)")
+    p.add_argument("--brick", type=int, default=128, help="bricks: cells per brick and axis")
+    p.add_argument("--workers", default="1,2",
+                   help="bricks: LocalCluster sizes to compare, comma-separated")
     p.add_argument("--device", default=None,
                    help="raycast, isovalue: OpenCL device (see SPLINEVIZ_DEVICE)")
     p.add_argument("--timeout", type=float, default=None,

@@ -1,6 +1,9 @@
 """OpenCL programs: kernel sources are ``.cl`` files in ``kernels/`` beside this module,
 specialised with ``-D`` build options (never by string formatting of kernel bodies) and built
-once per (context, file, options); pyopencl additionally caches binaries on disk."""
+once per (context, file, options, prelude); pyopencl additionally caches binaries on disk.
+
+A prelude is source generated from a model's tables (functions the file calls, e.g.
+:mod:`splineviz.compute.to_program`), prepended to the file; it never depends on a volume."""
 
 from __future__ import annotations
 
@@ -40,7 +43,7 @@ def build_options(defines: dict | None) -> tuple[str, ...]:
     return tuple(opts)
 
 
-def get_program(context, name: str, defines: dict | None = None):
+def get_program(context, name: str, defines: dict | None = None, prelude: str = ""):
     """Built program ``kernels/<name>.cl`` for ``context`` with ``defines``; cached.
 
     Parameters
@@ -50,15 +53,17 @@ def get_program(context, name: str, defines: dict | None = None):
         Kernel file stem, e.g. ``"raycast"``.
     defines : dict, optional
         Preprocessor definitions, e.g. ``{"MODEL_TRILINEAR": 1}``.
+    prelude : str, optional
+        Generated source prepended to the file (see the module docstring).
     """
     import pyopencl as cl
 
     opts = build_options(defines)
-    key = (context.int_ptr, name, opts)
+    key = (context.int_ptr, name, opts, prelude)
     prog = _cache.get(key)
     if prog is None:
         try:
-            prog = cl.Program(context, kernel_source(name)).build(options=list(opts))
+            prog = cl.Program(context, prelude + kernel_source(name)).build(options=list(opts))
         except cl.RuntimeError as exc:
             raise KernelBuildError(f"OpenCL program {name}.cl failed to build: {exc}") from exc
         _cache[key] = prog
@@ -68,15 +73,16 @@ def get_program(context, name: str, defines: dict | None = None):
 _kernels: dict = {}
 
 
-def get_kernel(context, name: str, kernel: str, defines: dict | None = None):
+def get_kernel(context, name: str, kernel: str, defines: dict | None = None,
+               prelude: str = ""):
     """Kernel object ``kernel`` of :func:`get_program`; cached, since every attribute access
     on a program creates a new kernel object."""
     import pyopencl as cl
 
-    key = (context.int_ptr, name, build_options(defines), kernel)
+    key = (context.int_ptr, name, build_options(defines), prelude, kernel)
     k = _kernels.get(key)
     if k is None:
-        k = _kernels[key] = cl.Kernel(get_program(context, name, defines), kernel)
+        k = _kernels[key] = cl.Kernel(get_program(context, name, defines, prelude), kernel)
     return k
 
 

@@ -399,11 +399,17 @@ class RayCaster:
                      NUNION=self._nunion)
         return d
 
+    def _ray_kernel(self, kernel: str):
+        """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude)."""
+        return get_kernel(self._device.context, "raycast", kernel, self._defines(),
+                          self._prelude)
+
     def _upload(self):
         """Samples, min-max octree and the cleared classification cache on the device."""
         import pyopencl.array as cla
 
         dev = self._device
+        self._prelude = ""
         q = dev.queue
         ctx = dev.context
         levels = _octree_levels(self._cells)
@@ -481,7 +487,7 @@ class RayCaster:
         """
         import pyopencl.array as cla
 
-        from splineviz.compute import to_tables
+        from splineviz.compute import to_program, to_tables
         from splineviz.compute.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
@@ -516,43 +522,13 @@ class RayCaster:
         }
         if np.diff(start).max() > 32 * TO_WORDS:
             raise AssertionError("more pieces per cell than the bit set holds")  # a bug
-        # union of the data offsets read by each class (for the conservative cell bounds and
-        # the private data copy of the classification); the distinct B-net points of the
-        # class's pieces (pieces of one TO share points: each is computed once) as stencils
-        # into that union, and per point the bit set of the pieces whose B-net holds it
-        tables = to_tables.stencils(k)
-        cls_offsets, cls_start, pt_start = [], [0], [0]
-        u_rows, u_cols, u_w, pt_pieces = [0], [], [], []
-        for c in range(8):
-            pts = sorted({p for e in range(start[c], start[c + 1])
-                          for p in map(tuple, tables[tet[e]][0] + base_off[e])})
-            where = {p: n for n, p in enumerate(pts)}
-            cls_offsets.extend(np.array(pts) @ strides)
-            cls_start.append(len(cls_offsets))
-            points = {}  # stencil (union index, weight) pairs -> point of the class
-            for e in range(start[c], start[c + 1]):
-                offsets, w = tables[tet[e]]
-                idx = [where[tuple(o)] for o in offsets + base_off[e]]
-                for i in range(w.shape[0]):
-                    nz = np.flatnonzero(w[i])
-                    key = tuple((idx[n], float(w[i, n])) for n in nz)
-                    if key not in points:
-                        points[key] = len(points)
-                        u_cols.extend(idx[n] for n in nz)
-                        u_w.extend(w[i, nz])
-                        u_rows.append(len(u_cols))
-                        pt_pieces.append(np.zeros(TO_WORDS, np.uint32))
-                    bit = e - start[c]
-                    pt_pieces[pt_start[-1] + points[key]][bit >> 5] |= np.uint32(1 << (bit & 31))
-            pt_start.append(pt_start[-1] + len(points))
-        self._nunion = int(np.diff(cls_start).max())
-        self._cls_start = cla.to_device(q, np.array(cls_start, np.int32))
-        self._cls_offsets = cla.to_device(q, np.array(cls_offsets, np.int32))
-        self._union_csr = [cla.to_device(q, np.array(pt_start, np.int32)),
-                           cla.to_device(q, np.array(u_rows, np.int32)),
-                           cla.to_device(q, np.array(u_cols, np.uint16)),
-                           cla.to_device(q, np.array(u_w, np.float32)),
-                           cla.to_device(q, np.concatenate(pt_pieces))]
+        # the data each class reads (its union: the conservative cell bounds and the private
+        # copy the generated relevance test sums, see splineviz.compute.to_program)
+        pts = to_tables.class_points(k, TO_WORDS)
+        self._nunion = int(np.diff(pts["union_start"]).max())
+        self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
+        self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
+        self._prelude = to_program.relevance_source(k, TO_WORDS)
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
@@ -678,7 +654,7 @@ class RayCaster:
                 ijk = np.stack(np.unravel_index(cells, self._cells))
                 bricks = len(np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:])))
                 self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + bricks)
-                get_kernel(ctx, "raycast", "tet_codes", self._defines())(
+                self._ray_kernel("tet_codes")(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
                     self._stencil.data, *(a.data for a in self._cube_program),
@@ -694,11 +670,10 @@ class RayCaster:
                 nrel = cla.empty(q, n, np.int32)
                 bits = cla.empty(q, n * TO_WORDS, np.uint32)
                 _, cy, cz = self._cells
-                get_kernel(ctx, "raycast", "to_codes", self._defines())(
+                self._ray_kernel("to_codes")(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
-                    self._cls_start.data, self._cls_offsets.data, self._ent["start"].data,
-                    *(a.data for a in self._union_csr), np.float32(self._negmass), iso,
+                    self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass), iso,
                     bits.data, nrel.data)
                 relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
         if relevant is None:
@@ -719,6 +694,24 @@ class RayCaster:
             return np.flatnonzero(((vmin <= iso) & (iso <= vmax)).ravel()).astype(np.int32)
         return self.classify_all().cells
 
+    @property
+    def negative_mass(self) -> float:
+        """Largest sum of negative weights of a B-coefficient as an affine combination of
+        samples (0 for trilinear; OpenCL path): the widening of the octree's value bounds."""
+        if self._device is None:
+            raise RayCastError("the negative weight mass is known on the OpenCL path")
+        return float(self._negmass)
+
+    def value_bounds(self) -> tuple[float, float]:
+        """Conservative (min, max) of the spline over the whole data box: the root of the
+        min-max octree (OpenCL path), e.g. to skip a brick of a bigger volume at another
+        isovalue without reading it again."""
+        if self._device is None:
+            raise RayCastError("value bounds come from the octree of the OpenCL path")
+        root = self._levels[-1][0]
+        lo, hi = self._bounds[2 * root:2 * root + 2].get(queue=self._device.queue)
+        return float(lo), float(hi)
+
     def skip_volume(self) -> np.ndarray:
         """(cx, cy, cz) uint8 skip codes (255 = candidate, else the empty macro level) that the
         ray kernel derives from the min-max octree at the current isovalue; OpenCL path."""
@@ -729,7 +722,7 @@ class RayCaster:
         q = self._device.queue
         skip = cla.empty(q, int(np.prod(self._cells)), np.uint8)
         cx, cy, cz = self._cells
-        get_kernel(self._device.context, "raycast", "skip_codes", self._defines())(
+        self._ray_kernel("skip_codes")(
             q, (cz, cy, cx), None, self._bounds.data, self._levels_buf.data,
             np.int32(len(self._levels)), np.int32(cx), np.int32(cy), np.int32(cz),
             np.float32(self._isovalue), skip.data)
@@ -737,7 +730,8 @@ class RayCaster:
 
     # -- rendering -----------------------------------------------------------------------
 
-    def render(self, camera: Camera, size=(640, 480), clip_planes=()) -> ref.Frame:
+    def render(self, camera: Camera, size=(640, 480), clip_planes=(),
+               hessian: bool = False) -> ref.Frame:
         """Ray cast one frame.
 
         Parameters
@@ -745,6 +739,10 @@ class RayCaster:
         camera : Camera
         size : (width, height) or "WxH"
         clip_planes : sequence of (origin, normal); each keeps the side its normal points to
+        hessian : bool
+            Also return the spline's Hessian and gradient norm at every hit
+            (``Frame.hessian``, ``Frame.gradient_norm``), computed in the kernel from the hit
+            piece's B-coefficients (colour by curvature). The NumPy path leaves them None.
 
         Returns
         -------
@@ -762,7 +760,7 @@ class RayCaster:
         if self._device is None:
             frame = ref.reference_raycast(self.spline, camera, (w, h), self._isovalue, planes)
         else:
-            frame = self._render_cl(camera, w, h, planes)
+            frame = self._render_cl(camera, w, h, planes, hessian)
         self.stats["render_s"] = time.perf_counter() - t
         return frame
 
@@ -793,13 +791,13 @@ class RayCaster:
         used = int(self._counts[2:3].get(queue=q)[0])
         self._counts[2:3].set(np.array([min(used, old)], np.int32), queue=q)
 
-    def _render_cl(self, camera, w, h, planes) -> ref.Frame:
+    def _render_cl(self, camera, w, h, planes, hessian: bool = False) -> ref.Frame:
         import pyopencl.array as cla
         from pyopencl import cltypes
 
         dev = self._device
         q = dev.queue
-        k_ray = get_kernel(dev.context, "raycast", "raycast", self._defines())
+        k_ray = self._ray_kernel("raycast")
         vol = self._volume
         spacing = np.asarray(vol.spacing, dtype=np.float64)
         origin = np.asarray(vol.origin, dtype=np.float64)
@@ -825,6 +823,8 @@ class RayCaster:
         nor = cla.empty(q, (n, 4), np.float32)
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
+        # one float8 per pixel only when asked for (32 bytes a pixel otherwise unused)
+        hess = cla.empty(q, (n if hessian else 1, 8), np.float32)
         nx, ny, nz = vol.shape
         model_args = []
         if self._family == "MODEL_TYPE6":
@@ -834,8 +834,8 @@ class RayCaster:
         elif self._family == "MODEL_TO":
             e = self._ent
             model_args = [*self._cache_args(), self._cls_start.data,
-                          self._cls_offsets.data, *(a.data for a in self._union_csr),
-                          e["start"].data, e["centre"].data, e["base"].data, e["tet"].data,
+                          self._cls_offsets.data, e["start"].data, e["centre"].data,
+                          e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         # a fixed work-group size, the launch padded to whole groups: PoCL compiles a kernel
@@ -851,7 +851,7 @@ class RayCaster:
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
               planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
               np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data,
-              np.int32(w), np.int32(h))
+              np.int32(bool(hessian)), hess.data, np.int32(w), np.int32(h))
         if self._family in CACHED:
             cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
             if self.stats.get("classified") == "visible":
@@ -862,8 +862,16 @@ class RayCaster:
         position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
                             np.nan)
         normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
+        hess_w = grad_norm = None
+        if hessian:
+            hv = hess.get(queue=q).reshape(h, w, 8).astype(np.float64)
+            i, j = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+            hess_w = np.empty((h, w, 3, 3))
+            hess_w[..., i, j] = hv[..., :6]
+            hess_w[..., j, i] = hv[..., :6]
+            grad_norm = hv[..., 6]
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
-                         color.get(queue=q).reshape(h, w, 4))
+                         color.get(queue=q).reshape(h, w, 4), hess_w, grad_norm)
 
 
 def _to_k(model_kwargs: dict) -> float:

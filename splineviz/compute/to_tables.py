@@ -111,3 +111,66 @@ def make_cell_classes():
         starts.append(len(tets))
     return (np.array(starts, np.int32), np.array(centres, np.float32).reshape(-1, 3),
             np.array(tets, np.int32))
+
+
+@cache
+def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
+    """The distinct B-net points of each cell class's pieces as stencils into the data the
+    class reads, kept on disk between runs.
+
+    Pieces of one TO share B-net points, so each point is listed once per class, with the bit
+    set of the class's pieces (bit ``e - start[c]``) whose B-net holds it: a piece straddles
+    the isovalue iff one of its points is <= iso and one is >= iso.
+
+    Parameters
+    ----------
+    k : the parameter of Q_k
+    words : 32-bit words of a class's piece bit set
+
+    Returns
+    -------
+    dict of arrays:
+        ``union`` (U, 3) int data offsets from the cell corner read by the classes, class c's
+        being ``union[union_start[c]:union_start[c+1]]`` (``union_start`` (9,));
+        ``pt_start`` (9,), class c's points are ``pt_start[c]:pt_start[c+1]``;
+        ``rows`` (P+1,), ``cols`` (nnz,) indices into the class's union, ``weights`` (nnz,):
+        point p = sum of weights[rows[p]:rows[p+1]] * union values[cols[...]];
+        ``pieces`` (P, words) uint32 bit sets.
+    """
+    from splineviz.compute.table_cache import cached_arrays
+
+    def make():
+        start, centre, tet = cell_classes()
+        # base data point of each piece's TO relative to the cell corner: centre - 1/2
+        base = np.rint(centre.astype(np.float64) - 0.5).astype(np.int64)
+        tables = stencils(k)
+        union, union_start, pt_start = [], [0], [0]
+        rows, cols, weights, pieces = [0], [], [], []
+        for c in range(8):
+            pts = sorted({p for e in range(start[c], start[c + 1])
+                          for p in map(tuple, tables[tet[e]][0] + base[e])})
+            where = {p: n for n, p in enumerate(pts)}
+            union.extend(pts)
+            union_start.append(len(union))
+            points = {}  # stencil (union index, weight) pairs -> point of the class
+            for e in range(start[c], start[c + 1]):
+                offsets, w = tables[tet[e]]
+                idx = [where[tuple(o)] for o in offsets + base[e]]
+                for i in range(w.shape[0]):
+                    nz = np.flatnonzero(w[i])
+                    key = tuple((idx[n], float(w[i, n])) for n in nz)
+                    if key not in points:
+                        points[key] = len(points)
+                        cols.extend(idx[n] for n in nz)
+                        weights.extend(w[i, nz])
+                        rows.append(len(cols))
+                        pieces.append(np.zeros(words, np.uint32))
+                    bit = e - start[c]
+                    pieces[pt_start[-1] + points[key]][bit >> 5] |= np.uint32(1 << (bit & 31))
+            pt_start.append(pt_start[-1] + len(points))
+        return {"union": np.array(union, np.int64), "union_start": np.array(union_start),
+                "pt_start": np.array(pt_start), "rows": np.array(rows),
+                "cols": np.array(cols), "weights": np.array(weights, np.float64),
+                "pieces": np.array(pieces, np.uint32)}
+
+    return cached_arrays(f"to-class-points-k{k:g}-w{words}", _TABLE_SOURCES, make)

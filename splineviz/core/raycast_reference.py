@@ -55,6 +55,9 @@ class Frame:
     normal : (H, W, 3) float64 normalised spline gradient at the hit, NaN where no hit
     depth : (H, W) float32 OpenGL window depth in [0, 1], 1 where no hit
     color : (H, W, 4) uint8 shaded RGBA image
+    hessian : (H, W, 3, 3) float64 world Hessian of the spline at the hit, or None
+        (only when asked for, and only by the OpenCL ray caster; NaN where no hit)
+    gradient_norm : (H, W) float64 |grad s| at the hit, or None (with ``hessian``)
     """
 
     hit: np.ndarray
@@ -62,6 +65,8 @@ class Frame:
     normal: np.ndarray
     depth: np.ndarray
     color: np.ndarray
+    hessian: np.ndarray | None = None
+    gradient_norm: np.ndarray | None = None
 
 
 def normalize_clip_planes(clip_planes) -> np.ndarray:

@@ -81,6 +81,10 @@ def build_actions(window) -> dict[str, QAction]:
                                  tip="Save the view as PNG at any size")
     _action(window, "Export &mesh...", lambda: dialogs.export_mesh(window), menu=m,
             tip="Save the selected mesh or isosurface as PLY/OBJ/STL/VTP (clipped, normals)")
+    _action(window, "Export spline mesh (advancing &front)...",
+            lambda: dialogs.export_mesh(window, method="front"), menu=m,
+            tip="Mesh the selected isosurface with the advancing front on the spline: "
+                "well-shaped, curvature-adapted triangles on the exact surface (slower)")
     m.addSeparator()
     # explicit: without a desktop environment Qt maps StandardKey.Quit to no key at all
     _action(window, "&Quit", window.close, menu=m, shortcut="Ctrl+Q")

@@ -86,8 +86,13 @@ def run_gui(args) -> int:
     window.ask_before_closing = True
     _install_excepthook(window)
     window.show()
-    if session:
+    window.enable_autosave()
+    # a restored scene (after a crash) replaces what the command line named
+    restoring = window.offer_recovery() is not None
+    if session and not restoring:
         window.open_path(args.file)
-    elif window.scene.volumes:
+    elif window.scene.volumes and not restoring:
         window.scene.select(window.scene.volumes[0])
-    return app.exec()
+    code = app.exec()
+    window.join_workers()
+    return code

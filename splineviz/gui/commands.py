@@ -4,6 +4,7 @@ the GUI thread when they finish. No method here blocks the GUI thread on data.""
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -11,13 +12,16 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from splineviz.core.errors import SplinevizError
+from splineviz.gui.jobs import error_message
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
-from splineviz.model.opening import read_file
+from splineviz.model.opening import OutsideFolder, noting_warnings, read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
 from splineviz.model.summaries import remember
 
 #: what to do with the current objects when a file is opened
 OPEN_MODES = ("ask", "replace", "add")
+
+log = logging.getLogger("splineviz")
 
 
 class Commands(QObject):
@@ -29,10 +33,14 @@ class Commands(QObject):
         A file or session was opened (its path): for the recent-files list.
     saved(str)
         A file was written (its path).
+    warned(str)
+        Something was read with a change the user should know of, or not read at the
+        user's wish (one sentence: the log panel and the status bar show it).
     """
 
     opened = Signal(str)
     saved = Signal(str)
+    warned = Signal(str)
 
     def __init__(self, scene: Scene, jobs, window):
         super().__init__(window)
@@ -63,14 +71,24 @@ class Commands(QObject):
         return self._add_volume(vol, f"{src.title} {'x'.join(map(str, vol.shape))}", mode,
                                 isovalue=src.isovalue, source=name)
 
-    def open_path(self, path, mode: str = "ask", **iso):
+    def open_path(self, path, mode: str = "ask", allow_outside: bool = False, **iso):
         """Open a volume, point cloud or session in a job; returns the job (None if the
-        session could not even be parsed: the message is shown)."""
+        session could not even be parsed: the message is shown). ``allow_outside``: the
+        user confirmed reading a data file outside the folder of the header naming it."""
+        from splineviz.io._util import regular_input
+
         path = str(path)
         if Path(path).suffix.lower() == SESSION_SUFFIX:
-            return self.load_session(path)
+            return self.load_session(path, allow_outside=allow_outside)
+        # a FIFO or device file would block the reader, and its job, for ever
+        regular_input(path, allow_dir=True)
 
-        def done(result):
+        def done(noted):
+            result = self._noted(noted, Path(path).name)
+            if isinstance(result, OutsideFolder):
+                self._outside(result, allow_outside,
+                              lambda: self.open_path(path, mode, allow_outside=True, **iso))
+                return
             kind, data, summaries = result
             for what, value in summaries.items():
                 remember(what, data, value)
@@ -82,8 +100,39 @@ class Commands(QObject):
                                                               path=path))
 
         # a process: readers (VTK's, NumPy's text parser) hold the GIL while they parse
-        return self.jobs.run(f"Opening {Path(path).name}", read_file, path, on_done=done,
-                             process=True)
+        return self.jobs.run(f"Opening {Path(path).name}", noting_warnings, read_file, path,
+                             allow_outside=allow_outside, on_done=done, process=True)
+
+    def _noted(self, noted, name: str):
+        """Show the warnings a read raised (log panel and status bar); its value."""
+        for text in noted.other_warnings:
+            log.debug("reading %s: %s", name, text)
+        for text in noted.warnings:
+            self.warned.emit(f"{name}: {text}")
+        return noted.value
+
+    def _outside(self, refusal: OutsideFolder, confirmed: bool, retry):
+        """A data file outside its folder was refused: ask, and ``retry()`` (its result is
+        returned) if the user confirms; refused again after a confirmation, it is an error."""
+        if confirmed:
+            self.window.show_error(refusal.message)
+            return None
+        return retry() if self.confirm_outside(refusal) else None
+
+    def confirm_outside(self, outside: OutsideFolder) -> bool:
+        """Ask whether to read a data file outside the folder of the file naming it (as
+        ParaView asks before loading state files that point elsewhere)."""
+        answer = QMessageBox.question(
+            self.window, "Data file outside its folder",
+            f"{Path(outside.path).name or outside.path} names data file {outside.data_path} "
+            "outside its folder. Read it anyway?",
+            QMessageBox.StandardButton.Yes | QMessageBox.StandardButton.No,
+            QMessageBox.StandardButton.No)
+        if answer != QMessageBox.StandardButton.Yes:
+            self.warned.emit(f"not read: {outside.data_path} lies outside the folder of "
+                             f"{Path(outside.path).name or outside.path}")
+            return False
+        return True
 
     def _replace_or_add(self, mode: str) -> str | None:
         """"replace" or "add" (asked when the scene has objects and ``mode`` is "ask");
@@ -120,23 +169,41 @@ class Commands(QObject):
 
     # -- sessions ------------------------------------------------------------------------
 
-    def load_session(self, path):
+    def load_session(self, path, *, allow_outside: bool = False, on_loaded=None):
         """Parse the session here (fast; missing data files are asked for), read its data
-        in a job, then replace the scene."""
+        in a job, then replace the scene (and call ``on_loaded()``). Returns the job, or
+        None when the session was refused (the message is shown) or not confirmed."""
         from splineviz.io.session import load_session
 
         try:
-            session = load_session(path, repoint=self._ask_repoint)
-        except (SplinevizError, OSError) as exc:
-            self.window.show_error(str(exc))
+            noted = noting_warnings(load_session, path, repoint=self._ask_repoint,
+                                    allow_outside=allow_outside)
+        except Exception as exc:  # noqa: BLE001  (a hostile session is a message, not a crash)
+            if not isinstance(exc, SplinevizError | OSError):
+                log.debug("loading %s", path, exc_info=True)
+            self.window.show_error(error_message(exc))
             return None
+        session = self._noted(noted, Path(path).name)
+        if isinstance(session, OutsideFolder):
+            return self._outside(session, allow_outside, lambda: self.load_session(
+                path, allow_outside=True, on_loaded=on_loaded))
+        return self._read_session(path, session, allow_outside, on_loaded)
 
-        def done(data):
+    def _read_session(self, path, session, allow_outside: bool, on_loaded):
+        def done(noted):
+            data = self._noted(noted, Path(path).name)
+            if isinstance(data, OutsideFolder):
+                self._outside(data, allow_outside,
+                              lambda: self._read_session(path, session, True, on_loaded))
+                return
             apply_session(self.scene, session, data)
             self.opened.emit(str(path))
+            if on_loaded is not None:
+                on_loaded()
 
-        return self.jobs.run(f"Loading {Path(path).name}", read_session_data, session,
-                             on_done=done)
+        # a process, as for single files: readers hold the GIL while they parse
+        return self.jobs.run(f"Loading {Path(path).name}", noting_warnings, read_session_data,
+                             session, allow_outside=allow_outside, on_done=done, process=True)
 
     def _ask_repoint(self, obj_id: str, missing: Path):
         found, _ = QFileDialog.getOpenFileName(
@@ -167,8 +234,9 @@ class Commands(QObject):
         self.saved.emit(str(path))
         return img
 
-    def export_mesh(self, path, node=None, clip: bool = True):
-        """Write the selected mesh or isosurface as a mesh file in a job."""
+    def export_mesh(self, path, node=None, clip: bool = True, method: str = "flying-edges"):
+        """Write the selected mesh or isosurface as a mesh file in a job (``method``: how an
+        isosurface is meshed, see :func:`splineviz.render.extract.export_mesh`)."""
         node = node if node is not None else self.scene.selected
         if isinstance(node, VolumeNode):
             isos = self.scene.isosurfaces_of(node)
@@ -178,4 +246,5 @@ class Commands(QObject):
         from splineviz.render.extract import export_mesh
 
         return self.jobs.run(f"Exporting {Path(path).name}", export_mesh, self.scene, node,
-                             str(path), clip=clip, on_done=lambda p: self.saved.emit(p))
+                             str(path), clip=clip, method=method,
+                             on_done=lambda p: self.saved.emit(p))

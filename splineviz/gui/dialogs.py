@@ -96,9 +96,10 @@ def export_screenshot(window) -> None:
                      (dlg.width.value(), dlg.height.value()), dlg.transparent.isChecked())
 
 
-def export_mesh(window) -> None:
+def export_mesh(window, method: str = "flying-edges") -> None:
     """Save the selected mesh or isosurface; asks whether to cut it by its clip planes when
-    it has some (ParaView's Clip filter before Save Data)."""
+    it has some (ParaView's Clip filter before Save Data). ``method="front"``: mesh an
+    isosurface with the advancing front on the spline."""
     path, _ = QFileDialog.getSaveFileName(window, "Export mesh", "mesh.ply",
                                           "Meshes (*.ply *.stl *.vtp *.obj)")
     if not path:
@@ -112,7 +113,7 @@ def export_mesh(window) -> None:
         if answer == QMessageBox.StandardButton.Cancel:
             return
         clip = answer == QMessageBox.StandardButton.Yes
-    window.guard(window.commands.export_mesh, path, clip=clip)
+    window.guard(window.commands.export_mesh, path, clip=clip, method=method)
 
 
 def fill_sources(window, menu) -> None:

@@ -310,6 +310,7 @@ class JobRunner(QObject):
         super().__init__(parent)
         self.jobs: list[Job] = []
         self.closed = False
+        self._left: list[Job] = []
 
     def run(self, label: str, func, *args, on_done=None, on_error=None,
             cancellable: bool = True, process: bool = False, **kwargs) -> Job:
@@ -353,4 +354,14 @@ class JobRunner(QObject):
         for job in list(self.jobs):
             job._cancel.set()
         self.closed = True
+        self._left = [j for j in self.jobs if j._thread.is_alive()]
         self.jobs.clear()
+
+    def join(self, timeout_s: float) -> bool:
+        """After :meth:`close`: wait up to ``timeout_s`` in all for the threads of the jobs
+        that were running (a process must not exit while one is inside OpenCL: pocl's
+        threads then abort it); True if all ended."""
+        end = time.perf_counter() + timeout_s
+        for job in self._left:
+            job.wait(max(end - time.perf_counter(), 0.0))
+        return not any(j._thread.is_alive() for j in self._left)

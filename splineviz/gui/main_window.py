@@ -29,6 +29,7 @@ from splineviz.gui.commands import Commands
 from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
 from splineviz.gui.panels import (
+    AnalysisPanel,
     ClippingPanel,
     DataPanel,
     IsosurfacePanel,
@@ -105,6 +106,9 @@ class MainWindow(QMainWindow):
         self.commands.opened.connect(self._opened)
         self.commands.saved.connect(lambda p: self.statusBar().showMessage(f"saved {p}", 6000))
         self.commands.saved.connect(lambda p: self.log.add(f"saved {p}"))
+        self.commands.warned.connect(self.show_warning)
+        #: autosaves the scene for crash recovery (the app turns it on: :meth:`enable_autosave`)
+        self.autosaver = None
         self.scene.changed.connect(self._update_title)
         self.fit_to_screen()
 
@@ -123,6 +127,7 @@ class MainWindow(QMainWindow):
         self.clip_panel = ClippingPanel(self.scene)
         self.smooth_panel = SmoothingPanel(self.scene)
         self.remesh_panel = RemeshPanel(self.scene, self.jobs)
+        self.analysis_panel = AnalysisPanel(self.scene)
         self.log = LogPanel()
         left, right = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
         self.docks = {
@@ -131,11 +136,13 @@ class MainWindow(QMainWindow):
             "Clipping": self._dock("Clipping", self.clip_panel, right),
             "Smoothing": self._dock("Smoothing", self.smooth_panel, right),
             "Remeshing": self._dock("Remeshing", self.remesh_panel, right),
+            "Analysis": self._dock("Analysis", self.analysis_panel, right),
             "Log": self._dock("Log", self.log, Qt.DockWidgetArea.BottomDockWidgetArea),
         }
         # the right column as tabs: narrower, so the 3-D view keeps its room
         self.tabifyDockWidget(self.docks["Clipping"], self.docks["Smoothing"])
         self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Remeshing"])
+        self.tabifyDockWidget(self.docks["Remeshing"], self.docks["Analysis"])
         self.docks["Clipping"].raise_()
         self.docks["Log"].hide()
 
@@ -259,6 +266,13 @@ class MainWindow(QMainWindow):
         self._message_boxes.append(box)
         box.show()
 
+    def show_warning(self, message: str) -> None:
+        """Something the user should know of, not an error: the log panel and the status
+        bar (no message box to close)."""
+        self.log.add(f"warning: {message}")
+        if not self._closed:
+            self.statusBar().showMessage(message, 8000)
+
     def guard(self, fn, *args, **kwargs):
         """Run a command; a user error becomes one message."""
         try:
@@ -298,6 +312,46 @@ class MainWindow(QMainWindow):
     def export_screenshot(self, path, size=None, transparent: bool = False):
         return self.commands.export_screenshot(path, size, transparent)
 
+    # -- crash recovery ------------------------------------------------------------------
+
+    def enable_autosave(self, folder=None, debounce_ms: int | None = None) -> None:
+        """Autosave the scene to a recovery file after every change (see
+        :mod:`splineviz.gui.recovery`); a clean quit removes it."""
+        from splineviz.gui.recovery import DEBOUNCE_MS, Autosaver
+
+        if self.autosaver is None:
+            self.autosaver = Autosaver(self.scene, folder, debounce_ms or DEBOUNCE_MS, self)
+            self.autosaver.failed.connect(self.show_warning)
+
+    def offer_recovery(self, folder=None):
+        """If an earlier run left a recovery file (a crash or kill), ask whether to restore
+        it and, if so, load it in a job (which replaces the scene); returns that job, or
+        None. Files not restored are removed; older ones wait for the next start."""
+        from splineviz.gui.recovery import ask_restore, orphaned, restored_data_paths
+
+        if folder is None and self.autosaver is not None:
+            folder = self.autosaver.folder
+        found = orphaned(folder)
+        if not found:
+            return None
+        newest = found[0]
+        if not ask_restore(self, newest):
+            newest.discard()
+            self.log.add(f"discarded the recovery file {newest.path}")
+            return None
+
+        def loaded():
+            restored_data_paths(self.scene, newest.data_dir)
+            newest.discard()
+            self.scene.modified = True  # restored work is not saved anywhere yet
+            self.session_file = None
+            self._update_title()
+            self.show_warning(f"restored the scene autosaved at "
+                              f"{time.strftime('%H:%M:%S', time.localtime(newest.saved))}")
+
+        # its data paths are relative to the recovery folder: outside it, and ours
+        return self.commands.load_session(newest.path, allow_outside=True, on_loaded=loaded)
+
     # -- tests and scripts ---------------------------------------------------------------
 
     def busy(self) -> bool:
@@ -321,6 +375,16 @@ class MainWindow(QMainWindow):
 
     def request_render(self) -> None:
         self.view.request_render()
+
+    def join_workers(self, timeout_s: float = 10.0) -> bool:
+        """After the window closed: wait up to ``timeout_s`` for the background threads still
+        running (a frame being ray cast, a job winding down, an autosave copy). Exiting the
+        process while one is inside OpenCL aborted it ("terminate called without an active
+        exception", from pocl's threads): the app calls this before it exits."""
+        end = time.perf_counter() + timeout_s
+        ok = self.view.join(timeout_s)
+        ok = self.jobs.join(max(end - time.perf_counter(), 0.0)) and ok
+        return ok
 
     # -- drag and drop, close ------------------------------------------------------------
 
@@ -357,6 +421,8 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self._closed = True
+        if self.autosaver is not None:
+            self.autosaver.close()  # a clean quit: nothing to recover
         self.jobs.close()
         for box in list(self._message_boxes):
             box.close()

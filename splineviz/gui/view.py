@@ -266,12 +266,17 @@ class View3D(QObject):
                 continue
             depth = float(rf.frame.depth[r, c])
             if best is None or depth < best[0]:
-                best = (depth, node_id, rf.frame.position[r, c], layer)
+                # the colour-by value at the hit, when the surface is coloured by one
+                colour = None if rf.scalars is None else float(rf.scalars[r, c])
+                best = (depth, node_id, rf.frame.position[r, c], layer, colour)
         if best is None:
             return None
-        _, node_id, pos, layer = best
+        _, node_id, pos, layer, colour = best
+        if colour is not None and not np.isfinite(colour):
+            colour = None
         return {"name": self.scene.get(node_id).name, "position": np.asarray(pos),
-                "isovalue": layer.isovalue, "value": _trilinear(layer.volume, pos)}
+                "isovalue": layer.isovalue, "value": _trilinear(layer.volume, pos),
+                "color_by": layer.color_by, "color_value": colour}
 
     def _update_readout(self) -> None:
         if self._cursor is None or self._closed:
@@ -281,8 +286,10 @@ class View3D(QObject):
             self.readout.emit("")
             return
         x, y, z = hit["position"]
+        colour = "" if hit["color_value"] is None else \
+            f"  {hit['color_by']} {hit['color_value']:.5g}"
         self.readout.emit(f"{hit['name']}: ({x:.4g}, {y:.4g}, {z:.4g})  "
-                          f"data {hit['value']:.5g}  (iso {hit['isovalue']:.5g})")
+                          f"data {hit['value']:.5g}  (iso {hit['isovalue']:.5g}){colour}")
 
     def close(self) -> None:
         self._closed = True
@@ -294,6 +301,11 @@ class View3D(QObject):
         self.scene.changed.disconnect(self.request_render)
         self.scene_view.close()
         self.plotter.close()
+
+    def join(self, timeout_s: float) -> bool:
+        """After :meth:`close`: wait for a frame still being ray cast (see
+        :meth:`splineviz.gui.jobs.JobRunner.join`)."""
+        return self._refiner.join(timeout_s)
 
 
 def _trilinear(volume, point) -> float:

@@ -189,7 +189,7 @@ def confined(name, referrer, *, what: str = "data file", error=OutsideFolderErro
         raise error(
             f"{ref.name} names the {what} {raw}, which resolves to {real} outside {folder}; "
             "allow it explicitly to read it (allow_outside=True, --allow-outside-data)",
-            path=real, folder=folder)
+            path=real, folder=folder, referrer=ref)
     return target
 
 

@@ -86,12 +86,15 @@ class OutsideFolderError(_OneSentence, SplinevizError, ValueError):
         The resolved file that would have been read.
     folder : Path
         The resolved folder it had to stay in.
+    referrer : Path
+        The header or session that names the file.
     """
 
-    def __init__(self, message="", *, path=None, folder=None):
+    def __init__(self, message="", *, path=None, folder=None, referrer=None):
         super().__init__(message)
         self.path = path
         self.folder = folder
+        self.referrer = referrer
 
 
 class SessionOutsideFolderError(OutsideFolderError, SessionPathError):

@@ -58,6 +58,10 @@ def describe(path, *, allow_outside: bool = False, **raw) -> dict:
                 "colors": pd.colors is not None,
                 "bounds": [[float(a), float(b)] for a, b in zip(lo, hi, strict=True)]}
     validate_volume_data(vd, p.name)
+    from splineviz.io.chunked import is_lazy
+
+    if is_lazy(vd.data):
+        return _describe_chunked(vd, p)
     data = np.asarray(vd.data)
     finite = np.isfinite(data) if data.dtype.kind == "f" else None
     vals = data[finite] if finite is not None else data
@@ -66,6 +70,20 @@ def describe(path, *, allow_outside: bool = False, **raw) -> dict:
     return {"kind": "volume", "file": str(p), "format": vd.format, "dims": list(shape),
             "dtype": str(data.dtype), "range": rng,
             "nonfinite": int(data.size - finite.sum()) if finite is not None else 0,
+            "spacing": [float(s) for s in vd.spacing], "origin": [float(o) for o in vd.origin],
+            "bounds": [[o, o + (n - 1) * s] for o, n, s in zip(vd.origin, shape, vd.spacing,
+                                                              strict=True)]}
+
+
+def _describe_chunked(vd, p) -> dict:
+    """A chunked volume from its metadata alone: no sample is read (the range is unknown
+    until the data are read: ``"not read"``)."""
+    shape = tuple(int(n) for n in vd.data.shape)
+    levels = [list(shape)] + [list(lv.shape) for lv in vd.meta.get("levels", ())]
+    return {"kind": "volume", "file": str(p), "format": vd.format, "dims": list(shape),
+            "dtype": str(vd.data.dtype), "range": "not read (chunked)",
+            "chunks": [int(max(c)) for c in vd.data.chunks],
+            "levels": " ".join("x".join(map(str, lv)) for lv in levels),
             "spacing": [float(s) for s in vd.spacing], "origin": [float(o) for o in vd.origin],
             "bounds": [[o, o + (n - 1) * s] for o, n, s in zip(vd.origin, shape, vd.spacing,
                                                               strict=True)]}

@@ -38,7 +38,8 @@ class Format:
     reader, writer : callable or None
         ``reader(path, **options)`` and ``writer(path, data, **options)``.
     sniff : callable or None
-        ``sniff(head: bytes) -> bool`` on the first bytes of a file.
+        ``sniff(head: bytes) -> bool`` on the first bytes of a file; for a folder format
+        ``sniff(path) -> bool`` on the folder.
     folder : bool
         The format is a folder of files (DICOM series).
     description : str
@@ -154,8 +155,16 @@ def find_format(path, kind: str, *, mode: str = "read", name: str | None = None)
             )
         return fmt
     if mode == "read" and path.is_dir():
-        for fmt in formats(kind, mode=mode):
-            if fmt.folder:
+        # folder formats: by suffix (".zarr"), then by content (``sniff(path)`` of a folder
+        # format looks at the folder), then one without a signature (a DICOM series)
+        folders = [f for f in formats(kind, mode=mode) if f.folder]
+        low = path.name.lower()
+        for fmt in sorted(folders, key=lambda f: f.sniff is None):
+            if any(low.endswith(e) for e in fmt.extensions) or (
+                    fmt.sniff is not None and fmt.sniff(path)):
+                return fmt
+        for fmt in folders:
+            if fmt.sniff is None:
                 return fmt
         raise UnknownFormatError(f"{path} is a folder and no {kind} format reads folders")
     candidates = [f for f in _by_suffix(path, kind, mode) if not f.folder]

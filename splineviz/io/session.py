@@ -4,7 +4,7 @@ Document layout (schema :data:`SCHEMA_VERSION`)::
 
     {
       "format": "splineviz-session",
-      "schema_version": 3,
+      "schema_version": 4,
       "app_version": "0.1.0",
       "objects": [                          # pipeline, inputs before outputs
         {"id": "vol1", "type": "VolumeFile", "name": "bonsai",
@@ -60,6 +60,7 @@ from pydantic import (
     model_validator,
 )
 
+from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
 from splineviz.io._util import atomic_write_bytes, confined, outside_allowed
 from splineviz.io.errors import (
     SessionError,
@@ -69,7 +70,7 @@ from splineviz.io.errors import (
 )
 
 FORMAT = "splineviz-session"
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: largest session file read, in bytes (a scene description, not data)
 MAX_SESSION_BYTES = 16 * 2**20
 #: largest coordinate or value magnitude accepted (beyond it float32 rendering breaks down)
@@ -175,6 +176,20 @@ class IsosurfaceProps(_Model):
     opacity: Unit = 1.0
     visible: bool = True
     material: Literal["default", "matte", "shiny", "metal"] = "default"
+    #: colour by (splineviz.core.colour_by): the field, its map, range and second volume
+    color_by: Literal[FIELDS] = "none"
+    color_map: Literal[COLORMAPS] = "viridis"
+    color_range: Literal[RANGE_MODES] = "auto"
+    color_min: Finite = 0.0
+    color_max: Finite = 1.0
+    color_volume: Annotated[str, Field(pattern=_ID)] | None = None
+    color_isosurface: Annotated[str, Field(pattern=_ID)] | None = None
+
+    @model_validator(mode="after")
+    def _range_order(self):
+        if not self.color_min < self.color_max:
+            raise ValueError("color_min must be below color_max")
+        return self
 
 
 class RemeshProps(_Model):
@@ -197,6 +212,15 @@ class ClipPlaneProps(_Model):
     show_widget: bool = True
 
     _nonzero = field_validator("normal")(classmethod(lambda cls, v: nonzero_normal(v)))
+
+
+class SectionProps(_Model):
+    """Exact cross-section curves of its first input (an isosurface) with its second (a clip
+    plane or another isosurface), drawn as lines."""
+
+    color: RGB = (0.95, 0.25, 0.2)
+    line_width: Annotated[float, Field(gt=0, le=20, allow_inf_nan=False)] = 3.0
+    visible: bool = True
 
 
 # ---------------------------------------------------------------------------- objects
@@ -241,8 +265,13 @@ class ClipPlane(_Object):
     properties: ClipPlaneProps = Field(default_factory=ClipPlaneProps)
 
 
+class Section(_Object):
+    type: Literal["Section"] = "Section"
+    properties: SectionProps = Field(default_factory=SectionProps)
+
+
 PipelineObject = Annotated[
-    VolumeFile | Source | PointsFile | MeshFile | Isosurface | Remesh | ClipPlane,
+    VolumeFile | Source | PointsFile | MeshFile | Isosurface | Remesh | ClipPlane | Section,
     Field(discriminator="type"),
 ]
 
@@ -256,11 +285,12 @@ INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
     "Remesh": ((1, 1), ("PointsFile",)),
     "ClipPlane": ((0, 64), ("VolumeFile", "Source", "Isosurface", "PointsFile", "MeshFile",
                             "Remesh")),
+    "Section": ((2, 2), ("Isosurface", "ClipPlane")),
 }
 
 #: type name -> model class (for :meth:`Session.add`)
 OBJECT_TYPES = {c.__name__: c for c in (VolumeFile, Source, PointsFile, MeshFile, Isosurface,
-                                        Remesh, ClipPlane)}
+                                        Remesh, ClipPlane, Section)}
 
 #: object types whose ``properties.path`` names a data file
 FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
@@ -340,7 +370,7 @@ class Session(_Model):
     """
 
     format: Literal["splineviz-session"] = FORMAT
-    schema_version: Literal[3] = SCHEMA_VERSION
+    schema_version: Literal[4] = SCHEMA_VERSION
     app_version: Annotated[str, Field(max_length=64)] = ""
     objects: Annotated[list[PipelineObject], Field(max_length=MAX_OBJECTS)] = []
     views: Annotated[list[View], Field(max_length=MAX_VIEWS)] = Field(
@@ -574,8 +604,14 @@ def _v2_to_v3(doc: dict) -> dict:
     return {**doc, "schema_version": 3}
 
 
+def _v3_to_v4(doc: dict) -> dict:
+    """Schema 4 adds the colour-by properties of isosurfaces (defaults: the flat colour of
+    schema 3) and Section objects, so a schema-3 document means the same under schema 4."""
+    return {**doc, "schema_version": 4}
+
+
 #: schema version -> function lifting a document of that version to the next one
-MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2, 2: _v2_to_v3}
+MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2, 2: _v2_to_v3, 3: _v3_to_v4}
 
 
 def migrate(doc: dict) -> dict:
@@ -645,7 +681,7 @@ def _describe(err: ValidationError) -> str:
     e = err.errors()[0]
     loc = ".".join(str(p) for p in e.get("loc", ()) if not (isinstance(p, str) and p in (
         "VolumeFile", "Source", "PointsFile", "MeshFile", "Isosurface", "Remesh",
-        "ClipPlane")))
+        "ClipPlane", "Section")))
     msg = e.get("msg", "invalid value").rstrip(".")
     return f"{loc or 'document'}: {msg}"
 
@@ -671,6 +707,8 @@ def validate_document(doc: dict) -> Session:
                                    "before it")
             if seen[i] not in allowed:
                 raise SessionError(f"{o.type} {o.id!r} cannot take the {seen[i]} {i!r} as input")
+        if o.type == "Section" and seen[o.inputs[0]] != "Isosurface":
+            raise SessionError(f"section {o.id!r} must take an isosurface as its first input")
         seen[o.id] = o.type
     view_ids = [v.id for v in session.views]
     if len(view_ids) != len(set(view_ids)):

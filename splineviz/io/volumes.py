@@ -827,8 +827,10 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
 
     Returns
     -------
-    Volume
-        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, float32.
+    Volume or ChunkedVolume
+        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, float32; chunked formats
+        (OME-Zarr, Zarr, HDF5) give a lazily read
+        :class:`~splineviz.core.chunked.ChunkedVolume`.
 
     Raises
     ------
@@ -845,6 +847,12 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
                           offset=offset, allow_outside=allow_outside)
+    from splineviz.io.chunked import is_lazy, to_chunked_volume
+
+    if is_lazy(vd.data):  # OME-Zarr, Zarr, HDF5: a ChunkedVolume, read brick by brick
+        validate_volume_data(vd, Path(os.fspath(path)).name)
+        return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,
+                                 origin=origin)
     return to_volume(vd, Path(os.fspath(path)).name, spacing=spacing, origin=origin,
                      nonfinite=nonfinite)
 

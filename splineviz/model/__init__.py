@@ -20,6 +20,7 @@ from splineviz.model.nodes import (
     ModelError,
     Node,
     PointsNode,
+    SectionNode,
     ViewNode,
     VolumeNode,
 )
@@ -27,4 +28,4 @@ from splineviz.model.scene import STANDARD_VIEWS, Scene
 
 __all__ = ["MATERIALS", "MAX_SIGMA", "PALETTE", "STANDARD_VIEWS", "CameraNode", "ClipPlaneNode",
            "IsosurfaceNode", "MeshNode", "ModelError", "Node", "PointsNode", "Scene",
-           "ViewNode", "VolumeNode"]
+           "SectionNode", "ViewNode", "VolumeNode"]

@@ -22,6 +22,7 @@ import numpy as np
 from psygnal import EventedModel
 from pydantic import ConfigDict, Field, ValidationError, field_validator
 
+from splineviz.core.chunked import ChunkedVolume
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
 from splineviz.core.volume import Volume
@@ -111,7 +112,8 @@ class VolumeNode(Node):
     source: str | None = None
     sigma: Annotated[float, Field(ge=0.0, le=MAX_SIGMA, allow_inf_nan=False)] = 0.0
     show_outline: bool = True
-    data: Volume | None = Field(default=None, exclude=True, repr=False)
+    #: in-memory samples, or a lazily read chunked volume (rendered in bricks)
+    data: Volume | ChunkedVolume | None = Field(default=None, exclude=True, repr=False)
     smoothed: Volume | None = Field(default=None, exclude=True, repr=False)
     #: the sigma ``smoothed`` was made with
     smoothed_sigma: float = Field(default=0.0, exclude=True)
@@ -152,6 +154,43 @@ class IsosurfaceNode(Node):
     color: RGB = PALETTE[0]
     opacity: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False)] = 1.0
     material: str = "default"
+    #: colour by (:mod:`splineviz.core.colour_by`): field, map, range mode, manual range and
+    #: the volume node whose values colour the surface when ``color_by == "volume"``
+    color_by: str = "none"
+    color_map: str = "viridis"
+    color_range: str = "auto"
+    color_min: Finite = 0.0
+    color_max: Finite = 1.0
+    color_volume_id: str | None = None
+    #: the isosurface node whose surface the distance is measured to (``"distance"``)
+    color_isosurface_id: str | None = None
+
+    @field_validator("color_by")
+    @classmethod
+    def _known_field(cls, v: str) -> str:
+        from splineviz.core.colour_by import FIELDS
+
+        if v not in FIELDS:
+            raise ValueError(f"unknown colour-by field {v!r}; choose one of {', '.join(FIELDS)}")
+        return v
+
+    @field_validator("color_map")
+    @classmethod
+    def _known_map(cls, v: str) -> str:
+        from splineviz.core.colour_by import COLORMAPS
+
+        if v not in COLORMAPS:
+            raise ValueError(f"unknown colour map {v!r}; choose one of {', '.join(COLORMAPS)}")
+        return v
+
+    @field_validator("color_range")
+    @classmethod
+    def _known_range(cls, v: str) -> str:
+        from splineviz.core.colour_by import RANGE_MODES
+
+        if v not in RANGE_MODES:
+            raise ValueError(f"unknown range mode {v!r}; choose one of {', '.join(RANGE_MODES)}")
+        return v
 
     @field_validator("model")
     @classmethod
@@ -242,6 +281,29 @@ class ClipPlaneNode(Node):
     def as_pair(self) -> tuple[tuple, tuple]:
         """``(origin, normal)`` as :meth:`splineviz.RayCaster.render` takes it."""
         return tuple(self.origin), tuple(self.normal)
+
+
+class SectionNode(Node):
+    """Exact cross-section curves (:mod:`splineviz.core.sections`) of an isosurface with a
+    clip plane (``plane_id``) or with another isosurface (``other_id``), shown as lines.
+
+    ``curves`` holds the last computed :class:`~splineviz.core.sections.SectionCurve` list
+    (derived data: never written to sessions, recomputed when an input changes).
+    """
+
+    kind: str = Field(default="section", exclude=True, frozen=True)
+    isosurface_id: str = ""
+    plane_id: str | None = None
+    other_id: str | None = None
+    color: RGB = (0.95, 0.25, 0.2)
+    line_width: Annotated[float, Field(gt=0.0, le=20.0, allow_inf_nan=False)] = 3.0
+    curves: list | None = Field(default=None, exclude=True, repr=False)
+
+    @property
+    def inputs(self) -> list[str]:
+        """The isosurface and the plane or second isosurface it intersects."""
+        return [self.isosurface_id, self.plane_id if self.plane_id is not None
+                else self.other_id]
 
 
 class CameraNode(Node):

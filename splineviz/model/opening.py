@@ -7,7 +7,10 @@ scene here, so the same arguments give the same scene (and, through
 
 from __future__ import annotations
 
-from splineviz.core.errors import SplinevizError
+import warnings
+from dataclasses import dataclass
+
+from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.model.scene import Scene
 from splineviz.model.session import apply_session, read_session_data
 
@@ -43,7 +46,7 @@ def read_file(path, *, allow_outside: bool = False):
     Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
     process. ``allow_outside`` as in :func:`splineviz.io.opening.open_path`."""
     from splineviz.io.opening import open_path
-    from splineviz.model.summaries import log_histogram, median_spacing
+    from splineviz.model.summaries import log_histogram, median_spacing, summary_samples
 
     opened = open_path(path, allow_outside=allow_outside)
     if opened.kind == "session":
@@ -51,7 +54,75 @@ def read_file(path, *, allow_outside: bool = False):
     if opened.kind != "volume":
         return opened.kind, opened.value, {"spacing": median_spacing(opened.value.points)}
     _ = opened.value.finite_range
-    return opened.kind, opened.value, {"histogram": log_histogram(opened.value.data)}
+    return opened.kind, opened.value, {"histogram": log_histogram(summary_samples(opened.value))}
+
+
+@dataclass(frozen=True)
+class OutsideFolder:
+    """A file (header or session) that names a data file outside its own folder: the io
+    layer refused to read it without the user's confirmation.
+
+    Attributes
+    ----------
+    path : str
+        The header or session.
+    data_path : str
+        The data file it names.
+    message : str
+        The refusal, one sentence.
+    """
+
+    path: str
+    data_path: str
+    message: str
+
+
+def outside_folder(exc: BaseException) -> OutsideFolder | None:
+    """The :class:`OutsideFolder` an io error stands for (an
+    :class:`~splineviz.io.errors.OutsideFolderError`: a data file outside the folder of the
+    file naming it), else None."""
+    from splineviz.io.errors import OutsideFolderError
+
+    if not isinstance(exc, OutsideFolderError):
+        return None
+    return OutsideFolder(str(exc.referrer or exc.folder or ""), str(exc.path), str(exc))
+
+
+@dataclass(frozen=True)
+class Noted:
+    """What a read in a job process returns to the GUI: the result (or the refusal of a
+    data file outside its folder) and the warnings raised while reading.
+
+    Attributes
+    ----------
+    value : object or OutsideFolder
+    warnings : list of str
+        :class:`~splineviz.core.errors.SplinevizWarning` messages: shown to the user.
+    other_warnings : list of str
+        Library warnings (``Category: message``): logged, not shown.
+    """
+
+    value: object
+    warnings: list
+    other_warnings: list
+
+
+def noting_warnings(func, *args, **kwargs) -> Noted:
+    """Call ``func`` recording the warnings it raises and turning a refusal of a data file
+    outside its folder into an :class:`OutsideFolder` (run in a job process: warnings are
+    process state, and the refusal's exception need not pickle)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            value = func(*args, **kwargs)
+        except SplinevizError as exc:
+            value = outside_folder(exc)
+            if value is None:
+                raise
+    ours = [str(w.message) for w in caught if issubclass(w.category, SplinevizWarning)]
+    other = [f"{w.category.__name__}: {w.message}" for w in caught
+             if not issubclass(w.category, SplinevizWarning)]
+    return Noted(value, ours, other)
 
 
 def scene_from_path(path, *, isovalue=None, model=None, repoint=None,

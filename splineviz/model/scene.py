@@ -30,6 +30,7 @@ from splineviz.model.nodes import (
     ModelError,
     Node,
     PointsNode,
+    SectionNode,
     ViewNode,
     VolumeNode,
 )
@@ -180,6 +181,8 @@ class Scene:
             if target is not None and not isinstance(self._nodes.get(target), VolumeNode):
                 raise ModelError(f"{node.kind} {node.id!r} refers to the volume {target!r}, "
                                  "which is not in the scene")
+        if isinstance(node, SectionNode):
+            self._check_section(node)
         if not node.name:
             node.name = node.id
         self._nodes[node.id] = node
@@ -197,6 +200,12 @@ class Scene:
             for dep in [n for n in self._nodes.values()
                         if getattr(n, "volume_id", None) == node.id]:
                 self.remove(dep)
+        for dep in [n for n in self.of_kind(SectionNode) if node.id in n.inputs]:
+            self.remove(dep)
+        # colourings that refer to it fall back to the flat colour
+        for iso in self.of_kind(IsosurfaceNode):
+            if node.id in (iso.color_volume_id, iso.color_isosurface_id):
+                iso.update(color_by="none", color_volume_id=None, color_isosurface_id=None)
         if isinstance(node, PointsNode):
             for mesh in self.of_kind(MeshNode):
                 if mesh.points_id == node.id:
@@ -259,6 +268,35 @@ class Scene:
         props.setdefault("name", f"isosurface {n + 1}" if n else "isosurface")
         return self.add(IsosurfaceNode(volume_id=volume.id, model=model,
                                        isovalue=float(isovalue), **props))
+
+    def _check_section(self, node: SectionNode) -> None:
+        if not isinstance(self._nodes.get(node.isosurface_id), IsosurfaceNode):
+            raise ModelError(f"section {node.id!r} needs an isosurface, not "
+                             f"{node.isosurface_id!r}")
+        if (node.plane_id is None) == (node.other_id is None):
+            raise ModelError(f"section {node.id!r} needs either a clip plane or a second "
+                             "isosurface")
+        if node.plane_id is not None and \
+                not isinstance(self._nodes.get(node.plane_id), ClipPlaneNode):
+            raise ModelError(f"section {node.id!r}: {node.plane_id!r} is not a clip plane")
+        if node.other_id is not None and (
+                node.other_id == node.isosurface_id
+                or not isinstance(self._nodes.get(node.other_id), IsosurfaceNode)):
+            raise ModelError(f"section {node.id!r}: {node.other_id!r} is not another "
+                             "isosurface")
+
+    @property
+    def sections(self) -> list[SectionNode]:
+        return self.of_kind(SectionNode)
+
+    def add_section(self, isosurface: IsosurfaceNode, plane: ClipPlaneNode | None = None,
+                    other: IsosurfaceNode | None = None, **props) -> SectionNode:
+        """The exact curves where ``isosurface`` meets ``plane`` or the isosurface
+        ``other``."""
+        props.setdefault("name", f"section of {isosurface.name}")
+        return self.add(SectionNode(isosurface_id=isosurface.id,
+                                    plane_id=None if plane is None else plane.id,
+                                    other_id=None if other is None else other.id, **props))
 
     def add_points(self, cloud, name: str = "", *, path=None, **props) -> PointsNode:
         return self.add(PointsNode(name=name, path=None if path is None else str(path),

@@ -25,6 +25,7 @@ from splineviz.model.nodes import (
     IsosurfaceNode,
     MeshNode,
     PointsNode,
+    SectionNode,
     VolumeNode,
     mesh_arrays,
 )
@@ -44,8 +45,16 @@ def _props(node, *names) -> dict:
     return {n: getattr(node, n) for n in names}
 
 
-def to_session(scene: Scene) -> Session:
+def to_session(scene: Scene, written: dict | None = None) -> Session:
     """The :class:`~splineviz.io.session.Session` of ``scene``.
+
+    Parameters
+    ----------
+    scene : Scene
+    written : dict, optional
+        Object id -> ``(path, read options)`` of data without a file of its own that was
+        written elsewhere (the GUI's autosave keeps such copies in its recovery folder and
+        must not point the nodes at them); used for nodes whose ``path`` is None.
 
     Raises
     ------
@@ -53,37 +62,50 @@ def to_session(scene: Scene) -> Session:
         An object holds data without a file or source (use :func:`save_scene`, which
         writes such data first).
     """
+    written = written or {}
     s = Session()
     for node in scene:
         common = {"name": node.name, "id": node.id}
+        path, read_options = getattr(node, "path", None), getattr(node, "read_options", {})
+        if path is None and node.id in written:
+            path, read_options = written[node.id]
         if isinstance(node, VolumeNode):
             extra = _props(node, "sigma", "show_outline", "visible")
             if node.source is not None:
                 s.add("Source", {"source": node.source, "shape": list(node.data.shape),
                                  **extra}, **common)
-            elif node.path is not None:
-                s.add("VolumeFile", {"path": node.path, **node.read_options, **extra}, **common)
+            elif path is not None:
+                s.add("VolumeFile", {"path": path, **read_options, **extra}, **common)
             else:
                 raise SessionError(f"volume {node.name!r} has no file; save the session with "
                                    "save_scene, which writes it")
         elif isinstance(node, IsosurfaceNode):
+            colour_by = _props(node, "color_by", "color_map", "color_range", "color_min",
+                               "color_max")
+            if node.color_volume_id is not None:
+                colour_by["color_volume"] = node.color_volume_id
+            if node.color_isosurface_id is not None:
+                colour_by["color_isosurface"] = node.color_isosurface_id
             s.add("Isosurface", {**_props(node, "isovalue", "model", "k", "opacity", "visible",
-                                          "material"), "color": list(node.color)},
+                                          "material"), "color": list(node.color), **colour_by},
                   inputs=[node.volume_id], **common)
         elif isinstance(node, PointsNode):
-            if node.path is None:
+            if path is None:
                 raise SessionError(f"point cloud {node.name!r} has no file")
-            s.add("PointsFile", {"path": node.path, "color": list(node.color),
+            s.add("PointsFile", {"path": path, "color": list(node.color),
                                  **_props(node, "point_size", "opacity", "visible")}, **common)
         elif isinstance(node, MeshNode):
-            if node.path is None:
+            if path is None:
                 raise SessionError(f"mesh {node.name!r} has no file")
             provenance = {k: v for k, v in _props(node, "edge_length", "rho").items()
                           if v is not None}
             inputs = [node.points_id] if node.points_id in scene else []
-            s.add("MeshFile", {"path": node.path, "color": list(node.color),
+            s.add("MeshFile", {"path": path, "color": list(node.color),
                                **_props(node, "opacity", "show_edges", "visible"),
                                **provenance}, inputs=inputs, **common)
+        elif isinstance(node, SectionNode):
+            s.add("Section", {"color": list(node.color), **_props(node, "line_width", "visible")},
+                  inputs=node.inputs, **common)
         elif isinstance(node, ClipPlaneNode):
             s.add("ClipPlane", {"origin": list(node.origin), "normal": list(node.normal),
                                 **_props(node, "enabled", "show_widget")},
@@ -100,6 +122,54 @@ def to_session(scene: Scene) -> Session:
     return s
 
 
+def needs_data_file(node) -> bool:
+    """Whether ``node`` holds data that no file or source describes (a volume made in
+    Python, a remeshed mesh): a session must write it somewhere first."""
+    if isinstance(node, VolumeNode):
+        return node.path is None and node.source is None
+    return isinstance(node, MeshNode | PointsNode) and node.path is None
+
+
+def write_node_data(node, folder, volume_suffix: str = ".vti") -> tuple[str, dict]:
+    """Write the data of a node without a file (see :func:`needs_data_file`) into
+    ``folder`` as ``<id><suffix>``; the node is not changed.
+
+    Parameters
+    ----------
+    node : VolumeNode, MeshNode or PointsNode
+    folder : path-like
+        An existing folder.
+    volume_suffix : str
+        ``".vti"`` (keeps spacing and origin in the file) or ``".npy"`` (a plain array
+        write, which releases the GIL: what a background writer wants; spacing and origin
+        then go into the read options).
+
+    Returns
+    -------
+    (str, dict)
+        The file written and the read options a session records beside it.
+    """
+    from splineviz.io.meshes import write_mesh
+    from splineviz.io.volumes import write_volume
+
+    folder = Path(folder)
+    if isinstance(node, VolumeNode):
+        path = write_volume(folder / f"{node.id}{volume_suffix}", node.data)
+        options = {}
+        if volume_suffix == ".npy":
+            vol = node.data
+            options = {"spacing": [float(v) for v in np.broadcast_to(vol.spacing, 3)],
+                       "origin": [float(v) for v in np.broadcast_to(vol.origin, 3)]}
+        return str(path), options
+    if isinstance(node, MeshNode):
+        return str(write_mesh(folder / f"{node.id}.ply", node.to_polydata())), {}
+    if isinstance(node, PointsNode):
+        pts = np.asarray(node.data.points, dtype=np.float64)
+        return str(write_mesh(folder / f"{node.id}.ply",
+                              (pts, np.zeros((0, 3), dtype=np.int64)))), {}
+    raise SessionError(f"{node.kind} {node.name!r} holds no data to write")
+
+
 def save_scene(scene: Scene, path) -> Path:
     """Write ``scene`` as a session file (``.svs`` appended when missing), data without a
     file written into ``<stem>_data/`` beside it first; returns the session's path.
@@ -107,23 +177,12 @@ def save_scene(scene: Scene, path) -> Path:
     Nodes whose data were written point at the new files afterwards, so saving again does
     not write them again.
     """
-    from splineviz.io.meshes import write_mesh
-    from splineviz.io.volumes import write_volume
-
     p = session_path(path)
     folder = p.parent / f"{p.stem}_data"
     for node in scene:
-        if isinstance(node, VolumeNode) and node.path is None and node.source is None:
+        if needs_data_file(node):
             folder.mkdir(exist_ok=True)
-            node.path = str(write_volume(folder / f"{node.id}.vti", node.data))
-        elif isinstance(node, MeshNode) and node.path is None:
-            folder.mkdir(exist_ok=True)
-            node.path = str(write_mesh(folder / f"{node.id}.ply", node.to_polydata()))
-        elif isinstance(node, PointsNode) and node.path is None:
-            folder.mkdir(exist_ok=True)
-            pts = np.asarray(node.data.points, dtype=np.float64)
-            node.path = str(write_mesh(folder / f"{node.id}.ply",
-                                       (pts, np.zeros((0, 3), dtype=np.int64))))
+            node.path, _ = write_node_data(node, folder)
     save_session(to_session(scene), p)
     scene.mark_saved()
     return p
@@ -183,9 +242,23 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
                                  sigma=p.sigma, show_outline=p.show_outline, visible=p.visible,
                                  data=data[obj.id], **common))
         elif obj.type == "Isosurface":
+            kinds = {o.id: o.type for o in session.objects}
+            if p.color_volume is not None and \
+                    kinds.get(p.color_volume) not in ("VolumeFile", "Source"):
+                raise SessionError(f"isosurface {obj.id!r} is coloured by {p.color_volume!r}, "
+                                   "which is not a volume")
+            if p.color_isosurface is not None and \
+                    kinds.get(p.color_isosurface) != "Isosurface":
+                raise SessionError(f"isosurface {obj.id!r} measures the distance to "
+                                   f"{p.color_isosurface!r}, which is not an isosurface")
             scene.add(IsosurfaceNode(volume_id=obj.inputs[0], model=p.model, k=p.k,
                                      isovalue=p.isovalue, color=p.color, opacity=p.opacity,
-                                     visible=p.visible, material=p.material, **common))
+                                     visible=p.visible, material=p.material,
+                                     color_by=p.color_by, color_map=p.color_map,
+                                     color_range=p.color_range, color_min=p.color_min,
+                                     color_max=p.color_max, color_volume_id=p.color_volume,
+                                     color_isosurface_id=p.color_isosurface,
+                                     **common))
         elif obj.type == "PointsFile":
             scene.add(PointsNode(path=p.path, color=p.color, point_size=p.point_size,
                                  opacity=p.opacity, visible=p.visible, data=data[obj.id],
@@ -200,6 +273,12 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
             scene.add(ClipPlaneNode(volume_id=_plane_volume(session, obj), origin=p.origin,
                                     normal=p.normal, enabled=p.enabled,
                                     show_widget=p.show_widget, **common))
+        elif obj.type == "Section":
+            first, second = obj.inputs
+            is_plane = session.object(second).type == "ClipPlane"
+            scene.add(SectionNode(isosurface_id=first, plane_id=second if is_plane else None,
+                                  other_id=None if is_plane else second, color=p.color,
+                                  line_width=p.line_width, visible=p.visible, **common))
     view = session.views[0]
     c = view.camera
     scene.camera.update(position=c.position, focal_point=c.focal_point, view_up=c.view_up,

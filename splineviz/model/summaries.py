@@ -45,11 +45,23 @@ def log_histogram(data: np.ndarray, bins: int = HISTOGRAM_BINS):
     return np.log1p(counts.astype(np.float64)), edges
 
 
+def summary_samples(volume) -> np.ndarray:
+    """The samples a volume's summaries are made of: all of an in-memory volume, the coarse
+    level of a chunked one (:meth:`~splineviz.core.chunked.ChunkedVolume.preview_level`: a
+    histogram must not read a volume bigger than memory)."""
+    from splineviz.core.chunked import ChunkedVolume
+
+    if isinstance(volume, ChunkedVolume):
+        return np.asarray(volume.preview_level().read_all())
+    return volume.data
+
+
 def cached_histogram(volume):
-    """``log_histogram(volume.data)``, computed once per volume object (thread safe)."""
+    """``log_histogram`` of :func:`summary_samples`, computed once per volume object
+    (thread safe)."""
     hist = _kept_value("histogram", volume)
     if hist is None:
-        hist = log_histogram(volume.data)
+        hist = log_histogram(summary_samples(volume))
         remember("histogram", volume, hist)
     return hist
 

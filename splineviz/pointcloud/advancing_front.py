@@ -410,7 +410,7 @@ class AdvancingFront:
             for (u, w), (pu, pw) in (((b, v), (xb, xv)), ((v, a), (xv, xa)))
             if (u, w) not in front])  # the centre and the new edges' midpoints
         # a triangle whose centre or new edges leave the cloud spans a hole of the scan
-        if any(self._outside(x, n) for x in probes):
+        if self._outside_any(probes, n):
             return False
         if self._covered(probes, centre, max(la, lb, lc)):
             return False
@@ -497,6 +497,17 @@ class AdvancingFront:
         sampling gaps are surrounded by points and do not count.
         """
         dist, idx = self.proj.conn.tree.query(x, k=BORDER_NEIGHBOURS)
+        return self._outside_of(x, n, dist, idx, strict)
+
+    def _outside_any(self, xs, n):
+        """Whether any of the points ``xs (K, 3)`` lies beyond a border (:meth:`_outside`);
+        one k-d tree query for all of them."""
+        dist, idx = self.proj.conn.tree.query(xs, k=BORDER_NEIGHBOURS)
+        return any(self._outside_of(x, n, d, i, False)
+                   for x, d, i in zip(xs, dist, idx, strict=True))
+
+    def _outside_of(self, x, n, dist, idx, strict):
+        """:meth:`_outside` given the ``BORDER_NEIGHBOURS`` nearest input points of ``x``."""
         same_side = self.proj.normals[idx] @ np.asarray(n) > 0  # not the back of a thin sheet
         if same_side.any():
             dist, idx = dist[same_side], idx[same_side]

@@ -110,8 +110,9 @@ def register(subparsers) -> None:
                    help="smallest adaptive edge length (default 1.5 x median spacing)")
     p.add_argument("--max-length", type=_positive, default=None,
                    help="largest adaptive edge length (default 5 x median spacing)")
-    p.add_argument("--smoothing", type=_positive, default=1.0,
-                   help="width of the local fits in spacings; raise for noisy scans")
+    p.add_argument("--smoothing", type=_positive, default=None,
+                   help="fixed width of the local fits in spacings (default: chosen per "
+                        "point from the noise in the data)")
     p.add_argument("--no-optimize", action="store_true",
                    help="skip the valence flips and tangential relaxation")
     p.add_argument("--report", default=None, help="write a JSON report here")

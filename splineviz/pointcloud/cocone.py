@@ -351,3 +351,78 @@ def cocone_connectivity(cloud: PointCloud | np.ndarray,
     spacing = local_spacing(tree, points)
     return Connectivity(points, inverse, graph, normals, spacing, tree, faces)
 
+
+
+#: nearest points whose covariance gives the normal of :func:`knn_connectivity`
+NORMAL_NEIGHBOURS = 12
+#: angular sectors around the normal in which :func:`knn_connectivity` joins the nearest point
+GRAPH_SECTORS = 6
+
+
+def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
+    """Nearest-neighbour graph and oriented PCA normals: a fast stand-in for Cocone.
+
+    For projecting a cloud (not meshing it) no Delaunay tetrahedralisation is needed: the
+    normal of each point is the least-variance direction of its ``NORMAL_NEIGHBOURS`` nearest
+    points [HDD*92], oriented like Cocone's by :func:`orient_normals`.  The graph joins each
+    point to the nearest of those points in each of ``GRAPH_SECTORS`` angular sectors around
+    its normal (symmetrised): like Cocone's ring of neighbours it surrounds the point, where
+    plain nearest neighbours may all lie to one side (the projector's median over the
+    neighbours' polynomials then lands off the surface).  About five times faster than
+    :func:`cocone_connectivity` on 20,000 points; the two sides of a part thinner than the
+    spacing may share a graph edge, which Cocone's co-cone test avoids, so the mesher keeps
+    Cocone.
+
+    Parameters
+    ----------
+    cloud : PointCloud or (N0, 3) array_like
+
+    Returns
+    -------
+    Connectivity
+        With no ``triangles`` (shape ``(0, 3)``).
+
+    Raises
+    ------
+    ConnectivityError
+        Fewer than 4 distinct points, or all points on a line.
+    """
+    pts = cloud.points if isinstance(cloud, PointCloud) else PointCloud(cloud).points
+    if len(pts) == 0:
+        raise ConnectivityError("the point cloud is empty")
+    points, inverse = deduplicate(pts)
+    n = len(points)
+    if n < 4:
+        raise ConnectivityError(f"at least 4 distinct points are needed, got {n}")
+    centred = points - points.mean(axis=0)
+    sv = np.linalg.svd(centred[:: max(1, n // 20000)], compute_uv=False)
+    if sv[1] <= 1e-9 * sv[0]:
+        raise ConnectivityError("all points lie on a line; no surface can be built")
+    tree = cKDTree(points)
+    k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
+    dist, idx = tree.query(points, k=k + 1)
+    nb = points[idx]
+    d = nb - nb.mean(axis=1, keepdims=True)
+    _, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))
+    normals = vec[:, :, 0]
+    # tangent directions: any unit vector orthogonal to the normal, and their cross product
+    helper = np.zeros_like(normals)
+    helper[np.arange(n), np.argmin(np.abs(normals), axis=1)] = 1.0
+    t1 = np.cross(helper, normals)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(normals, t1)
+    rel = nb[:, 1:] - points[:, None, :]
+    angle = np.arctan2(np.einsum("nkc,nc->nk", rel, t2), np.einsum("nkc,nc->nk", rel, t1))
+    sector = np.minimum(((angle + np.pi) / (2 * np.pi) * GRAPH_SECTORS).astype(int),
+                        GRAPH_SECTORS - 1)
+    rows = np.repeat(np.arange(n), k)
+    # columns are sorted by distance: the first of each (point, sector) key is the nearest
+    _, first = np.unique(rows * GRAPH_SECTORS + sector.ravel(), return_index=True)
+    graph = sparse.coo_matrix((dist[:, 1:].ravel()[first], (rows[first],
+                                                             idx[:, 1:].ravel()[first])),
+                              shape=(n, n)).tocsr()
+    graph = graph.maximum(graph.T).tocsr()
+    normals = orient_normals(normals, graph, points)
+    spacing = dist[:, 1:min(SPACING_NEIGHBOURS, n - 1) + 1].mean(axis=1)
+    return Connectivity(points, inverse, graph, normals, spacing, tree,
+                        np.empty((0, 3), dtype=np.int64))

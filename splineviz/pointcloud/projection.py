@@ -20,7 +20,8 @@ import numpy as np
 from scipy import sparse
 
 from splineviz.core.errors import SplinevizError
-from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity
+from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity, knn_connectivity
+from splineviz.pointcloud.local_fits import project_on_polynomials, smoothing_fits
 
 #: highest polynomial degree tried (thesis: "around 5")
 Q_MAX = 5
@@ -49,6 +50,28 @@ FAR_SPACINGS = 2.0
 HINT_CANDIDATES = 8
 #: Gauss-Newton iterations of the orthogonal projection onto a polynomial graph
 PROJECTION_ITERATIONS = 3
+#: nearest points of the variable-degree fit of clean points in the adaptive mode (3 spacings)
+CLEAN_NEIGHBOURS = 40
+#: points fitted at once (bounds the memory of the (chunk, K, m) basis arrays)
+CHUNK = 2048
+#: adaptive mode: nearest points gathered per neighbourhood (the widest scale's support)
+ADAPTIVE_NEIGHBOURS = 80
+#: adaptive mode: Gaussian widths h (in local spacings) and polynomial degrees of the smoothing
+#: fits, narrowest first; the first one also measures the noise
+SCALES = ((1.6, 3), (2.6, 2), (4.2, 2))
+#: intersection-of-confidence-intervals rule: half width of an interval in standard deviations
+ICI_KAPPA = 2.0
+#: noise below this fraction of the spacing counts as none: the interpolating variable-degree
+#: fit of §7.2 is kept (its error on clean data is far below what any smoothing fit reaches)
+CLEAN_NOISE = 1e-3
+#: the noise level used at a point is at most this many times the cloud's median level
+NOISE_CAP = 2.0
+#: a fit whose weighted neighbourhood centroid lies farther than this many widths from the
+#: point leans on one side (a border of the cloud: half a Gaussian gives 0.56) and is not used
+MAX_BALANCE = 0.35
+#: neighbours whose oriented normal deviates more than this from the point's (cos) belong to
+#: another sheet of the surface (the two sides of a thin part) and are left out
+SHEET_COS = 0.0
 
 
 class ProjectionError(SplinevizError, ValueError):
@@ -262,9 +285,9 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
     cond : (N,) condition number of the chosen A
     """
     b = basis(local[..., 0], local[..., 1], q_max)  # (N, K, m)
-    bw = b * weights[..., None]
-    a = np.einsum("nkm,nkl->nml", bw, b)
-    d = np.einsum("nkm,nk->nm", bw, local[..., 2])
+    bwt = (b * weights[..., None]).transpose(0, 2, 1)
+    a = bwt @ b
+    d = (bwt @ local[..., 2, None])[..., 0]
     n, m = d.shape
     degree = np.ones(n, dtype=int)
     cond = np.full(n, np.inf)
@@ -274,8 +297,11 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
         idx = np.flatnonzero(undecided)
         if len(idx) == 0:
             break
+        # A is symmetric positive semi-definite: its 2-norm condition number is the ratio of
+        # its extreme eigenvalues (eigvalsh: a quarter of the cost of np.linalg.cond's SVD)
+        ev = np.linalg.eigvalsh(a[idx, :mq, :mq])
         with np.errstate(all="ignore"):
-            c = np.linalg.cond(a[idx, :mq, :mq])
+            c = np.where(ev[:, 0] > 0, ev[:, -1] / ev[:, 0], np.inf)
         ok = np.isfinite(c) & (c <= cond_max) if q > 1 else np.ones(len(idx), dtype=bool)
         degree[idx[ok]] = q
         cond[idx[ok]] = c[ok]
@@ -289,6 +315,39 @@ def fit_polynomials(local: np.ndarray, weights: np.ndarray, q_max: int = Q_MAX,
     return coeffs, degree, cond
 
 
+def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
+                 kappa: float = ICI_KAPPA, usable: np.ndarray | None = None) -> np.ndarray:
+    """Intersection of confidence intervals (Lepski's method): the widest fit whose interval,
+    and those of all narrower fits, still share a point.
+
+    A wider Gaussian averages more noise out but bends less with the surface; while the value
+    at the origin stays within ``kappa`` standard deviations of all narrower fits, the wider
+    fit is no more biased than the noise, so the widest such fit is taken.
+
+    Parameters
+    ----------
+    values : (P, S) value at the origin of each fit, narrowest first
+    spread : (P, S) variance factors (see :func:`smoothing_fit`)
+    sigma : (P,) noise standard deviation
+    usable : (P, S) bool, optional
+        Fits that may be chosen; the widening also stops at the first unusable one (the
+        narrowest fit is always taken).
+
+    Returns
+    -------
+    (P,) int index of the chosen fit.
+    """
+    half = kappa * sigma[:, None] * np.sqrt(spread)
+    lo = np.maximum.accumulate(values - half, axis=1)
+    hi = np.minimum.accumulate(values + half, axis=1)
+    ok = lo <= hi
+    if usable is not None:
+        ok &= usable
+    ok[:, 0] = True
+    ok = np.logical_and.accumulate(ok, axis=1)
+    return ok.sum(axis=1) - 1
+
+
 def _local_normals(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Unit normals ``(-z_x, -z_y, 1)/|.|`` of polynomial graphs in local coordinates."""
     _, zx, zy = evaluate(coeffs, x, y)
@@ -299,24 +358,50 @@ def _local_normals(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarr
 class Projector:
     """Projection onto the point-set surface of thesis §7.2.
 
-    Precomputes Cocone connectivity, breadth-first neighbourhoods (r_c rule and overlap rule,
-    Fig. 7.6), and per point a weighted least-squares polynomial of variable degree in a local
-    coordinate system re-oriented by bisection (Fig. 7.5).
+    Precomputes Cocone connectivity and per point a weighted least-squares polynomial in a
+    local coordinate system re-oriented by bisection (Fig. 7.5).
+
+    By default (``smoothing=None``) the fits adapt to the noise in the data: per point the
+    noise level is measured from the residuals of a degree-3 fit over about 1.6 spacings and
+    pooled over the nearest points.  Where it is below ``CLEAN_NOISE`` spacings the thesis'
+    interpolating fit is kept (Gaussian width one spacing, variable degree up to ``q_max`` by
+    the condition number), so clean data keeps its accuracy; elsewhere the widest of the
+    ``SCALES`` fits (widths 1.6-4.2 spacings, degree 3 then 2) whose value at the point
+    stays within the confidence intervals of the narrower fits is taken
+    (:func:`choose_scale`), so noise is averaged out where the surface is flat enough and
+    curvature detail stops the widening.  Neighbourhoods are the ``ADAPTIVE_NEIGHBOURS``
+    nearest points whose oriented normals agree (the two sides of a thin part stay apart).
+
+    With a number for ``smoothing`` the thesis' fixed scheme runs: breadth-first
+    neighbourhoods (r_c rule and overlap rule, Fig. 7.6) and variable degree at that width.
 
     Parameters
     ----------
     cloud : PointCloud or (N, 3) array_like
-    smoothing : float
-        Multiplies the Gaussian width ``h`` (eq. 7.2), which defaults to the local spacing;
-        raise it (e.g. 2-3) to smooth out measurement noise.
+    smoothing : float, optional
+        Fixed Gaussian width ``h`` (eq. 7.2) in units of the local spacing (1 is the thesis'
+        choice; e.g. 2-3 smooths out measurement noise); ``None`` (default) chooses the width
+        per point from the data as described above.
     q_max : int
         Highest polynomial degree (1 ... 6).
     cond_max : float
         Condition-number threshold for the degree reduction.
     fixed_degree : int, optional
-        Use this degree everywhere and skip the condition test: an MLS-style ablation.
+        Use this degree everywhere and skip the condition test: an MLS-style ablation (with
+        the fixed width ``smoothing``, 1 when not given).
     connectivity : Connectivity, optional
-        Reuse a previously computed :func:`cocone_connectivity`.
+        Reuse a previously computed :func:`cocone_connectivity` (the mesher does); when not
+        given, the adaptive mode builds the faster :func:`knn_connectivity` (a projection
+        needs no Delaunay tetrahedralisation) and the fixed-width mode Cocone's.
+
+    Attributes
+    ----------
+    noise : (N,) float or None
+        Adaptive mode: the noise standard deviation measured at each point (world units).
+    width : (N,) float
+        Gaussian width of each point's fit in spacings (1 for clean points).
+    degree : (N,) int
+        Degree of each point's polynomial.
 
     Examples
     --------
@@ -329,21 +414,32 @@ class Projector:
     True
     """
 
-    def __init__(self, cloud, smoothing: float = 1.0, q_max: int = Q_MAX,
+    def __init__(self, cloud, smoothing: float | None = None, q_max: int = Q_MAX,
                  cond_max: float = COND_MAX, fixed_degree: int | None = None,
                  connectivity: Connectivity | None = None):
-        if not (np.isfinite(smoothing) and smoothing > 0):
+        if smoothing is not None and not (np.isfinite(smoothing) and smoothing > 0):
             raise ProjectionError(f"smoothing must be a positive number, got {smoothing}")
         if not 1 <= int(q_max) <= 6:
             raise ProjectionError(f"q_max must be between 1 and 6, got {q_max}")
         if fixed_degree is not None and not 1 <= int(fixed_degree) <= int(q_max):
             raise ProjectionError(f"fixed_degree must be between 1 and q_max, got {fixed_degree}")
-        self.conn = connectivity if connectivity is not None else cocone_connectivity(cloud)
         self.q_max = int(q_max)
-        self.smoothing = float(smoothing)
+        self.smoothing = None if smoothing is None else float(smoothing)
+        adaptive = self.smoothing is None and fixed_degree is None
+        if connectivity is not None:
+            self.conn = connectivity
+        else:
+            self.conn = knn_connectivity(cloud) if adaptive else cocone_connectivity(cloud)
         self.points = self.conn.points
         self.scale = self.conn.spacing.copy()
-        self._fit(fixed_degree, cond_max)
+        if adaptive:
+            self._fit_adaptive(cond_max)
+        else:
+            self.smoothing = 1.0 if self.smoothing is None else self.smoothing
+            self._fit(fixed_degree, cond_max)
+            self.reach = np.full(len(self.points), CUTOFF * self.smoothing)
+            self.width = np.full(len(self.points), self.smoothing)
+            self.noise = None
         self._median_sets()
 
     # -- precomputation ------------------------------------------------------------------
@@ -389,6 +485,100 @@ class Projector:
         nloc = _local_normals(coeffs, zero, zero)
         self.normals = np.einsum("nji,nj->ni", frames, nloc)
 
+    def _fit_adaptive(self, cond_max):
+        """Noise-aware fits: the scale (and with it the degree) chosen per point from the data.
+
+        Per point: the ``ADAPTIVE_NEIGHBOURS`` nearest points of its own sheet; the noise
+        level from the residuals of the narrowest smoothing fit, pooled over the nearest
+        points (median); clean points keep the interpolating variable-degree fit of §7.2,
+        noisy ones take the widest of the ``SCALES`` fits that the intersection of confidence
+        intervals accepts (:func:`choose_scale`).  The LCS re-orientation of Fig. 7.5 runs on
+        the chosen polynomial.
+        """
+        pts, n = self.points, len(self.points)
+        k = min(ADAPTIVE_NEIGHBOURS, n)
+        _, index = self.conn.tree.query(pts, k=k)
+        index[:, 0] = np.arange(n)  # points are distinct: the nearest is the point itself
+        normals = self.conn.normals
+        # the other side of a thin part is near but faces the other way (oriented normals)
+        valid = np.einsum("nkc,nc->nk", normals[index], normals) > SHEET_COS
+        valid[:, 0] = True
+        self.neighbourhoods = Neighbourhoods(index, np.zeros(index.shape, dtype=int), valid)
+        frames = frames_from_normals(normals)
+        coeffs = np.zeros((n, basis_size(self.q_max)))
+        degree = np.ones(n, dtype=int)
+        cond = np.zeros(n)
+        reach = np.full(n, CUTOFF)
+        width = np.ones(n)
+        # all widths at once: the first pass serves both the noise and the choice
+        fits = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES,
+                              cond_max, noise=True)
+        raw = fits[5]
+        # residuals also hold the fit's bias where the surface bends sharply (creases, thin
+        # parts): there they would pass for noise and open the intervals to the widest fit;
+        # creases are lines, so the median over the whole neighbourhood is the noise of the
+        # surface around them (and it steadies the estimate from a handful of residuals)
+        noise = np.median(raw[index], axis=1)
+        # a scanner's noise varies slowly over a scan; patches of residuals far above the
+        # cloud's typical level are strongly bent surface (ears, tips) the fits cannot follow,
+        # not noise: capped, their narrow fits keep the shape
+        noise = np.minimum(noise, NOISE_CAP * np.median(noise))
+        self.noise = noise * self.scale
+        todo = np.arange(n)
+        for it in range(MAX_BISECTIONS + 1):
+            self._choose(todo, index, valid, frames, noise[todo], cond_max,
+                         coeffs, degree, cond, reach, width, fits if it == 0 else None)
+            zero = np.zeros(len(todo))
+            nloc = _local_normals(coeffs[todo], zero, zero)
+            bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
+            if it == MAX_BISECTIONS or not bad.any():
+                break
+            # Fig. 7.5: the new z-axis bisects the old one and the polynomial normal
+            nworld = np.einsum("nji,nj->ni", frames[todo[bad]], nloc[bad])
+            frames[todo[bad]] = frames_from_normals(frames[todo[bad], 2] + nworld)
+            todo = todo[bad]
+        self.frames, self.coeffs, self.degree, self.cond, self.reach, self.width = (
+            frames, coeffs, degree, cond, reach, width)
+        zero = np.zeros(n)
+        self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
+
+    def _choose(self, ids, index, valid, frames, noise, cond_max, coeffs, degree, cond, reach,
+                width, fits=None):
+        """Fit points ``ids`` in ``frames`` (or take ``fits`` of them) and store the chosen
+        fits (:meth:`_fit_adaptive`)."""
+        clean = noise < CLEAN_NOISE
+        noisy = ids[~clean]
+        if len(noisy):
+            if fits is None:
+                fits = smoothing_fits(self.points, index, valid, frames, self.scale, noisy,
+                                      SCALES, cond_max)
+            else:
+                fits = tuple(f[:, ~clean] for f in fits[:5])  # axis 1: the points ``ids``
+            c, q, kc, spread, balance = fits[:5]
+            # near a border of the cloud a wide fit leans on one side only and extrapolates
+            # across the border: the widening stops there as it does at curvature detail
+            pick = choose_scale(c[:, :, 0].T, spread.T, noise[~clean],
+                                usable=(balance < MAX_BALANCE).T)
+            rows = np.arange(len(noisy))
+            coeffs[noisy] = 0.0
+            coeffs[noisy, :c.shape[2]] = c[pick, rows]
+            degree[noisy], cond[noisy] = q[pick, rows], kc[pick, rows]
+            width[noisy] = np.array([w for w, _ in SCALES])[pick]
+            # the foot stays within CUTOFF spacings as for the interpolating fits: wider
+            # feet let queries beyond a border of the cloud slide far along the extrapolation
+            reach[noisy] = CUTOFF
+        sel = ids[clean]
+        if len(sel):
+            k = min(CLEAN_NEIGHBOURS, index.shape[1])
+            for lo in range(0, len(sel), CHUNK):
+                part = sel[lo:lo + CHUNK]
+                rel = self.points[index[part, :k]] - self.points[part, None, :]
+                loc = np.einsum("pij,pkj->pki", frames[part], rel) / self.scale[part, None, None]
+                w = np.where(valid[part, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
+                c, q, kc = fit_polynomials(loc, w, self.q_max, cond_max)
+                coeffs[part] = c
+                degree[part], cond[part], reach[part], width[part] = q, kc, CUTOFF, 1.0
+
     def _median_sets(self):
         """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""
         g, n = self.conn.graph, len(self.points)
@@ -431,41 +621,8 @@ class Projector:
         -------
         positions (P, 3), normals (P, 3) in world coordinates.
         """
-        f, s, c = self.frames[ids], self.scale[ids], self.coeffs[ids]
-        loc = np.einsum("pij,pj->pi", f, r - self.points[ids]) / s[:, None]
-        u, v = loc[:, 0].copy(), loc[:, 1].copy()
-        limit = 1.0  # at most one spacing per step: damped for far queries
-        reach = CUTOFF * self.smoothing
-        rad = np.hypot(u, v)
-        shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
-        u *= shrink
-        v *= shrink
-        for _ in range(PROJECTION_ITERATIONS):
-            z, zx, zy = evaluate(c, u, v)
-            res = loc - np.stack([u, v, z], axis=1)
-            # J = [[1,0],[0,1],[zx,zy]];  solve (J^T J) du = J^T res
-            g0 = res[:, 0] + zx * res[:, 2]
-            g1 = res[:, 1] + zy * res[:, 2]
-            a00, a01, a11 = 1 + zx * zx, zx * zy, 1 + zy * zy
-            det = a00 * a11 - a01 * a01
-            du = (a11 * g0 - a01 * g1) / det
-            dv = (a00 * g1 - a01 * g0) / det
-            step = np.hypot(du, dv)
-            factor = np.minimum(1.0, limit / np.maximum(step, 1e-300))
-            u += du * factor
-            v += dv * factor
-            # the polynomial is only valid where its points were: keep the foot point inside
-            # the fitted disc, so that far queries land near their nearest input point
-            rad = np.hypot(u, v)
-            shrink = np.minimum(1.0, reach / np.maximum(rad, 1e-300))
-            u *= shrink
-            v *= shrink
-        z, zx, zy = evaluate(c, u, v)
-        nloc = np.stack([-zx, -zy, np.ones_like(z)], axis=1)
-        nloc /= np.linalg.norm(nloc, axis=1, keepdims=True)
-        foot = np.stack([u, v, z], axis=1) * s[:, None]
-        pos = self.points[ids] + np.einsum("pji,pj->pi", f, foot)
-        return pos, np.einsum("pji,pj->pi", f, nloc)
+        return project_on_polynomials(self.points, self.frames, self.scale, self.coeffs,
+                                      self.degree, self.reach, ids, r, PROJECTION_ITERATIONS)
 
     def project_with_normals(self, points, normal_hint=None):
         """Project points and return the surface normals there.

@@ -15,6 +15,7 @@ import numpy as np
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
 from splineviz.pointcloud.advancing_front import BORDER_NEIGHBOURS, AdvancingFront
+from splineviz.pointcloud.cocone import cocone_connectivity
 from splineviz.pointcloud.guidance import guidance_field
 from splineviz.pointcloud.projection import Projector
 from splineviz.pointcloud.relaxation import optimize
@@ -74,7 +75,8 @@ def _check_spans_a_surface(points: np.ndarray) -> None:
 
 def remesh(pc, edge_length: float | None = None, rho: float | None = None, progress=None, *,
            min_length: float | None = None, max_length: float | None = None,
-           smoothing: float = 1.0, optimize_mesh: bool = True, projector: Projector | None = None,
+           smoothing: float | None = None, optimize_mesh: bool = True,
+           projector: Projector | None = None,
            fixed_degree: int | None = None, report: RemeshReport | None = None):
     """Triangulate a point cloud with near-equilateral, curvature-adapted triangles.
 
@@ -91,8 +93,9 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
         :class:`~splineviz.pointcloud.advancing_front.Cancelled`).
     min_length, max_length : float, optional
         Bounds of the adaptive edge length (defaults 1.5 and 5 times the median spacing).
-    smoothing : float
-        Gaussian width of the local fits in units of the local spacing (raise for noise).
+    smoothing : float, optional
+        Fixed Gaussian width of the local fits in units of the local spacing; by default the
+        width is chosen per point from the noise in the data (:class:`Projector`).
     optimize_mesh : bool
         Run valence flips and tangential relaxation after the front.
     projector : Projector, optional
@@ -135,7 +138,10 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     t0 = time.perf_counter()
     stage(0.0, "connectivity and local surfaces")
     if projector is None:
-        projector = Projector(cloud, smoothing=smoothing, fixed_degree=fixed_degree)
+        # Cocone's graph keeps the two sides of thin parts apart and its triangles measure
+        # the sampling's gaps for the front (Connectivity.void_ratio)
+        projector = Projector(cloud, smoothing=smoothing, fixed_degree=fixed_degree,
+                              connectivity=cocone_connectivity(cloud))
     t1 = time.perf_counter()
     field_ = guidance_field(projector, edge_length=edge_length, rho=rho, min_length=min_length,
                             max_length=max_length)

@@ -56,6 +56,32 @@ def make_camera(spec: str | None, bounds, view_angle: float) -> Camera:
     return Camera(v[:3], focal, view_up=up, view_angle=view_angle)
 
 
+def _configure_bricks(scene, args):
+    """For chunked volumes: the dask scheduler (``--scheduler``, else a LocalCluster of
+    ``--workers``) and a bricks-done progress bar on stderr; returns the bar and the settings
+    to restore afterwards (None when the scene holds no chunked volume)."""
+    from splineviz.core.chunked import ChunkedVolume
+
+    if not any(isinstance(v.data, ChunkedVolume) for v in scene.volumes):
+        return None
+    from tqdm import tqdm
+
+    from splineviz.compute import bricked
+
+    bar = tqdm(total=0, unit="brick", desc="bricks", file=sys.stderr, leave=False,
+               disable=not sys.stderr.isatty())
+
+    def progress(done, total):
+        bar.total = total
+        bar.n = done
+        bar.refresh()
+
+    saved = dict(bricked.DEFAULTS)
+    bricked.configure(scheduler=args.scheduler or saved["scheduler"], workers=args.workers,
+                      progress=progress)
+    return bar, saved
+
+
 def run(args) -> int:
     from splineviz.core.splines import model_spec
     from splineviz.model.opening import scene_from_path
@@ -80,11 +106,21 @@ def run(args) -> int:
     for text in args.clip or ():
         p = _floats(text, (6,), "--clip")
         scene.add_clip_plane(p[:3], p[3:])
+    chunked = _configure_bricks(scene, args)
     spec = model_spec(scene.isosurfaces[0].model)
     if spec.family is None:
         print(f"splineviz: note: model {spec.name!r} renders on the NumPy reference path "
               "(slow): it has no OpenCL kernel", file=sys.stderr)
-    render_scene(scene, size, args.output, device=args.device)
+    try:
+        render_scene(scene, size, args.output, device=args.device)
+    finally:
+        if chunked is not None:
+            bar, saved = chunked
+            bar.close()
+            from splineviz.compute import bricked
+
+            bricked.configure(**saved)
+            bricked.close_clients()
     iso = scene.isosurfaces[0]
     print(f"{args.output}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
     return 0
@@ -110,6 +146,12 @@ def register(subparsers) -> None:
                    help="clip plane keeping the side its normal points to (repeatable)")
     p.add_argument("--device", default=None, help="gpu | cpu | numpy | device-name substring "
                    "(default: $SPLINEVIZ_DEVICE, else GPU before CPU)")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="chunked volumes (OME-Zarr, Zarr, HDF5): dask scheduler that renders "
+                   "the bricks (default: $SPLINEVIZ_SCHEDULER, else a LocalCluster here)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="chunked volumes: workers of the LocalCluster (default: one per core, "
+                   "at most 4)")
     p.add_argument("-o", "--output", required=True, help="output PNG")
     p.add_argument("--allow-outside-data", action="store_true",
                    help="read data files that a header or session names outside its folder")

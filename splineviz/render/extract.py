@@ -9,45 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def project_to_isosurface(spline, points: np.ndarray, iso: float, steps: int = 6):
-    """Newton steps x <- x - (s(x) - iso) grad s / |grad s|^2, kept inside the data box.
-
-    Parameters
-    ----------
-    spline : Spline
-    points : (N, 3) starting points near the isosurface
-    iso : float
-
-    Returns
-    -------
-    points : (N, 3) projected points
-    normals : (N, 3) unit normals -grad s / |grad s| there (VTK's contour convention: they point
-        to lower values); zero where the gradient vanishes
-    """
-    lo = np.array([b[0] for b in spline.bounds])
-    hi = np.array([b[1] for b in spline.bounds])
-    x = np.asarray(points, dtype=np.float64).copy()
-    # vertices on a face of the box slide within that face (the cut of the surface stays exact)
-    tol = 1e-9 * np.max(hi - lo)
-    free = ~((np.abs(x - lo) < tol) | (np.abs(x - hi) < tol))
-    step_limit = 0.5 * np.min(spline.volume.spacing)
-    for _ in range(steps):
-        v, g = spline.value_gradient(x)
-        g = g * free
-        g2 = np.einsum("nc,nc->n", g, g)
-        ok = g2 > 1e-30
-        delta = np.zeros_like(x)
-        delta[ok] = ((v[ok] - iso) / g2[ok])[:, None] * g[ok]
-        # never move further than half a voxel: a vertex belongs to the sheet it started on
-        norm = np.linalg.norm(delta, axis=1)
-        scale = np.minimum(1.0, step_limit / np.maximum(norm, 1e-300))
-        x = np.clip(x - delta * scale[:, None], lo, hi)
-    g = spline.gradient(x)
-    n = np.linalg.norm(g, axis=1)
-    normals = np.divide(-g, n[:, None], out=np.zeros_like(g), where=n[:, None] > 0)
-    return x, normals
-
+from splineviz.core.isosurface import project_to_isosurface
 
 #: most spline samples taken to mesh the isosurface (bounds the time of a mesh export)
 MAX_SAMPLES = 4_000_000
@@ -79,12 +41,33 @@ def spline_isosurface(spline, iso: float, refine: int = 2):
     return mesh
 
 
-def export_mesh(scene, node, path, clip: bool = True) -> str:
+def front_isosurface(spline, iso: float, planes=(), **options):
+    """pyvista.PolyData of the spline isosurface meshed by the advancing front on the spline
+    (:func:`splineviz.pointcloud.spline_mesh.spline_front_mesh`: vertices on s = iso,
+    curvature-adapted, well-shaped triangles, exact cuts by ``planes``), with normals."""
+    import pyvista as pv
+
+    from splineviz.pointcloud.spline_mesh import spline_front_mesh
+
+    v, f, n = spline_front_mesh(spline, iso, planes=planes, **options)
+    mesh = pv.PolyData(v, np.hstack([np.full((len(f), 1), 3), f]).astype(np.int64).ravel())
+    mesh.point_data.active_normals = n
+    return mesh
+
+
+#: mesh export methods for isosurfaces
+EXPORT_METHODS = ("flying-edges", "front")
+
+
+def export_mesh(scene, node, path, clip: bool = True, method: str = "flying-edges") -> str:
     """Write a mesh node, or an isosurface node meshed on a refined grid
-    (:func:`spline_isosurface`), with normals; returns the path written.
+    (:func:`spline_isosurface`, ``method="flying-edges"``, fast) or by the advancing front on
+    the spline (:func:`front_isosurface`, ``method="front"``), with normals; returns the path
+    written.
 
     ``clip``: cut the mesh by the planes that cut the object in the view
-    (:meth:`splineviz.model.Scene.planes_cutting`; ParaView's Clip before Save Data).
+    (:meth:`splineviz.model.Scene.planes_cutting`; ParaView's Clip before Save Data). The
+    front cuts exactly: the new vertices lie on the plane and on the spline surface.
     """
     import pyvista as pv
 
@@ -95,9 +78,15 @@ def export_mesh(scene, node, path, clip: bool = True) -> str:
     if isinstance(node, MeshNode):
         mesh = node.to_polydata()
     elif isinstance(node, IsosurfaceNode):
+        if method not in EXPORT_METHODS:
+            raise SplinevizError(f"unknown mesh export method {method!r}; choose one of "
+                                 f"{', '.join(EXPORT_METHODS)}")
         vol = scene.volume_of(node)
-        mesh = spline_isosurface(sv.build_spline(vol.active, node.model, **node.model_options()),
-                                 node.isovalue)
+        spline = sv.build_spline(vol.active, node.model, **node.model_options())
+        if method == "front":
+            planes = scene.planes_cutting(node) if clip else []
+            return str(sv.write_mesh(path, front_isosurface(spline, node.isovalue, planes)))
+        mesh = spline_isosurface(spline, node.isovalue)
     else:
         raise SplinevizError("select a mesh or an isosurface to export")
     planes = scene.planes_cutting(node) if clip else []

@@ -69,6 +69,8 @@ class RenderedFrame:
     #: made the frame when it can)
     textures: tuple | None = None
     mean_depth: float = 1.0
+    #: (H, W) colour-by scalars at the hits (NaN elsewhere), None when not coloured by one
+    scalars: np.ndarray | None = None
 
     @property
     def final(self) -> bool:
@@ -87,6 +89,21 @@ class Material:
 
 #: named materials offered in the GUI (the model's table)
 MATERIALS = {name: Material(*consts) for name, consts in nodes.MATERIALS.items()}
+
+
+def make_caster(volume, model: str, device=None, options=None):
+    """The ray caster of a layer: a :class:`~splineviz.compute.raycast.RayCaster` of an
+    in-memory volume, a :class:`~splineviz.compute.bricked.BrickedRayCaster` (bricks on dask
+    workers) of a :class:`~splineviz.core.chunked.ChunkedVolume`."""
+    from splineviz.core.chunked import ChunkedVolume
+
+    if isinstance(volume, ChunkedVolume):
+        from splineviz.compute.bricked import BrickedRayCaster
+
+        return BrickedRayCaster(volume, model=model, device=device, **dict(options or {}))
+    from splineviz.compute.raycast import RayCaster
+
+    return RayCaster(volume, model=model, device=device, **dict(options or {}))
 
 
 class IsosurfaceLayer:
@@ -134,6 +151,14 @@ class IsosurfaceLayer:
         self._isovalue = (0.5 * sum(volume.finite_range) if isovalue is None
                           else float(isovalue))
         self.last_stats: dict = {}
+        #: colour by (core.colour_by.FIELDS), its map, range mode and manual limits
+        self.color_by = "none"
+        self.color_map = "viridis"
+        self.color_range = "auto"
+        self.color_limits = (0.0, 1.0)
+        self._color_volume: Volume | None = None
+        self._color_reference: tuple | None = None  # (volume, model, options, isovalue)
+        self._splines: dict = {}  # "own" / "other" -> Spline for the colour-by values
 
     # -- events --------------------------------------------------------------------------
 
@@ -182,6 +207,7 @@ class IsosurfaceLayer:
         self._volume = volume
         self._caster = None
         self._preview = None
+        self._splines = {}
         self._emit("frame")
 
     @staticmethod
@@ -200,6 +226,7 @@ class IsosurfaceLayer:
         self._model_options = options
         self._caster = None
         self._preview = None
+        self._splines = {}
         self._emit("frame")
 
     def set_clip_planes(self, planes) -> None:
@@ -242,6 +269,111 @@ class IsosurfaceLayer:
         self.material_name = name
         self._emit("appearance")
 
+    def set_color_by(self, field: str, volume: Volume | None = None,
+                     reference: tuple | None = None) -> None:
+        """Colour the surface by ``field`` (:data:`splineviz.core.colour_by.FIELDS`).
+
+        ``"volume"``: the value of ``volume``'s spline (of this layer's model) at the hits;
+        ``"distance"``: the signed distance to the surface ``reference = (volume, model,
+        model_options, isovalue)``, e.g. another model or isovalue of the same data.
+        """
+        from splineviz.core.colour_by import FIELDS
+
+        if field not in FIELDS:
+            raise LayerError(f"unknown colour-by field {field!r}; choose one of "
+                             f"{', '.join(FIELDS)}")
+        if reference is not None:
+            vol, model, options, iso = reference
+            self._check_model(model)
+            reference = (vol, model, dict(options or {}), float(iso))
+        same_ref = (reference is None and self._color_reference is None) or (
+            reference is not None and self._color_reference is not None
+            and reference[0] is self._color_reference[0]
+            and reference[1:] == self._color_reference[1:])
+        if field == self.color_by and volume is self._color_volume and same_ref:
+            return
+        self.color_by = field
+        self._color_volume = volume
+        self._color_reference = reference
+        self._splines.pop("other", None)
+        self._splines.pop("reference", None)
+        self._emit("frame")
+
+    def set_color_map(self, name: str | None = None, range_mode: str | None = None,
+                      limits=None) -> None:
+        """Colour map by name, range mode (``auto``, ``manual``, ``symmetric``) and the
+        manual ``(lo, hi)``; only the colouring of shown frames changes, no new ray cast."""
+        from splineviz.core.colour_by import RANGE_MODES
+        from splineviz.render.colormaps import ColormapError, lut
+
+        if name is not None:
+            try:
+                lut(name)
+            except ColormapError as exc:
+                raise LayerError(str(exc)) from None
+            self.color_map = name
+        if range_mode is not None:
+            if range_mode not in RANGE_MODES:
+                raise LayerError(f"unknown range mode {range_mode!r}; choose one of "
+                                 f"{', '.join(RANGE_MODES)}")
+            self.color_range = range_mode
+        if limits is not None:
+            lo, hi = (float(v) for v in limits)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise LayerError(f"a colour range needs finite lo < hi, got {limits!r}")
+            self.color_limits = (lo, hi)
+        self._emit("appearance")
+
+    def color_range_of(self, scalars) -> tuple[float, float]:
+        """The ``(lo, hi)`` the colour map spans for a frame's ``scalars``."""
+        from splineviz.core.colour_by import scalar_range
+
+        values = np.empty(0) if scalars is None else scalars
+        return scalar_range(values, self.color_range, *self.color_limits)
+
+    def _spline(self, which: str):
+        """This layer's spline (``"own"``), the colour-by volume's (``"other"``) or the
+        reference surface's (``"reference"``), built once; the values at the hits come from
+        it."""
+        from splineviz.plugins import build_spline
+
+        if which not in self._splines:
+            if which == "reference":
+                vol, model, options, _iso = self._color_reference
+                self._splines[which] = build_spline(vol, model, **options)
+            else:
+                vol = self._volume if which == "own" else self._color_volume
+                self._splines[which] = build_spline(vol, self._model, **self._model_options)
+        return self._splines[which]
+
+    def hit_scalars(self, frame: Frame) -> np.ndarray | None:
+        """(H, W) colour-by values at the frame's hits (NaN elsewhere), or None.
+
+        Curvatures and the gradient magnitude come from the frame's kernel derivatives when it
+        has them (``Frame.hessian``), else from the spline evaluated at the hits."""
+        from splineviz.core.colour_by import DERIVATIVE_FIELDS, derivative_scalars, hit_scalars
+
+        if self.color_by == "none":
+            return None
+        out = np.full(frame.hit.shape, np.nan)
+        if self.color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
+            hit = frame.hit
+            grad = frame.normal[hit] * frame.gradient_norm[hit][:, None]
+            out[hit] = derivative_scalars(self.color_by, grad, frame.hessian[hit])
+            return out
+        pts = frame.position[frame.hit]
+        other, other_iso = None, 0.0
+        if self.color_by == "volume":
+            if self._color_volume is None:
+                return out
+            other = self._spline("other")
+        elif self.color_by == "distance":
+            if self._color_reference is None:
+                return out
+            other, other_iso = self._spline("reference"), self._color_reference[3]
+        out[frame.hit] = hit_scalars(self._spline("own"), pts, self.color_by, other, other_iso)
+        return out
+
     @property
     def material(self) -> Material:
         return MATERIALS[self.material_name]
@@ -261,9 +393,12 @@ class IsosurfaceLayer:
             return None, None
         with self._lock:
             if self._caster is None:
-                self._caster = RayCaster(self._volume, model=self._model, device=self._device,
-                                         **self._model_options)
-            if self._caster.stats.get("path") != "opencl" and self._preview is None:
+                self._caster = make_caster(self._volume, self._model, self._device,
+                                           self._model_options)
+            if self._caster.stats.get("path") == "bricked" and self._preview is None:
+                # a chunked volume: previews ray cast its coarse level here
+                self._preview = self._caster.preview_caster()
+            elif self._caster.stats.get("path") != "opencl" and self._preview is None:
                 self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
             return self._caster, self._preview
 
@@ -273,7 +408,8 @@ class IsosurfaceLayer:
         return self._casters()[0].stats.get("path", "numpy")
 
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
-                blocking: bool = True) -> RenderedFrame | None:
+                blocking: bool = True, progress=None,
+                cancelled=None) -> RenderedFrame | None:
         """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
 
         Parameters
@@ -286,13 +422,16 @@ class IsosurfaceLayer:
         blocking : bool
             If False, return None instead of waiting while another thread uses the caster
             or instead of building the casters (the GUI thread's previews).
+        progress, cancelled : callable, optional
+            A chunked volume's exact frame, made in bricks on dask workers: ``progress(done,
+            total)`` after each brick; ``cancelled()`` True gives up the frame (None).
 
         A new isovalue costs nothing here: the ray caster classifies only the cells the rays
         of this frame reach (visible-first), so a reduced-resolution preview of a new
         isovalue is as cheap as any other preview.
         """
         try:
-            return self._compute(view, scale, preview, blocking)
+            return self._compute(view, scale, preview, blocking, progress, cancelled)
         except Exception as exc:  # noqa: BLE001 - pyopencl's errors, matched by module
             if not _is_opencl_error(exc) or self._device == "numpy":
                 raise
@@ -304,9 +443,9 @@ class IsosurfaceLayer:
             with self._lock, self._preview_lock:
                 self._device = "numpy"
                 self._caster = self._preview = None
-            return self._compute(view, scale, preview, blocking)
+            return self._compute(view, scale, preview, blocking, progress, cancelled)
 
-    def _compute(self, view, scale, preview, blocking):
+    def _compute(self, view, scale, preview, blocking, progress, cancelled):
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
         exact, fast = self._casters(build=blocking)
@@ -322,16 +461,39 @@ class IsosurfaceLayer:
                 return None  # the model changed meanwhile
             if rc.isovalue != self._isovalue:
                 rc.set_isovalue(self._isovalue)
+            from splineviz.core.colour_by import DERIVATIVE_FIELDS
+
+            # curvature and gradient magnitude from the kernel's derivatives at the hits, when
+            # this model's own kernel casts the frame (not the trilinear preview caster)
+            kernel_derivs = (self.color_by in DERIVATIVE_FIELDS and rc is exact
+                             and exact.stats.get("path") == "opencl")
             t = time.perf_counter()
-            frame = rc.render(view.camera, size=(sw, sh),
-                              clip_planes=tuple(view.clip_planes) + self.clip_planes)
+            if rc.stats.get("path") == "bricked":
+                extra = {"progress": progress, "cancelled": cancelled}
+            else:
+                extra = {"hessian": kernel_derivs}
+            try:
+                frame = rc.render(view.camera, size=(sw, sh),
+                                  clip_planes=tuple(view.clip_planes) + self.clip_planes,
+                                  **extra)
+            except SplinevizError as exc:
+                from splineviz.compute.bricked import RenderCancelled
+
+                if isinstance(exc, RenderCancelled):
+                    return None
+                raise
             seconds = time.perf_counter() - t
             stats = dict(rc.stats)
         finally:
             lock.release()
         path = "preview" if rc is not exact else stats.get("path", "numpy")
         self.last_stats = stats
-        return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats)
+        # colour-by values from the spline's exact derivatives at the hits (per hit, no pass
+        # over the volume); under the caster lock: the spline cache is shared
+        with self._lock:
+            scalars = self.hit_scalars(frame)
+        return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats,
+                             scalars=scalars)
 
 
 def _is_opencl_error(exc: BaseException) -> bool:

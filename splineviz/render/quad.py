@@ -48,6 +48,8 @@ FRAGMENT_SHADER = """//VTK::System::Dec
 in vec2 quadUV;
 uniform sampler2D normtex;
 uniform sampler2D depthtex;
+uniform sampler2D colortex;
+uniform float useColorTex;  // 1: colour by the per-pixel colours of colortex (colour by)
 uniform vec3 frontColor;
 uniform vec3 backColor;
 uniform float surfaceOpacity;
@@ -70,6 +72,7 @@ void main()
   float c = abs(ndl);
   // the side the gradient points away from the viewer is the front (as the reference)
   vec3 base = ndl > 0.0 ? frontColor : backColor;
+  if (useColorTex > 0.5) { base = texture(colortex, quadUV).rgb; }
   vec3 rgb = base * (ambientK + diffuseK * c) + vec3(specularK * pow(c, shininess));
   gl_FragData[0] = vec4(clamp(rgb, 0.0, 1.0), surfaceOpacity);
 }
@@ -133,6 +136,13 @@ def frame_textures(hit: np.ndarray, normal: np.ndarray, depth: np.ndarray, basis
     return tuple(np.ascontiguousarray(a[::-1]).reshape(h * w, -1) for a in rows)
 
 
+def frame_colors(rgb: np.ndarray) -> np.ndarray:
+    """Per-pixel colours ``(H, W, 3)`` uint8 (row 0 at the top) as the colour texture's
+    ``(H*W, 3)`` rows in VTK's bottom-up order."""
+    h, w = rgb.shape[:2]
+    return np.ascontiguousarray(rgb[::-1]).reshape(h * w, 3)
+
+
 def _image_texture(ncomp: int) -> tuple[vtk.vtkTexture, vtk.vtkImageData]:
     image = vtk.vtkImageData()
     image.SetDimensions(1, 1, 1)
@@ -170,9 +180,11 @@ class FrameQuad:
         self.set_bounds(bounds)
         self._norm_tex, self._norm_img = _image_texture(4)
         self._depth_tex, self._depth_img = _image_texture(3)
+        self._color_tex, self._color_img = _image_texture(3)
         prop = self.actor.GetProperty()
         prop.SetTexture("normtex", self._norm_tex)
         prop.SetTexture("depthtex", self._depth_tex)
+        prop.SetTexture("colortex", self._color_tex)
         prop.BackfaceCullingOff()
         sp = self.actor.GetShaderProperty()
         sp.SetVertexShaderCode(VERTEX_SHADER)
@@ -181,6 +193,7 @@ class FrameQuad:
         self.set_material()
         self.set_appearance((0.93, 0.78, 0.55), 1.0)
         self.set_view_scale(1.0, 1.0)
+        self._uniforms.SetUniformf("useColorTex", 0.0)
         self.has_image = False
         self.actor.VisibilityOff()
 
@@ -233,6 +246,22 @@ class FrameQuad:
         flip = (np.ascontiguousarray(a[::-1]).reshape(h * w, -1)
                 for a in (normal_rgba, pack_depth(depth)))
         self.set_textures((w, h), *flip)
+
+    def set_colors(self, size, colors: np.ndarray | None) -> None:
+        """Per-pixel surface colours ``(W*H, 3)`` uint8 in VTK row order (see
+        :func:`frame_colors`), or None for the flat front colour."""
+        if colors is None:
+            self._uniforms.SetUniformf("useColorTex", 0.0)
+        else:
+            w, h = size
+            vtk_arr = numpy_support.numpy_to_vtk(colors, deep=True,
+                                                 array_type=vtk.VTK_UNSIGNED_CHAR)
+            self._color_img.SetDimensions(w, h, 1)
+            self._color_img.GetPointData().SetScalars(vtk_arr)
+            self._color_img.Modified()
+            self._color_tex.Modified()
+            self._uniforms.SetUniformf("useColorTex", 1.0)
+        self.actor.Modified()
 
     def set_textures(self, size, normals: np.ndarray, depth: np.ndarray) -> None:
         """Upload textures made by :func:`frame_textures` for a frame of ``size`` (W, H)."""

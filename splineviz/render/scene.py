@@ -30,8 +30,9 @@ import numpy as np
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import normalize_clip_planes
+from splineviz.render.colormaps import colorize, lut
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
-from splineviz.render.quad import FrameQuad, frame_textures
+from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
 
 #: seconds a synchronous preview may take (keeps the window responsive while dragging)
 PREVIEW_BUDGET_S = 0.045
@@ -73,6 +74,10 @@ class _LayerView:
     preview_seconds: float | None = None
     callback: object = None
     pending: dict = field(default_factory=dict)
+    #: the colour-by legend of this layer (a vtkScalarBarActor, shown while colouring by)
+    scalar_bar: object = None
+    #: the (lo, hi) the colour map spans in the shown frame
+    color_range: tuple | None = None
 
 
 def view_state_of(renderer, size, clip_planes=()) -> ViewState:
@@ -102,6 +107,8 @@ class SplineScene:
         self.progressive = progressive
         #: called with no argument when exact frames are due (progressive mode)
         self.request_refine = None
+        #: key of the view the last render was for (a refining worker compares its own)
+        self._latest_key = None
         self.layers: list[IsosurfaceLayer] = []
         self._views: dict[int, _LayerView] = {}
         self.props: dict[str, PropRecord] = {}
@@ -128,6 +135,8 @@ class SplineScene:
         self.layers.append(layer)
         self._views[id(layer)] = lv
         self.renderer.AddActor(quad.actor)
+        lv.scalar_bar = _scalar_bar(len(self.layers) - 1)
+        self.renderer.AddActor(lv.scalar_bar)
         self._apply_appearance(layer, lv)
 
     def remove_layer(self, layer: IsosurfaceLayer) -> None:
@@ -137,6 +146,7 @@ class SplineScene:
         layer.disconnect(lv.callback)
         self.layers.remove(layer)
         self.renderer.RemoveActor(lv.quad.actor)
+        self.renderer.RemoveActor(lv.scalar_bar)
 
     def quad(self, layer: IsosurfaceLayer) -> FrameQuad:
         return self._views[id(layer)].quad
@@ -198,6 +208,42 @@ class SplineScene:
         q.set_appearance(layer.color, layer.opacity)
         q.set_material(m.ambient, m.diffuse, m.specular, m.shininess)
         q.actor.SetVisibility(bool(layer.visible and q.has_image))
+        self._apply_colors(layer, lv)
+
+    def _apply_colors(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
+        """Colour the shown frame by its scalars with the layer's map and range, and update
+        the layer's scalar bar (no new ray cast: the scalars are kept with the frame)."""
+        rf = lv.shown
+        scalars = None if rf is None or layer.color_by == "none" else rf.scalars
+        if scalars is None:
+            lv.quad.set_colors(None, None)
+            lv.color_range = None
+        else:
+            lo, hi = layer.color_range_of(scalars[rf.frame.hit])
+            lv.color_range = (lo, hi)
+            lv.quad.set_colors(scalars.shape[::-1],
+                               frame_colors(colorize(scalars, layer.color_map, lo, hi)))
+            _update_scalar_bar(lv.scalar_bar, layer.color_map, lo, hi,
+                               f"{layer.name}: {layer.color_by}")
+        lv.scalar_bar.SetVisibility(bool(layer.visible and lv.color_range is not None))
+
+    def color_range(self, layer: IsosurfaceLayer) -> tuple | None:
+        """The ``(lo, hi)`` the layer's colour map spans in the shown frame (None: flat)."""
+        return self._views[id(layer)].color_range
+
+    def picked_value(self, layer: IsosurfaceLayer, x: int, y: int) -> float | None:
+        """The colour-by value under window pixel ``(x, y)`` (VTK display coordinates,
+        origin bottom left) in the shown frame; None where there is no hit or no colouring."""
+        lv = self._views[id(layer)]
+        rf = lv.shown
+        if rf is None or rf.scalars is None:
+            return None
+        w, h = rf.view.size
+        fh, fw = rf.scalars.shape
+        col = int(np.clip(x * fw / w, 0, fw - 1))
+        row = int(np.clip((h - 1 - y) * fh / h, 0, fh - 1))
+        value = float(rf.scalars[row, col])
+        return value if np.isfinite(value) else None
 
     def _show(self, layer: IsosurfaceLayer, rf: RenderedFrame) -> None:
         lv = self._views.get(id(layer))
@@ -208,6 +254,8 @@ class SplineScene:
         if rf.textures is None:
             _prepare(rf)
         lv.quad.set_textures(f.hit.shape[::-1], *rf.textures)
+        lv.shown = rf
+        self._apply_colors(layer, lv)
         w, h = rf.view.size
         t = np.tan(np.radians(cam.view_angle) / 2.0)
         lv.quad.set_view_scale(t * w / h, t)
@@ -245,6 +293,8 @@ class SplineScene:
         t0 = time.perf_counter()
         self._reset_clipping_range()
         view = self.view_state()
+        # read by refine() in a worker: a bricked frame of an older view is given up
+        self._latest_key = view.key()
         stale = []
         for layer in self.layers:
             lv = self._views[id(layer)]
@@ -311,7 +361,7 @@ class SplineScene:
                 return True
         return False
 
-    def refine(self, view: ViewState | None = None, cancelled=None):
+    def refine(self, view: ViewState | None = None, cancelled=None, job=None):
         """Exact frames of all visible layers that show a preview (thread safe).
 
         Parameters
@@ -321,6 +371,10 @@ class SplineScene:
             thread before starting a worker).
         cancelled : callable or None
             Returns True to stop between layers.
+        job : object with ``progress(fraction, message)``, optional
+            Told the bricks done of a chunked volume's frame (the GUI's job runner passes
+            its job); such a frame is also given up once the view moved on (bricks still
+            out are cancelled) and refined again for the new view.
 
         Returns
         -------
@@ -336,7 +390,8 @@ class SplineScene:
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
-            rf = layer.compute(view)
+            rf = layer.compute(view, progress=_brick_progress(job, layer),
+                               cancelled=lambda: self._latest_key not in (None, view.key()))
             if rf is not None:
                 _prepare(rf)  # the textures, here in the worker, not in the GUI thread
                 out.append((layer, rf))
@@ -365,6 +420,51 @@ class SplineScene:
         self.renderer.RemoveObserver(self._observer)
         for layer in list(self.layers):
             self.remove_layer(layer)
+
+
+def _brick_progress(job, layer):
+    """``progress(done, total)`` of a chunked layer's bricks for a job, or None."""
+    if job is None:
+        return None
+
+    def progress(done, total):
+        job.progress(done / max(total, 1), f"{layer.name}: bricks {done}/{total}")
+
+    return progress
+
+
+def _scalar_bar(index: int):
+    """A hidden horizontal scalar bar for the ``index``-th layer (stacked from the bottom)."""
+    import vtk
+
+    bar = vtk.vtkScalarBarActor()
+    bar.SetOrientationToHorizontal()
+    bar.SetLookupTable(vtk.vtkLookupTable())
+    bar.SetNumberOfLabels(5)
+    bar.GetPositionCoordinate().SetCoordinateSystemToNormalizedViewport()
+    bar.SetPosition(0.25, 0.02 + 0.11 * index)
+    bar.SetWidth(0.5)
+    bar.SetHeight(0.1)
+    bar.UnconstrainedFontSizeOn()
+    for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
+        prop.SetFontSize(12)
+        prop.ShadowOff()
+        prop.BoldOff()
+        prop.ItalicOff()
+    bar.VisibilityOff()
+    return bar
+
+
+def _update_scalar_bar(bar, cmap: str, lo: float, hi: float, title: str) -> None:
+    table = lut(cmap)
+    lt = bar.GetLookupTable()
+    lt.SetNumberOfTableValues(len(table))
+    for i, (r, g, b) in enumerate(table):
+        lt.SetTableValue(i, r / 255.0, g / 255.0, b / 255.0, 1.0)
+    lt.SetRange(lo, hi)
+    lt.Build()
+    bar.SetTitle(title)
+    bar.Modified()
 
 
 def _prepare(rf: RenderedFrame) -> None:

@@ -23,6 +23,7 @@ from splineviz.model import (
     Node,
     PointsNode,
     Scene,
+    SectionNode,
     VolumeNode,
 )
 from splineviz.render.isosurface import IsosurfaceLayer
@@ -78,6 +79,8 @@ class SceneView:
             self._show_prop(node)
         elif isinstance(node, ClipPlaneNode):
             self._update_planes()
+        elif isinstance(node, SectionNode):
+            self._show_section(node, recompute=node.curves is None)
 
         def changed(info, node=node):
             self._node_changed(node, info.signal.name)
@@ -116,6 +119,16 @@ class SceneView:
             self._show_prop(node)
         elif isinstance(node, ClipPlaneNode):
             self._update_planes()
+        elif isinstance(node, SectionNode):
+            if what != "curves":
+                self._show_section(node, recompute=False)
+        # the curves follow their inputs: a new isovalue, model, plane position or data
+        if what in ("isovalue", "model", "k", "origin", "normal", "data", "smoothed", "sigma"):
+            for sec in self.scene.sections:
+                volumes = [self.scene.volume_of(self.scene.get(i)).id for i in sec.inputs
+                           if isinstance(self.scene.get(i), IsosurfaceNode)]
+                if node.id in sec.inputs or node.id in volumes:
+                    self._show_section(sec, recompute=True)
 
     def _show_outline(self, node: VolumeNode) -> None:
         import pyvista as pv
@@ -153,6 +166,25 @@ class SceneView:
         self.spline_scene.set_prop_visible(name, node.visible)
         self._update_grid()
 
+    def _show_section(self, node: SectionNode, recompute: bool) -> None:
+        """(Re)draw a section's curves as lines, computing them first if asked."""
+        from splineviz.io.curves import curves_polydata
+        from splineviz.model.analysis import section_curves
+
+        if recompute:
+            section_curves(self.scene, node)
+        name = f"{node.kind}:{node.id}"
+        if not node.curves:
+            self._props.pop(node.id, None)
+            if name in self.spline_scene.props:
+                self.spline_scene.remove_prop(name)
+            return
+        self._props[node.id] = name
+        self.spline_scene.add_mesh(name, curves_polydata(node.curves), kind=node.kind,
+                                   color=node.color, line_width=node.line_width,
+                                   lighting=False)
+        self.spline_scene.set_prop_visible(name, node.visible)
+
     def _add_layer(self, node: IsosurfaceNode) -> None:
         vol = self.scene.volume_of(node)
         layer = IsosurfaceLayer(vol.active, model=node.model, isovalue=node.isovalue,
@@ -163,6 +195,22 @@ class SceneView:
         layer.set_clip_planes(self._volume_planes(vol.id))
         self.layers[node.id] = layer
         self.spline_scene.add_layer(layer)
+        self._apply_colour_by(node, layer)
+
+    def _apply_colour_by(self, node: IsosurfaceNode, layer: IsosurfaceLayer) -> None:
+        other = None
+        if node.color_volume_id is not None and node.color_volume_id in self.scene:
+            other = self.scene.get(node.color_volume_id).active
+        reference = None
+        ref_id = node.color_isosurface_id
+        if node.color_by == "distance" and ref_id is not None and ref_id in self.scene:
+            ref = self.scene.get(ref_id)
+            reference = (self.scene.volume_of(ref).active, ref.model, ref.model_options(),
+                         ref.isovalue)
+        # the manual range while one end is being edited past the other: keep the last valid
+        limits = (node.color_min, node.color_max) if node.color_min < node.color_max else None
+        layer.set_color_map(node.color_map, node.color_range, limits)
+        layer.set_color_by(node.color_by, other, reference)
 
     def _update_layer(self, node: IsosurfaceNode, what: str) -> None:
         layer = self.layers[node.id]
@@ -180,6 +228,14 @@ class SceneView:
             layer.set_visible(node.visible and self.scene.volume_of(node).visible)
         elif what == "name":
             layer.name = node.name
+        elif what in ("color_by", "color_volume_id", "color_isosurface_id", "color_map",
+                      "color_range", "color_min", "color_max"):
+            self._apply_colour_by(node, layer)
+        if what in ("isovalue", "model", "k"):
+            # surfaces coloured by their distance to this one follow it
+            for other in self.scene.isosurfaces:
+                if other.color_isosurface_id == node.id and other.id in self.layers:
+                    self._apply_colour_by(other, self.layers[other.id])
 
     # -- clip planes ---------------------------------------------------------------------
 

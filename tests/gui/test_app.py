@@ -458,4 +458,11 @@ def test_value_readout_under_the_cursor(window):
     assert hit is not None and hit["name"] == iso.name
     assert np.linalg.norm(hit["position"]) == pytest.approx(0.8, abs=0.02)
     assert hit["value"] == pytest.approx(iso.isovalue, abs=0.05)
+    assert hit["color_value"] is None
     assert window.view.pick(2, 2) is None  # the background
+    # coloured by the gradient magnitude: |grad (x^2 + y^2 + z^2)| = 2 r = 1.6 is read out
+    iso.color_by = "gradient-magnitude"
+    window.wait_for_refine()
+    hit = window.view.pick(w / 2, h / 2)
+    assert hit["color_by"] == "gradient-magnitude"
+    assert hit["color_value"] == pytest.approx(1.6, abs=0.1)

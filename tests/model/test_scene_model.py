@@ -116,11 +116,17 @@ def _every_kind(tmp_path):
     mem = scene.add_volume(ml_volume(7), "in memory", isosurface=False)  # no file: written
     va.update(sigma=1.25, show_outline=False)
     vb.visible = False
-    scene.add_isosurface(va, isovalue=0.4, model="to-quadratic", k=3, color=(0.1, 0.2, 0.3),
-                         opacity=0.6, material="shiny", name="skin")
+    skin = scene.add_isosurface(va, isovalue=0.4, model="to-quadratic", k=3,
+                                color=(0.1, 0.2, 0.3), opacity=0.6, material="shiny",
+                                name="skin")
+    # colour by another volume (schema 4) and by curvature with a manual range
+    skin.update(color_by="volume", color_volume_id=vb.id, color_map="coolwarm",
+                color_range="symmetric")
     scene.add_isosurface(vb, isovalue=0.55, model="tricubic-bspline", material="metal",
-                         visible=False)
-    scene.add_isosurface(mem, isovalue=0.5, model="super-quadratic", material="matte")
+                         visible=False, color_by="distance", color_isosurface_id=skin.id)
+    scene.add_isosurface(mem, isovalue=0.5, model="super-quadratic", material="matte",
+                         color_by="mean", color_map="magma", color_range="manual",
+                         color_min=-3.0, color_max=2.5)
     pts = scene.add_points(sv.read_points(tmp_path / "cloud.ply"), "cloud",
                            path=tmp_path / "cloud.ply", color=(0.9, 0.1, 0.1), point_size=7.0,
                            opacity=0.5)
@@ -196,6 +202,26 @@ def test_schema_2_sessions_still_load(tmp_path):
     plane = scene.get("c")
     assert isinstance(plane, ClipPlaneNode) and plane.volume_id == "v"
     assert scene.get("i").model == "cubic-c1"
+    assert scene.get("i").color_by == "none"  # schema 4's colour by: off in old sessions
+
+
+def test_colour_by_a_non_volume_is_refused(tmp_path):
+    import json
+
+    from splineviz.io.errors import SessionError
+
+    np.save(tmp_path / "v.npy", ml_volume(9).data)
+    doc = {"format": "splineviz-session", "schema_version": 4, "objects": [
+        {"id": "v", "type": "VolumeFile", "properties": {"path": "v.npy"}},
+        {"id": "i", "type": "Isosurface", "inputs": ["v"],
+         "properties": {"isovalue": 0.5, "color_by": "volume", "color_volume": "i"}}]}
+    (tmp_path / "s.svs").write_text(json.dumps(doc))
+    with pytest.raises(SessionError, match="not a volume"):
+        load_scene(tmp_path / "s.svs")
+    doc["objects"][1]["properties"] = {"isovalue": 0.5, "color_map": "jet"}
+    (tmp_path / "s.svs").write_text(json.dumps(doc))
+    with pytest.raises(SessionError):
+        load_scene(tmp_path / "s.svs")
 
 
 def test_unknown_model_in_a_session_is_an_error_not_trilinear(tmp_path):

@@ -275,11 +275,41 @@ inline bool tet_interval(float4 r0, float4 r1, float4 r2, float4 r3, float3 p0, 
     return lo <= hi;
 }
 
+// Index-space Hessian of the polynomial with B-coefficients c at lam (xx, yy, zz, xy, xz, yz):
+// the DEGREE-2 fold de Casteljau leaves the quadratic coefficients q_{e_m + e_n}, and
+// D^2 p = DEGREE (DEGREE - 1) sum_{m,n} q_{e_m + e_n} grad(lam_m) grad(lam_n)^T (thesis
+// §3.4.2, one order further; colour by curvature, Kindlmann et al. 2003).
+inline void tet_hessian(const float *c, __constant const int *red, float4 lam, float4 r0,
+                        float4 r1, float4 r2, float4 r3, float *hess)
+{
+#if DEGREE == 3
+    float q[10];
+    decasteljau(c, q, 10, red, lam);
+    __constant const int *red2 = red + 40;  // degree 2 -> 1 table: position of e_m + e_n
+#else
+    const float *q = c;
+    __constant const int *red2 = red;
+#endif
+    const float3 r[4] = {r0.xyz, r1.xyz, r2.xyz, r3.xyz};
+    float3 hx = (float3)(0.0f), hy = (float3)(0.0f), hz = (float3)(0.0f);
+    for (int m = 0; m < 4; ++m) {
+        float3 a = (float3)(0.0f);
+        for (int n = 0; n < 4; ++n) a += q[red2[4 * m + n]] * r[n];
+        hx += r[m].x * a;
+        hy += r[m].y * a;
+        hz += r[m].z * a;
+    }
+    const float f = (float)(DEGREE * (DEGREE - 1));
+    hess[0] = f * hx.x; hess[1] = f * hy.y; hess[2] = f * hz.z;
+    hess[3] = f * hx.y; hess[4] = f * hx.z; hess[5] = f * hy.z;
+}
+
 // First root of the polynomial with B-coefficients c (already minus iso) on [lo, hi] of the
-// ray, from the blossoms of the segment (thesis §6.1.2); -1 if none; *grad at the root.
+// ray, from the blossoms of the segment (thesis §6.1.2); -1 if none; *grad at the root, and
+// the Hessian there in hess[6] when want_hess.
 inline float tet_segment_root(const float *c, __constant const int *red, float4 r0, float4 r1,
                               float4 r2, float4 r3, float4 l, float4 av, float lo, float hi,
-                              float3 *grad)
+                              float3 *grad, int want_hess, float *hess)
 {
     const float4 lam0 = l + lo * av, lam1 = l + hi * av;
     float4 k;
@@ -299,6 +329,7 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
     const float4 e = linear_part(c, red, l + sh * av);
     // grad p = DEGREE * sum_m e_m grad(lam_m)
     *grad = DEGREE * (e.x * r0.xyz + e.y * r1.xyz + e.z * r2.xyz + e.w * r3.xyz);
+    if (want_hess) tet_hessian(c, red, l + sh * av, r0, r1, r2, r3, hess);
     return sh;
 }
 #endif
@@ -353,7 +384,7 @@ inline float type6_cube_root(__global const DATA_T *pdata, int base,
                              __global const int *cols, __global const float *masks,
                              __constant const float4 *bary, __constant const int *red,
                              uint code, float3 p0, float3 d, float len, float iso,
-                             float3 *grad)
+                             float3 *grad, int want_hess, float *hess)
 {
     float vals[27];
     for (int q = 0; q < 27; ++q) vals[q] = pdata[base + stencil[q]];
@@ -374,10 +405,14 @@ inline float type6_cube_root(__global const DATA_T *pdata, int base,
             c[i] = acc - iso;  // the coefficients of p - iso (constants reproduce exactly)
         }
         float3 g;
-        const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g);
+        float h6[6];
+        const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g,
+                                          want_hess, h6);
         if (sh >= 0.0f && (best < 0.0f || sh < best)) {
             best = sh;
             *grad = g;
+            if (want_hess)
+                for (int i = 0; i < 6; ++i) hess[i] = h6[i];
         }
     }
     return best;
@@ -478,15 +513,13 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
 // returns the number of relevant pieces. The data a cell's pieces read (the class union, at
 // most NUNION values) are gathered once. First the cheap cell bounds of classify.cl (their
 // range widened by the negative weight mass): most cells the rays reach end there. Then each
-// distinct B-net point of the class's pieces (stencils into the union, pt_start per class) is
-// computed once: min <= iso <= max over a piece's coefficients iff one is <= iso and one is
-// >= iso, so each point marks the pieces whose B-net holds it (pt_pieces) in two masks.
+// distinct B-net point of the class's pieces is computed once: min <= iso <= max over a
+// piece's coefficients iff one is <= iso and one is >= iso, so each point marks the pieces
+// whose B-net holds it in two masks (to_class_points, generated from the class tables by
+// splineviz/compute/to_program.py and prepended to this file).
 inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
-                        __constant const int *ent_start, __global const int *pt_start,
-                        __global const int *u_rows,
-                        __global const ushort *u_cols, __global const float *u_w,
-                        __global const uint *pt_pieces, float negmass, float iso, uint *words)
+                        float negmass, float iso, uint *words)
 {
     float vals[NUNION];
     const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
@@ -496,27 +529,12 @@ inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
         vlo = fmin(vlo, vals[u]);
         vhi = fmax(vhi, vals[u]);
     }
-    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
     const float wid = negmass * (vhi - vlo);
-    if (!(vlo - wid <= iso && iso <= vhi + wid)) return 0;
-    uint below[NWORDS];
-    for (int w = 0; w < NWORDS; ++w) below[w] = 0u;
-    // words holding pieces of this class (64 of 144 pieces in most classes: 2 of 5)
-    const int nw = (ent_start[cls + 1] - ent_start[cls] + 31) >> 5;
-    for (int p = pt_start[cls]; p < pt_start[cls + 1]; ++p) {
-        float acc = 0.0f;
-        for (int q = u_rows[p]; q < u_rows[p + 1]; ++q) acc += u_w[q] * vals[u_cols[q]];
-        if (acc <= iso)
-            for (int w = 0; w < nw; ++w) below[w] |= pt_pieces[p * NWORDS + w];
-        if (acc >= iso)
-            for (int w = 0; w < nw; ++w) words[w] |= pt_pieces[p * NWORDS + w];
+    if (!(vlo - wid <= iso && iso <= vhi + wid)) {
+        for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+        return 0;
     }
-    int count = 0;
-    for (int w = 0; w < nw; ++w) {
-        words[w] &= below[w];
-        count += popcount(words[w]);
-    }
-    return count;
+    return to_class_points(vals, cls, iso, words);
 }
 
 // The bit set of `cell` at this epoch: from the brick cache, or computed by this ray and
@@ -526,11 +544,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
                            uint epoch, int3 cell, int BY, int BZ,
                            __global const DATA_T *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
-                           __constant const int *ent_start, __global const int *pt_start,
-                           __global const int *u_rows,
-                           __global const ushort *u_cols, __global const float *u_w,
-                           __global const uint *pt_pieces, float negmass, float iso,
-                           __global int *counts, uint *words)
+                           float negmass, float iso, __global int *counts, uint *words)
 {
     const int a = brick_entry(slots, pool, pool_cap, epoch, cell, BY, BZ, counts);
     const int at = a >= 0 ? cell_word(a, cell) : 0;
@@ -538,8 +552,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
         for (int w = 0; w < NWORDS; ++w) words[w] = pool[at + w];
         return;
     }
-    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start, pt_start,
-                               u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
+    const int n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words);
     if (a < 0) return;
     for (int w = 0; w < NWORDS; ++w) pool[at + w] = words[w];
     mem_fence(CLK_GLOBAL_MEM_FENCE);  // the words before their flag
@@ -553,11 +566,7 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
 // the number of relevant pieces per candidate.
 __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int CZ,
                        __global const int *cells, __constant const int *cls_start,
-                       __constant const int *cls_offsets, __constant const int *ent_start,
-                       __global const int *pt_start,
-                       __global const int *u_rows, __global const ushort *u_cols,
-                       __global const float *u_w, __global const uint *pt_pieces,
-                       float negmass, float iso,
+                       __constant const int *cls_offsets, float negmass, float iso,
                        __global uint *bits, __global int *n_relevant)
 {
     const int a = get_global_id(0);
@@ -566,8 +575,7 @@ __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
     const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
-    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, ent_start,
-                                 pt_start, u_rows, u_cols, u_w, pt_pieces, negmass, iso, words);
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words);
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
@@ -580,13 +588,16 @@ inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, con
                           __constant const int *ent_tet, __global const int *row_ptr,
                           __global const int *cols, __global const float *weights,
                           __constant const float4 *bary, __constant const int *red,
-                          float3 p0, float3 d, float len, float iso, float3 *grad)
+                          float3 p0, float3 d, float len, float iso, float3 *grad,
+                          int want_hess, float *hess)
 {
     float best = -1.0f;
     const int e0 = ent_start[cls];
-    for (int e = e0; e < ent_start[cls + 1]; ++e) {
-        const int q = e - e0;
-        if (!(words[q >> 5] & (1u << (q & 31)))) continue;
+    const int nw = (ent_start[cls + 1] - e0 + 31) >> 5;
+    // the set bits only (about 30 of the class's 64 or 144 pieces), lowest first
+    for (int w = 0; w < nw; ++w)
+    for (uint bits = words[w]; bits != 0u; bits &= bits - 1u) {
+        const int e = e0 + (w << 5) + (31 - (int)clz(bits & (0u - bits)));
         const int t = ent_tet[e];
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
                      r3 = bary[4 * t + 3];
@@ -606,10 +617,14 @@ inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, con
             c[i] = acc - iso;
         }
         float3 g;
-        const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g);
+        float h6[6];
+        const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g,
+                                          want_hess, h6);
         if (sh >= 0.0f && (best < 0.0f || sh < best)) {
             best = sh;
             *grad = g;
+            if (want_hess)
+                for (int i = 0; i < 6; ++i) hess[i] = h6[i];
         }
     }
     return best;
@@ -636,10 +651,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
 #endif
 #ifdef MODEL_TO
                       __constant const int *cls_start,
-                      __constant const int *cls_offsets, __global const int *pt_start,
-                      __global const int *u_rows, __global const ushort *u_cols,
-                      __global const float *u_w, __global const uint *pt_pieces,
-                      __constant const int *ent_start,
+                      __constant const int *cls_offsets, __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
                       __constant const int *ent_tet, __global const int *row_ptr,
                       __global const int *cols, __global const float *weights,
@@ -654,6 +666,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                       __global uchar *hit_out, __global float4 *pos_out,
                       __global float4 *normal_out, __global float *depth_out,
                       __global uchar4 *color_out,
+                      int want_hess,       // 1: write the world Hessian and |grad| per hit
+                      __global float8 *hess_out,  // (xx, yy, zz, xy, xz, yz, |grad|, 0)
                       int W, int H)        // frame size; the launch is padded to whole groups
 {
     const int col = get_global_id(0), row = get_global_id(1);
@@ -689,6 +703,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
     bool found = false;
     float3 upos = (float3)(0.0f);
     float3 grad_u = (float3)(0.0f);
+    float hess_u[6] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
     float t_hit = 0.0f;
 
     if (t0 <= t1) {
@@ -714,6 +729,10 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                     const float3 q = p + r * d;
                     upos = convert_float3(cell) + q;
                     grad_u = tri_gradient(&f, q);
+                    // the trilinear piece has no pure second derivatives
+                    hess_u[3] = f.bxy + f.bxyz * q.z;
+                    hess_u[4] = f.bxz + f.bxyz * q.y;
+                    hess_u[5] = f.byz + f.bxyz * q.x;
                     t_hit = t0 + s + r;
                     found = true;
                     break;
@@ -724,8 +743,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 const int cls = ((cell.x & 1) << 2) | ((cell.y & 1) << 1) | (cell.z & 1);
                 uint words[NWORDS];
                 to_cached_bits(slots, pool, pool_cap, epoch, cell, BY, BZ, data, corner, cls,
-                               cls_start, cls_offsets, ent_start, pt_start, u_rows, u_cols, u_w,
-                               pt_pieces, negmass, iso, counts, words);
+                               cls_start, cls_offsets, negmass, iso, counts, words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
@@ -733,7 +751,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                     float3 g;
                     const float r = to_cell_root(data, corner, cls, words, ent_start,
                                                  ent_centre, ent_base, ent_tet, row_ptr, cols,
-                                                 weights, bary, red, p, d, s_end - s, iso, &g);
+                                                 weights, bary, red, p, d, s_end - s, iso, &g,
+                                                 want_hess, hess_u);
                     if (r >= 0.0f) {
                         upos = convert_float3(cell) + p + r * d;
                         grad_u = g;
@@ -752,7 +771,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
                     const float r = type6_cube_root(data, base, stencil, row_ptr, cols, masks,
-                                                    bary, red, tc, p, d, s_end - s, iso, &g);
+                                                    bary, red, tc, p, d, s_end - s, iso, &g,
+                                                    want_hess, hess_u);
                     if (r >= 0.0f) {
                         upos = convert_float3(cell) + p + r * d;
                         grad_u = g;
@@ -790,6 +810,15 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
     }
 
     hit_out[pix] = found ? 1 : 0;
+    if (want_hess) {
+        // chain rule: index-space second derivatives to world, d/dx_i = inv_spacing_i d/du_i
+        const float3 w = inv_spacing;
+        hess_out[pix] = found
+            ? (float8)(hess_u[0] * w.x * w.x, hess_u[1] * w.y * w.y, hess_u[2] * w.z * w.z,
+                       hess_u[3] * w.x * w.y, hess_u[4] * w.x * w.z, hess_u[5] * w.y * w.z,
+                       length(grad_u * inv_spacing), 0.0f)
+            : (float8)(NAN);
+    }
     if (!found) {
         pos_out[pix] = (float4)(NAN);
         normal_out[pix] = (float4)(NAN);

@@ -51,6 +51,10 @@ class ModelSpec:
         Extrapolated sample layers the stencils reach beyond the data box.
     options : dict
         Default keyword arguments of the class (e.g. ``{"k": 2}``).
+    lattice_period : int
+        Grid steps after which the partition repeats (2 for truncated octahedra, centred at
+        a BCC lattice: a sub-volume must start at even sample offsets to carry the same
+        spline; 1 for the cube partitions).
     plugin : str or None
         The plugin that added it (None: built in).
     """
@@ -64,6 +68,7 @@ class ModelSpec:
     ghost_layers: int = 0
     options: dict = field(default_factory=dict)
     plugin: str | None = None
+    lattice_period: int = 1
 
     @property
     def kernel_define(self) -> str | None:
@@ -85,7 +90,8 @@ def _builtin() -> dict[str, ModelSpec]:
         ModelSpec("cubic-c1", p + "cubic_c1:CubicC1Spline", "Cubic C1 (type-6)", 3, "C1",
                   "type6", 1),
         ModelSpec("to-quadratic", p + "to_quadratic:TOQuadraticSpline",
-                  "Quadratic C1 (truncated octahedra)", 2, "C1", "to", 3, {"k": 2}),
+                  "Quadratic C1 (truncated octahedra)", 2, "C1", "to", 3, {"k": 2},
+                  lattice_period=2),
     )
     return {s.name: s for s in specs}
 

@@ -1,0 +1,453 @@
+"""Meshes of spline isosurfaces by the advancing front of chapter 7, with the spline itself as
+the projector (thesis §7.3 with the volume's spline in place of the local polynomials).
+
+* Projection: Newton steps onto ``s = iso`` along the exact spline gradient
+  (:func:`splineviz.core.isosurface.project_to_isosurface`); normals ``-grad s / |grad s|``.
+* Edge lengths: ``2 sin(rho / 2) / kappa`` with ``kappa`` the larger absolute principal
+  curvature of the spline's isosurface (:mod:`splineviz.core.curvature`) at surface samples,
+  clamped and graded like the point-cloud guidance field
+  (:func:`splineviz.pointcloud.guidance.limit_gradation`).
+* Samples: where the data cross the isovalue along grid edges, one per grid cell, projected
+  onto the spline surface. They tell the front where the surface is (seeds, the data box's
+  border) exactly as the input points of a scan do.
+* Holes: where the front gives up edges (its point-cloud tests misjudge sharp folds), the
+  border loops left inside the surface are closed by rings on the surface
+  (:func:`fill_holes`); then valence flips and tangential relaxation
+  (:func:`splineviz.pointcloud.relaxation.optimize`) with the spline as projector.
+* Clip planes: the front runs a little past each plane, then the mesh is cut there; vertices
+  on the cut are put onto the exact section curve (plane and isosurface,
+  :func:`splineviz.core.sections.project`), vertices closer than ``SNAP`` edge lengths to the
+  plane are moved onto it first so that the cut leaves no slivers.
+
+Conventions: ``vertices (V, 3)`` float64, ``faces (F, 3)`` int64 counter-clockwise seen from the
+normals, ``normals (V, 3)`` unit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.spatial import cKDTree
+
+from splineviz.core import sections
+from splineviz.core.curvature import spline_curvatures
+from splineviz.core.errors import SplinevizError
+from splineviz.core.isosurface import project_to_isosurface
+from splineviz.pointcloud.advancing_front import AdvancingFront
+from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
+from splineviz.pointcloud.relaxation import optimize
+
+#: default angle (radians) one edge subtends on the osculating circle
+DEFAULT_RHO = 0.3
+#: default edge-length bounds, in grid steps
+DEFAULT_MIN_LENGTH = 0.4
+DEFAULT_MAX_LENGTH = 6.0
+#: growth of the target length per unit distance
+GRADATION = 0.3
+#: a vertex within this many target lengths of a clip plane is moved onto the plane
+SNAP = 0.3
+#: neighbours per sample in the gradation graph
+GRAPH_NEIGHBOURS = 8
+#: value tolerance of a vertex, relative to the data range
+VALUE_TOL = 1e-9
+#: at most this many surface samples (one per grid cell; coarser cells beyond)
+MAX_SAMPLES = 600_000
+
+
+class SplineMeshError(SplinevizError, ValueError):
+    """No spline mesh can be made (the isovalue is not crossed, bad parameters)."""
+
+
+@dataclass(frozen=True, eq=False)
+class _Samples:
+    """What the front reads of a point cloud's connectivity: the k-d tree and how irregular
+    the sampling is (grid samples are regular)."""
+
+    tree: cKDTree
+    graph: sparse.csr_matrix
+
+    def void_ratio(self) -> float:
+        return 1.0
+
+
+class SplineProjector:
+    """The projector interface of :class:`~splineviz.pointcloud.advancing_front.AdvancingFront`
+    for the isosurface ``s = iso`` of a spline.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    points : (N, 3) samples on the surface
+    normals : (N, 3) their unit normals
+    spacing : float, the samples' spacing
+    """
+
+    def __init__(self, spline, iso, points, normals, spacing):
+        self.spline = spline
+        self.iso = float(iso)
+        self.points = points
+        self.normals = normals
+        self.scale = np.full(len(points), float(spacing))
+        lo, hi = spline.volume.finite_range
+        self.tol = VALUE_TOL * max(hi - lo, 1e-300)
+        tree = cKDTree(points)
+        dist, idx = tree.query(points, k=GRAPH_NEIGHBOURS + 1)
+        rows = np.repeat(np.arange(len(points)), GRAPH_NEIGHBOURS)
+        graph = sparse.csr_matrix((dist[:, 1:].ravel(), (rows, idx[:, 1:].ravel())),
+                                  shape=(len(points), len(points)))
+        self.conn = _Samples(tree, graph.maximum(graph.T).tocsr())
+
+    def project_with_normals(self, points, normal_hint=None):
+        """Newton projection onto ``s = iso``: points ``(M, 3)`` and unit normals ``(M, 3)``;
+        ``normal_hint`` is not needed (the spline's normals are consistent everywhere)."""
+        # most points converge in one or two steps; a guess far off the surface needs more
+        # of the half-voxel-limited steps
+        return project_to_isosurface(self.spline, points, self.iso, steps=30, tol=self.tol)
+
+    def project(self, points):
+        """Newton projection onto ``s = iso`` of ``(M, 3)`` points."""
+        return self.project_with_normals(points)[0]
+
+
+def surface_samples(spline, iso: float, cell: float | None = None):
+    """Points on ``s = iso`` near every grid edge whose data cross the isovalue.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    cell : float, optional
+        One sample per cube of this size (default one grid step, coarser when there would be
+        more than ``MAX_SAMPLES``).
+
+    Returns
+    -------
+    points : (N, 3), normals : (N, 3), cell : float
+    """
+    vol = spline.volume
+    data = vol.data
+    found = []
+    for axis in range(3):
+        a = np.moveaxis(data, axis, 0)
+        lo_v, hi_v = a[:-1], a[1:]
+        hits = np.argwhere(((lo_v - iso) * (hi_v - iso) <= 0) & (lo_v != hi_v))
+        if len(hits) == 0:
+            continue
+        i, j, k = hits.T
+        f0, f1 = lo_v[i, j, k].astype(np.float64), hi_v[i, j, k].astype(np.float64)
+        t = np.divide(iso - f0, f1 - f0, out=np.full_like(f0, 0.5), where=f1 != f0)
+        idx = np.stack([i, j, k], axis=1).astype(np.float64)
+        idx[:, 0] += t
+        found.append(np.roll(idx, axis, axis=1) if axis else idx)
+    if not found:
+        raise SplineMeshError(f"the isovalue {iso:g} is not crossed by the data")
+    index = np.concatenate(found)
+    world = vol.index_to_world(index)
+    step = float(np.min(vol.spacing))
+    cell = step if cell is None else float(cell)
+    while True:
+        keys = np.floor(world / cell).astype(np.int64)
+        _, first = np.unique(keys, axis=0, return_index=True)
+        if len(first) <= MAX_SAMPLES:
+            break
+        cell *= 1.5
+    pts, normals = project_to_isosurface(spline, world[np.sort(first)], iso, steps=10)
+    lo, hi = vol.finite_range
+    ok = (np.abs(spline.evaluate(pts) - iso) <= VALUE_TOL * (hi - lo)) & \
+        (np.linalg.norm(normals, axis=1) > 0.5)
+    return pts[ok], normals[ok], cell
+
+
+def _guidance(projector, rho, min_length, max_length):
+    k1, k2 = spline_curvatures(projector.spline, projector.points)
+    kappa = np.nan_to_num(np.maximum(np.abs(k1), np.abs(k2)), nan=0.0)
+    ideal = 2.0 * np.sin(rho / 2.0) / np.maximum(kappa, 1e-300)
+    lengths = np.clip(ideal, min_length, max_length)
+    lengths = limit_gradation(lengths, projector.conn.graph, GRADATION)
+    return GuidanceField(lengths, projector.conn.tree)
+
+
+def border_loops(faces: np.ndarray) -> list[list[int]]:
+    """Closed loops of border edges, each as vertex indices in the direction the faces give
+    their edges (the open side lies to the right).
+
+    Parameters
+    ----------
+    faces : (F, 3)
+
+    Returns
+    -------
+    list of vertex-index lists
+    """
+    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    key = np.sort(directed, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    border = directed[counts[inverse.ravel()] == 1]
+    nxt: dict[int, list[int]] = {}
+    for a, b in border.tolist():
+        nxt.setdefault(a, []).append(b)
+    loops, used = [], set()
+    for a, b in border.tolist():
+        if (a, b) in used:
+            continue
+        loop, u, v = [], a, b
+        while (u, v) not in used:
+            used.add((u, v))
+            loop.append(u)
+            cands = [w for w in nxt.get(v, []) if (v, w) not in used]
+            if not cands:
+                break
+            u, v = v, cands[0]
+        if v == a and len(loop) >= 3:
+            loops += _simple(loop)
+    return loops
+
+
+def _simple(loop: list[int]) -> list[list[int]]:
+    """Split a loop pinched at repeated vertices into loops without repeats (a fan over a
+    pinched loop would give one edge four triangles)."""
+    out, stack, first = [], [], {}
+    for v in loop:
+        if v in first:
+            i = first[v]
+            out.append(stack[i:])
+            for w in stack[i + 1:]:
+                del first[w]
+            del stack[i + 1:]
+        else:
+            first[v] = len(stack)
+            stack.append(v)
+    out.append(stack)
+    return [part for part in out if len(part) >= 3]
+
+
+def _zip(a: list[int], b: list[int]) -> list[list[int]]:
+    """Triangles joining the closed ring ``a`` to the closed ring ``b`` inside it (both in the
+    same turning direction), walking both by their fraction of a turn."""
+    na, nb = len(a), len(b)
+    tris, i, j = [], 0, 0
+    while i < na or j < nb:
+        # advance on the ring whose next vertex comes first along the turn
+        if j >= nb or (i < na and (i + 1) / na <= (j + 1) / nb):
+            tris.append([a[i % na], a[(i + 1) % na], b[j % nb]])
+            i += 1
+        else:
+            tris.append([a[i % na], b[(j + 1) % nb], b[j % nb]])
+            j += 1
+    return tris
+
+
+def fill_holes(spline, iso, vertices, faces, keep_open):
+    """Close the border loops the front left inside the surface (edges it gave up).
+
+    A loop of 3 vertices becomes a triangle. A larger one is closed by rings: shrunk copies
+    of the loop towards its centroid, about one edge length apart, with fewer vertices as
+    they shrink, every new vertex moved onto ``s = iso``; ring to ring by a zipper, the last
+    ring as a fan around the centroid (no diagonal between loop vertices, which could exist
+    already). The flips and relaxation that follow even the rings out.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    vertices : (V, 3)
+    faces : (F, 3)
+    keep_open : callable ``(M, 3) points -> bool``: a loop through any such point is a real
+        border (the data box, beyond a clip plane) and stays open
+
+    Returns
+    -------
+    vertices : (V', 3), faces : (F', 3), filled : int number of loops closed
+    """
+    lo, hi = spline.volume.finite_range
+    tol = VALUE_TOL * max(hi - lo, 1e-300)
+    new_v, new_f, filled = [], [], 0
+    for loop in border_loops(faces):
+        pts = vertices[loop]
+        if keep_open(pts):
+            continue
+        rev = loop[::-1]  # the hole's side: the reversed border direction
+        if len(loop) == 3:
+            new_f.append(rev)
+            filled += 1
+            continue
+        loop_v, loop_f = _rings(spline, iso, vertices, rev, len(vertices) + len(new_v))
+        # a hole whose rings do not lie on the surface (it spans a fold or a gap of the
+        # surface) stays open rather than be closed off the surface
+        if len(loop_v) and np.abs(spline.evaluate(np.array(loop_v)) - iso).max() > tol:
+            continue
+        new_v += loop_v
+        new_f += loop_f
+        filled += 1
+    if not filled:
+        return vertices, faces, 0
+    v = np.concatenate([vertices, np.array(new_v).reshape(-1, 3)])
+    return v, np.concatenate([faces, np.array(new_f, dtype=np.int64).reshape(-1, 3)]), filled
+
+
+def _rings(spline, iso, vertices, rev, first):
+    """New vertices (list of (3,)) and triangles closing the loop ``rev`` by rings (see
+    :func:`fill_holes`); new vertex indices start at ``first``."""
+    new_v, new_f = [], []
+    p = vertices[rev]
+    centre = p.mean(axis=0)
+    edge = float(np.mean(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1)))
+    radius = float(np.mean(np.linalg.norm(p - centre, axis=1)))
+    n_rings = max(1, int(round(radius / max(edge, 1e-300))))
+    outer, k = rev, len(rev)
+    for j in range(1, n_rings):
+        frac = 1.0 - j / n_rings
+        m = max(3, int(round(k * frac)))
+        # the ring's vertices sample the loop evenly, pulled towards the centre
+        src = p[np.floor(np.arange(m) * k / m).astype(int)]
+        ring, _ = project_to_isosurface(spline, centre + frac * (src - centre), iso,
+                                        steps=10)
+        ids = list(range(first + len(new_v), first + len(new_v) + m))
+        new_v += list(ring)
+        new_f += _zip(outer, ids)
+        outer = ids
+    c, _ = project_to_isosurface(spline, centre[None], iso, steps=10)
+    ci = first + len(new_v)
+    new_v.append(c[0])
+    new_f += [[outer[i], outer[(i + 1) % len(outer)], ci] for i in range(len(outer))]
+    return new_v, new_f
+
+
+def clip_mesh(spline, iso, vertices, faces, origin, normal, snap_length):
+    """Cut a mesh on ``s = iso`` by a plane, keeping the side ``normal`` points to.
+
+    New vertices on the cut lie on the exact section curve (on the plane and on ``s = iso``).
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    vertices : (V, 3)
+    faces : (F, 3)
+    origin, normal : (3,) the plane
+    snap_length : float, vertices closer than this to the plane are moved onto it
+
+    Returns
+    -------
+    vertices : (V', 3), faces : (F', 3)
+    """
+    level = sections.Level(spline, iso)
+    plane = sections.Plane(origin, normal, float(np.linalg.norm(level.hi - level.lo)))
+    limit = sections.STEP_LIMIT * level.step
+    v = np.array(vertices, dtype=np.float64, copy=True)
+    d = (v - plane.origin) @ plane.normal
+    near = np.abs(d) < snap_length
+    if near.any():
+        moved, ok = sections.project(level, plane, v[near], level.lo, level.hi, limit)
+        idx = np.flatnonzero(near)[ok]
+        v[idx] = moved[ok]
+        d[idx] = 0.0
+    side = np.sign(d)
+    fs = side[faces]
+    keep = faces[(fs >= 0).all(axis=1)]
+    cut = faces[(fs > 0).any(axis=1) & (fs < 0).any(axis=1)]
+    new_points: list[np.ndarray] = []
+    edge_vertex: dict[tuple[int, int], int] = {}
+
+    def on_edge(a, b):
+        key = (a, b) if a < b else (b, a)
+        if key not in edge_vertex:
+            t = d[a] / (d[a] - d[b])
+            edge_vertex[key] = len(v) + len(new_points)
+            new_points.append(v[a] + t * (v[b] - v[a]))
+        return edge_vertex[key]
+
+    tris = []
+    for tri in cut:
+        poly = []
+        for i in range(3):
+            a, b = int(tri[i]), int(tri[(i + 1) % 3])
+            if d[a] >= 0:
+                poly.append(a)
+            if d[a] * d[b] < 0:
+                poly.append(on_edge(a, b))
+        tris += [(poly[0], poly[m], poly[m + 1]) for m in range(1, len(poly) - 1)]
+    if new_points:
+        moved, _ok = sections.project(level, plane, np.array(new_points), level.lo, level.hi,
+                                      limit)
+        v = np.concatenate([v, moved])
+    f = np.concatenate([keep, np.array(tris, dtype=np.int64).reshape(-1, 3)])
+    used = np.unique(f)
+    remap = np.full(len(v), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return v[used], remap[f]
+
+
+def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
+                      min_length: float | None = None, max_length: float | None = None,
+                      progress=None):
+    """Triangulate ``s = iso`` with the advancing front on the spline.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    planes : sequence of (origin (3,), normal (3,))
+        Clip planes; the side each normal points to is kept.
+    rho : float
+        Angle (radians) one edge subtends on the osculating circle: smaller is finer.
+    min_length, max_length : float, optional
+        Edge-length bounds (default ``DEFAULT_MIN_LENGTH`` / ``DEFAULT_MAX_LENGTH`` grid steps).
+    progress : callable, optional
+        ``progress(fraction, message)``; returning False cancels.
+
+    Returns
+    -------
+    vertices : (V, 3), faces : (F, 3), normals : (V, 3)
+    """
+    if not (np.isfinite(rho) and 0 < rho < np.pi):
+        raise SplineMeshError(f"rho must be an angle in (0, pi) radians, got {rho}")
+    step = float(np.min(spline.volume.spacing))
+    lo_len = DEFAULT_MIN_LENGTH * step if min_length is None else float(min_length)
+    hi_len = DEFAULT_MAX_LENGTH * step if max_length is None else float(max_length)
+    if not 0 < lo_len <= hi_len:
+        raise SplineMeshError(f"need 0 < min_length <= max_length, got {lo_len} and {hi_len}")
+    pts, nrm, cell = surface_samples(spline, iso)
+    planes = [(np.asarray(o, dtype=np.float64), np.asarray(n, dtype=np.float64) /
+               np.linalg.norm(n)) for o, n in planes]
+    # the front runs two longest edges past each plane so that the cut finds whole triangles
+    for origin, normal in planes:
+        keep = (pts - origin) @ normal >= -2.0 * hi_len
+        pts, nrm = pts[keep], nrm[keep]
+    if len(pts) < 3:
+        raise SplineMeshError("the clip planes leave no part of the isosurface")
+    proj = SplineProjector(spline, iso, pts, nrm, cell)
+    guide = _guidance(proj, rho, lo_len, hi_len)
+    front = AdvancingFront(proj, guide, progress)
+    vertices, faces = front.run()
+    # the front gives up a few edges where its point-cloud tests misjudge the surface (sharp
+    # folds); those holes are closed, borders at the data box and past clip planes are not
+    box_lo = np.array([b[0] for b in spline.bounds]) + 1.5 * cell
+    box_hi = np.array([b[1] for b in spline.bounds]) - 1.5 * cell
+
+    def keep_open(p):
+        if np.any((p <= box_lo) | (p >= box_hi)):
+            return True
+        return any(np.any((p - o) @ n < 0) for o, n in planes)
+
+    vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
+    # valence flips and tangential relaxation, every moved vertex put back onto the spline
+    vertices, faces, _flips = optimize(vertices, faces, proj)
+    for origin, normal in planes:
+        snap = SNAP * float(np.median(guide.lengths))
+        vertices, faces = clip_mesh(spline, iso, vertices, faces, origin, normal, snap)
+        if len(faces) == 0:
+            raise SplineMeshError("the clip planes leave no part of the isosurface")
+    # vertices the relaxation or the front left short of the surface (a step limit reached):
+    # more Newton steps for those alone
+    off = np.abs(spline.evaluate(vertices) - iso) > proj.tol
+    if off.any():
+        vertices[off], _ = project_to_isosurface(spline, vertices[off], iso, steps=60,
+                                                 tol=proj.tol)
+    g = spline.gradient(vertices)
+    norm = np.linalg.norm(g, axis=1)
+    normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)
+    return vertices, faces, normals

@@ -1,0 +1,107 @@
+"""The compiled fits of the noise-aware projection (pointcloud/local_fits.py) and the
+k-nearest connectivity the standalone projector builds."""
+
+import numpy as np
+import pc_surfaces as S
+
+from splineviz.pointcloud.cocone import knn_connectivity
+from splineviz.pointcloud.local_fits import project_on_polynomials, smoothing_fits
+
+SCALES = ((1.6, 3), (2.6, 2), (4.2, 2))
+
+
+def _grid_patch(f, noise=0.0, seed=0, n=25):
+    """One neighbourhood: a jittered grid of unit spacing around the origin, heights ``f``."""
+    rng = np.random.default_rng(seed)
+    g = np.arange(n) - n // 2
+    xy = np.stack(np.meshgrid(g, g), -1).reshape(-1, 2) + 0.2 * rng.uniform(-1, 1, (n * n, 2))
+    xy[0] = 0.0
+    pts = np.c_[xy, f(xy[:, 0], xy[:, 1]) + noise * rng.normal(size=n * n)]
+    index = np.argsort(np.linalg.norm(pts[:, :2], axis=1))[None, :200]
+    index[0, 0] = 0
+    return pts, index
+
+
+def _fit(pts, index, scales=SCALES, noise=False):
+    return smoothing_fits(pts, index, np.ones(index.shape, dtype=bool),
+                          np.eye(3)[None], np.ones(len(pts)), np.array([0]), scales, 1e4,
+                          noise=noise)
+
+
+def test_quadratic_is_reproduced_at_every_width():
+    true = np.array([0.3, 0.1, -0.2, 0.05, -0.02, 0.04])
+    f = lambda x, y: true[0] + true[1] * x + true[2] * y + true[3] * x * x \
+        + true[4] * x * y + true[5] * y * y  # noqa: E731
+    pts, index = _grid_patch(f)
+    coeffs, degree, _, _, _, sigma = _fit(pts, index, noise=True)
+    true[0] = 0.0  # local heights are relative to the point itself, which is on the surface
+    for s in range(3):
+        assert np.allclose(coeffs[s, 0, :6], true, atol=1e-9)
+        assert np.allclose(coeffs[s, 0, 6:], 0.0, atol=1e-9)
+    assert degree[:, 0].tolist() == [3, 2, 2]
+    assert sigma[0] < 1e-9
+
+
+def test_noise_estimate_and_variance_factor():
+    """On a noisy plane: the residual estimate recovers sigma, and ``spread`` predicts the
+    variance of the fitted height at the origin over repeated noise (local heights are
+    relative to the noisy point itself: its own height is added back)."""
+    values, sigmas = [], []
+    for seed in range(60):
+        pts, index = _grid_patch(lambda x, y: 0.0 * x, noise=0.1, seed=seed)
+        coeffs, _, _, spread, _, sigma = _fit(pts, index, noise=True)
+        values.append(coeffs[:, 0, 0] + pts[0, 2])
+        sigmas.append(sigma[0])
+    assert abs(np.mean(sigmas) / 0.1 - 1.0) < 0.1
+    predicted = 0.1 * np.sqrt(spread[:, 0])
+    measured = np.std(values, axis=0)
+    assert np.all(np.abs(measured / predicted - 1.0) < 0.3)
+    # wider fits average more points: smaller variance
+    assert predicted[0] > predicted[1] > predicted[2]
+
+
+def test_scan_lines_fall_back_to_the_plane_and_borders_lean():
+    """Points on two lines leave degree 2 undetermined across them: the plane is fitted.  A
+    half-plane neighbourhood (a border of the cloud) has its centroid about 0.56 widths off."""
+    x = np.linspace(-6, 6, 61)
+    pts = np.c_[np.r_[x, x], np.r_[np.zeros(61), np.ones(61)], 0.1 * np.r_[x, x]]
+    pts = np.r_[[[0.0, 0.0, 0.0]], pts[pts[:, 0] ** 2 + pts[:, 1] ** 2 > 0]]
+    index = np.arange(len(pts))[None]
+    coeffs, degree, _, _, _, _ = _fit(pts, index)
+    assert degree[:, 0].tolist() == [1, 1, 1]
+    assert np.allclose(coeffs[:, 0, 1], 0.1, atol=1e-6)
+    pts, index = _grid_patch(lambda x, y: 0.0 * x, n=41)
+    half = index[:, pts[index[0], 0] >= 0]
+    balance = _fit(pts, half)[4]
+    assert np.all((balance[:, 0] > 0.4) & (balance[:, 0] < 0.65))
+    assert np.all(_fit(pts, index)[4][:, 0] < 0.05)
+
+
+def test_projection_onto_a_polynomial_graph():
+    """Gauss-Newton lands on z = x^2 / 4 at the orthogonal foot (normal through the query)."""
+    coeffs = np.zeros((1, 21))
+    coeffs[0, 3] = 0.25
+    queries = np.array([[0.5, 0.2, 1.0], [-1.0, 0.3, -0.5], [0.0, 0.0, 0.4]])
+    pos, nrm = project_on_polynomials(np.zeros((1, 3)), np.eye(3)[None], np.ones(1), coeffs,
+                                      np.array([2]), np.array([3.0]), np.zeros(3, dtype=int),
+                                      queries, 30)
+    assert np.allclose(pos[:, 2], 0.25 * pos[:, 0] ** 2, atol=1e-12)
+    assert np.allclose(np.linalg.norm(nrm, axis=1), 1.0)
+    off = queries - pos
+    assert np.allclose(np.linalg.norm(np.cross(off, nrm), axis=1), 0.0, atol=1e-8)
+
+
+def test_knn_connectivity_normals_and_ring_graph():
+    pts = S.sphere(3000, seed=3)
+    conn = knn_connectivity(pts)
+    assert np.min(np.einsum("ij,ij->i", conn.normals, conn.points)) > 0.99  # outward
+    g = conn.graph
+    assert (g != g.T).nnz == 0
+    # every point has neighbours on all sides (a ring), not only the nearest cluster
+    counts = np.diff(g.indptr)
+    assert counts.min() >= 3 and np.median(counts) >= 6
+    d = conn.points[g.indices] - np.repeat(conn.points, counts, axis=0)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    pull = np.add.reduceat(d, g.indptr[:-1], axis=0) / counts[:, None]
+    assert np.percentile(np.linalg.norm(pull, axis=1), 99) < 0.5
+    assert len(conn.triangles) == 0
