@@ -229,11 +229,16 @@ def check_xml_appended(path, name: str, budget: int) -> None:
         with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as m:
             where = m.find(b"<AppendedData")
             head = m[:where] if where >= 0 else m[:min(size, 1 << 20)]
+            # VTK allocates a piece's points and cells from these counts before it reads
+            # any data: each must be what the file can hold (compressed data inflate at most
+            # ~1100:1), or a damaged count of 2*10^9 allocates tens of GB, and a failed
+            # allocation aborts the process
+            most = min(2**31, 1100 * size + 4096)
             for piece in _XML_TAG["Piece"].findall(head):
                 for key, val in _attrs(piece).items():
                     if key.startswith("NumberOf") or key == "Extent":
                         for n in val.split():
-                            if not re.fullmatch(r"-?\d{1,12}", n) or abs(int(n)) > 2**31:
+                            if not re.fullmatch(r"-?\d{1,12}", n) or abs(int(n)) > most:
                                 raise CorruptFileError(f"{name} has the unusable piece size "
                                                        f"{key}={val[:40]!r}")
             for arr in _XML_TAG["DataArray"].findall(head):
@@ -241,7 +246,7 @@ def check_xml_appended(path, name: str, budget: int) -> None:
                     val = _attrs(arr).get(key)
                     limit = MAX_COMPONENTS if key == "NumberOfComponents" else 2**31
                     if val is not None and (not re.fullmatch(r"\d{1,12}", val.strip())
-                                            or int(val) > limit):
+                                            or int(val) > min(limit, most)):
                         raise CorruptFileError(f"{name} has an array with the unusable "
                                                f"{key}={val[:40]!r}")
             if where < 0:

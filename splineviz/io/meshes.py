@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.io import _vtk
-from splineviz.io._util import atomic_output, memory_budget, regular_input
+from splineviz.io._util import atomic_output, memory_budget, reader_errors, regular_input
 from splineviz.io.errors import CorruptFileError, InvalidDataError, WriteError
 from splineviz.io.registry import find_format, register_format
 
@@ -280,7 +280,9 @@ def write_mesh(path, mesh, *, format=None) -> Path:
 def read_mesh(path, *, format=None):
     """Read a mesh file -> ``pyvista.PolyData``."""
     p = regular_input(path)
-    return find_format(p, "mesh", name=format).reader(p)
+    fmt = find_format(p, "mesh", name=format)
+    with reader_errors(p.name, fmt.name):
+        return fmt.reader(p)
 
 
 def write_screenshot(path, image) -> Path:
@@ -293,4 +295,6 @@ def write_screenshot(path, image) -> Path:
 def read_image(path) -> np.ndarray:
     """Read a PNG -> (H, W, 4) uint8."""
     p = regular_input(path)
-    return find_format(p, "image").reader(p)
+    fmt = find_format(p, "image")
+    with reader_errors(p.name, fmt.name):
+        return fmt.reader(p)

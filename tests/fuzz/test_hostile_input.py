@@ -150,15 +150,22 @@ def test_absurd_render_size_is_refused_before_anything_is_read(tmp_path, size, c
     assert capsys.readouterr().err.count("\n") == 1
 
 
-def test_raycaster_refuses_a_frame_the_device_cannot_hold():
+def test_raycaster_refuses_a_frame_the_device_cannot_hold(monkeypatch):
+    """Checked against the device's limits before any buffer exists: a device with 1 GiB
+    (256 MiB per buffer) is simulated, so nothing is allocated whatever the real device."""
+    from types import SimpleNamespace
+
     from splineviz.compute.raycast import RayCaster, RayCastError
 
-    rc = RayCaster(sv.Volume(F), "trilinear")
+    rc = RayCaster(sv.Volume(F), "trilinear", device="numpy")
     rc.set_isovalue(3.0)
-    if rc.stats.get("path") != "opencl" and rc._device is None:
-        pytest.skip("no OpenCL device: the NumPy path has no device buffers")
-    with pytest.raises(RayCastError, match="frame"):
-        rc.render(sv.Camera((20, 20, 20), (2, 2, 1)), (16384, 16384 * 0 + 16384))
+    small = SimpleNamespace(name="a 1 GiB device", device=SimpleNamespace(
+        max_mem_alloc_size=2**28, global_mem_size=2**30))
+    monkeypatch.setattr(rc, "_device", small)
+    with pytest.raises(RayCastError, match="8192x8192 frame") as info:
+        rc.render(sv.Camera((20, 20, 20), (2, 2, 1)), (8192, 8192))
+    _one_sentence(info.value)
+    rc._check_frame_memory(1024, 768)  # an ordinary frame fits
 
 
 @pytest.mark.parametrize("iso", ["nan", "inf", "-inf"])

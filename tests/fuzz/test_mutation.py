@@ -10,6 +10,7 @@ never another exception, a hang or a file read outside the folder.
 The default run is derandomized and small (CI-deterministic); ``-m slow`` runs many more.
 """
 
+import copy
 import json
 import re
 import time
@@ -224,7 +225,7 @@ def _fuzz_files(examples):
     return test
 
 
-test_mutated_files = _fuzz_files(12)
+test_mutated_files = _fuzz_files(30)
 test_mutated_files_many = pytest.mark.slow(_fuzz_files(300))
 
 
@@ -291,7 +292,7 @@ def _edit_session(doc, edit):
             parent = parent[key]
         del parent[path[-1]]
         return doc
-    return _replace(doc, path, value)
+    return _replace(doc, path, copy.deepcopy(value))  # never the shared constant itself
 
 
 @pytest.fixture(scope="module")
@@ -346,5 +347,5 @@ def _fuzz_sessions(examples):
     return test
 
 
-test_mutated_sessions = _fuzz_sessions(400)
-test_mutated_sessions_many = pytest.mark.slow(_fuzz_sessions(3000))
+test_mutated_sessions = _fuzz_sessions(800)
+test_mutated_sessions_many = pytest.mark.slow(_fuzz_sessions(10000))

@@ -5,6 +5,7 @@ the model and check the model, the frames the view shows and the pictures.
 """
 
 import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -190,7 +191,9 @@ def test_open_replace_or_add_frames_the_data(window, tmp_path):
 
 
 def test_point_cloud_loads_and_session_round_trip(window, tmp_path, shared_data):
-    window.open_path(shared_data / "points" / "kitten.xyz", mode="replace", block=True)
+    # a copy beside the session: data outside a session's folder needs the user's consent
+    shutil.copy(shared_data / "points" / "kitten.xyz", tmp_path / "kitten.xyz")
+    window.open_path(tmp_path / "kitten.xyz", mode="replace", block=True)
     pts = window.scene.of_kind(PointsNode)[-1]
     assert len(pts.data) > 5000
     vol = tmp_path / "sphere.npy"

@@ -236,7 +236,8 @@ def test_nonfinite_samples_fill_option(tmp_path, field):
     np.save(tmp_path / "n.npy", f)
     with pytest.raises(errors.InvalidDataError, match="1 NaN or infinite"):
         sv.read_volume(tmp_path / "n.npy")
-    vol = sv.read_volume(tmp_path / "n.npy", nonfinite="fill")
+    with pytest.warns(sv.SplinevizWarning, match="1 NaN or infinite samples were replaced"):
+        vol = sv.read_volume(tmp_path / "n.npy", nonfinite="fill")
     assert vol.data[1, 2, 3] == np.nanmin(f)
 
 

@@ -36,7 +36,8 @@ PROPS = {
     "Remesh": st.fixed_dictionaries({}, optional={"rho": st.floats(0.1, 5),
                                                   "edge_length": st.floats(1e-3, 10)}),
     "ClipPlane": st.fixed_dictionaries({}, optional={
-        "origin": vec, "normal": vec.filter(lambda v: any(v)), "enabled": st.booleans()}),
+        "origin": vec, "normal": vec.filter(lambda v: sum(c * c for c in v) > 0),
+        "enabled": st.booleans()}),
 }
 
 
