@@ -53,12 +53,15 @@ def test_bunny(shared_data):
 
 @pytest.mark.slow
 def test_lucy(shared_data):
-    # measured: points to mesh 0.89 %, two-sided 2.02 %, 60-90 s on this 2-core machine
+    # measured: points to mesh 0.89 %, two-sided 2.02 %, 60-90 s on this 2-core machine.
+    # Lucy's samples are the vertices of a decimated mesh, free of noise, so they are meshed
+    # with the interpolating projection (smoothing=1.0); the noise-aware default reads her
+    # under-resolved folds as noise and reaches 1.26 % points to mesh (issue 13)
     path = shared_data / "points" / "lucy.ply"
     source = sv.read_mesh(path)  # the decimated mesh whose vertices are the cloud
     own = sv.mesh_quality(source, reference=np.asarray(source.points))["hausdorff"]
     diag = float(np.linalg.norm(np.ptp(np.asarray(source.points), axis=0)))
-    _check(sv.read_points(path), 120, hausdorff_limit=own / diag)
+    _check(sv.read_points(path), 120, hausdorff_limit=own / diag, smoothing=1.0)
 
 
 def test_cli_remesh_writes_mesh_and_report(tmp_path, capsys):

@@ -80,6 +80,8 @@ class AnalysisPanel(QWidget):
             box.setDecimals(6)
             box.setRange(-1e12, 1e12)
             box.setKeyboardTracking(False)
+        self.vmin.setToolTip("Value at the low end of the colour map (manual range)")
+        self.vmax.setToolTip("Value at the high end of the colour map (manual range)")
         self.section_with = QComboBox()
         self.section_with.setToolTip("Cut the isosurface with a clip plane or another "
                                      "isosurface")
