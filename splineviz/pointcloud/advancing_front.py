@@ -154,7 +154,7 @@ def _corner_angles(pa, pb, pc):
     return out
 
 
-def _simple_loops(loop):
+def simple_loops(loop):
     """Split a closed vertex loop at its repeated vertices into loops without repeats.
 
     A front loop pinched at a vertex (two of its wedges meet there) would otherwise give the
@@ -752,7 +752,7 @@ class AdvancingFront:
         failed: set[tuple[int, int]] = set()
         while True:
             filled = False
-            for loop in (part for whole in self.front_loops() for part in _simple_loops(whole)):
+            for loop in (part for whole in self.front_loops() for part in simple_loops(whole)):
                 k = len(loop)
                 edges = [(loop[i], loop[(i + 1) % k]) for i in range(k)]
                 if k < 3 or k > MAX_HOLE_EDGES or edges[0] in failed or \

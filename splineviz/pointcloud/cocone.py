@@ -282,6 +282,35 @@ def _planar_connectivity(points: np.ndarray):
     return tri, normals
 
 
+def _distinct_points(cloud):
+    """The distinct points of ``cloud``, the index of each input point among them and the
+    singular values of the centred points (a sample of 20,000 at most).
+
+    Returns
+    -------
+    points : (n, 3) float ndarray
+    inverse : (N,) int ndarray
+    sv : (3,) float ndarray
+
+    Raises
+    ------
+    ConnectivityError
+        Fewer than 4 distinct points, or all points on a line.
+    """
+    pts = cloud.points if isinstance(cloud, PointCloud) else PointCloud(cloud).points
+    if len(pts) == 0:
+        raise ConnectivityError("the point cloud is empty")
+    points, inverse = deduplicate(pts)
+    n = len(points)
+    if n < 4:
+        raise ConnectivityError(f"at least 4 distinct points are needed, got {n}")
+    centred = points - points.mean(axis=0)
+    sv = np.linalg.svd(centred[:: max(1, n // 20000)], compute_uv=False)
+    if sv[1] <= 1e-9 * sv[0]:
+        raise ConnectivityError("all points lie on a line; no surface can be built")
+    return points, inverse, sv
+
+
 def cocone_connectivity(cloud: PointCloud | np.ndarray,
                         angle: float = COCONE_ANGLE) -> Connectivity:
     """Cocone neighbour graph and oriented normals of a point cloud (thesis §7.2, Fig. 7.4).
@@ -305,17 +334,8 @@ def cocone_connectivity(cloud: PointCloud | np.ndarray,
     ConnectivityError
         Fewer than 4 distinct points, or all points on a line.
     """
-    pts = cloud.points if isinstance(cloud, PointCloud) else PointCloud(cloud).points
-    if len(pts) == 0:
-        raise ConnectivityError("the point cloud is empty")
-    points, inverse = deduplicate(pts)
+    points, inverse, sv = _distinct_points(cloud)
     n = len(points)
-    if n < 4:
-        raise ConnectivityError(f"at least 4 distinct points are needed, got {n}")
-    centred = points - points.mean(axis=0)
-    sv = np.linalg.svd(centred[:: max(1, n // 20000)], compute_uv=False)
-    if sv[1] <= 1e-9 * sv[0]:
-        raise ConnectivityError("all points lie on a line; no surface can be built")
     if sv[2] <= 1e-9 * sv[0]:
         faces, normals = _planar_connectivity(points)
     else:
@@ -387,17 +407,8 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     ConnectivityError
         Fewer than 4 distinct points, or all points on a line.
     """
-    pts = cloud.points if isinstance(cloud, PointCloud) else PointCloud(cloud).points
-    if len(pts) == 0:
-        raise ConnectivityError("the point cloud is empty")
-    points, inverse = deduplicate(pts)
+    points, inverse, sv = _distinct_points(cloud)
     n = len(points)
-    if n < 4:
-        raise ConnectivityError(f"at least 4 distinct points are needed, got {n}")
-    centred = points - points.mean(axis=0)
-    sv = np.linalg.svd(centred[:: max(1, n // 20000)], compute_uv=False)
-    if sv[1] <= 1e-9 * sv[0]:
-        raise ConnectivityError("all points lie on a line; no surface can be built")
     tree = cKDTree(points)
     k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
     dist, idx = tree.query(points, k=k + 1)

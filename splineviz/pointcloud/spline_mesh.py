@@ -35,7 +35,7 @@ from splineviz.core import sections
 from splineviz.core.curvature import spline_curvatures
 from splineviz.core.errors import SplinevizError
 from splineviz.core.isosurface import project_to_isosurface
-from splineviz.pointcloud.advancing_front import AdvancingFront
+from splineviz.pointcloud.advancing_front import AdvancingFront, simple_loops
 from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 
@@ -202,26 +202,8 @@ def border_loops(faces: np.ndarray) -> list[list[int]]:
                 break
             u, v = v, cands[0]
         if v == a and len(loop) >= 3:
-            loops += _simple(loop)
+            loops += simple_loops(loop)
     return loops
-
-
-def _simple(loop: list[int]) -> list[list[int]]:
-    """Split a loop pinched at repeated vertices into loops without repeats (a fan over a
-    pinched loop would give one edge four triangles)."""
-    out, stack, first = [], [], {}
-    for v in loop:
-        if v in first:
-            i = first[v]
-            out.append(stack[i:])
-            for w in stack[i + 1:]:
-                del first[w]
-            del stack[i + 1:]
-        else:
-            first[v] = len(stack)
-            stack.append(v)
-    out.append(stack)
-    return [part for part in out if len(part) >= 3]
 
 
 def _zip(a: list[int], b: list[int]) -> list[list[int]]:

@@ -195,12 +195,12 @@ def test_given_up_edges_are_retried_and_holes_filled(monkeypatch):
 
 
 def test_pinched_loops_are_split_into_simple_ones():
-    from splineviz.pointcloud.advancing_front import _simple_loops
+    from splineviz.pointcloud.advancing_front import simple_loops
 
     # 1 -> 2 -> 3 -> 4 -> 2 -> 5 -> 6 -> 1 touches itself at 2
-    parts = _simple_loops([1, 2, 3, 4, 2, 5, 6])
+    parts = simple_loops([1, 2, 3, 4, 2, 5, 6])
     assert sorted(map(tuple, parts)) == [(1, 2, 5, 6), (2, 3, 4)]
     for part in parts:  # every directed edge of a part is an edge of the loop
         edges = set(zip(part, part[1:] + part[:1], strict=True))
         assert edges <= {(1, 2), (2, 3), (3, 4), (4, 2), (2, 5), (5, 6), (6, 1)}
-    assert _simple_loops([7, 8, 9]) == [[7, 8, 9]]
+    assert simple_loops([7, 8, 9]) == [[7, 8, 9]]
