@@ -6,6 +6,7 @@ Runs on the default data in the default suite; ``-m slow`` drags across bonsai (
 the cubic C1 model, the issue's case.
 """
 
+import os
 import time
 
 import pytest
@@ -13,10 +14,12 @@ import pytest
 pytest.importorskip("pytestqt")
 
 from interaction import (  # noqa: E402
+    FRESH,
     LEFT,
     NO_BUTTON,
     _mouse,
     close_window,
+    in_fresh_process,
     open_window,
     pump,
 )
@@ -94,6 +97,8 @@ def _drag_across_twice_if_slow(w):
     assert max(latencies) <= PREVIEW_S, latencies
 
 
+@pytest.mark.skipif(os.environ.get(FRESH) != "1", reason="run in a fresh process by "
+                    "test_slider_drag_on_the_default_data_previews_every_step_alone")
 def test_slider_drag_on_the_default_data_previews_every_step(window):
     window.open_default()
     window.wait_for_refine()
@@ -107,3 +112,8 @@ def test_slider_drag_across_bonsai_with_cubic_c1(window, shared_data):
     window.wait_idle(300)
     window.wait_for_refine(300)
     _drag_across_twice_if_slow(window)
+
+
+@pytest.mark.skipif(os.environ.get(FRESH) == "1", reason="this process is the fresh one")
+def test_slider_drag_on_the_default_data_previews_every_step_alone():
+    in_fresh_process("tests/gui/test_isovalue_preview.py::test_slider_drag_on_the_default_data_previews_every_step")

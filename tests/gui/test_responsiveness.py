@@ -6,13 +6,21 @@ The default run uses small data (the embedded default volume, the kitten scan); 
 runs the same script on bonsai (256^3) and the bunny (36k points), the issue's figures.
 """
 
+import os
 import time
 
 import pytest
 
 pytest.importorskip("pytestqt")
 
-from interaction import StallMeter, close_window, open_window, pump  # noqa: E402
+from interaction import (  # noqa: E402
+    FRESH,
+    StallMeter,
+    close_window,
+    in_fresh_process,
+    open_window,
+    pump,
+)
 
 from splineviz.core.splines import MODELS  # noqa: E402
 
@@ -114,6 +122,8 @@ def _script(w, volume_path, cloud_path, iso):
     return stalls
 
 
+@pytest.mark.skipif(os.environ.get(FRESH) != "1", reason="run in a fresh process by "
+                    "test_no_stall_on_the_default_data_and_kitten_alone")
 def test_no_stall_on_the_default_data_and_kitten(window, shared_data):
     _script(window, None, shared_data / "points" / "kitten.xyz", None)
 
@@ -122,3 +132,8 @@ def test_no_stall_on_the_default_data_and_kitten(window, shared_data):
 def test_no_stall_on_bonsai_and_bunny(window, shared_data):
     _script(window, shared_data / "volumes" / "bonsai.vti", shared_data / "points" / "bunny.ply",
             40.5)
+
+
+@pytest.mark.skipif(os.environ.get(FRESH) == "1", reason="this process is the fresh one")
+def test_no_stall_on_the_default_data_and_kitten_alone():
+    in_fresh_process("tests/gui/test_responsiveness.py::test_no_stall_on_the_default_data_and_kitten")
