@@ -144,16 +144,10 @@ def _read_mesh_ply(path: Path):
     """
     import pyvista as pv
 
-    from splineviz.io.points import read_ply_data
+    from splineviz.io.points import ply_vertices, read_ply_data
 
     ply = read_ply_data(path)
-    if "vertex" not in ply:
-        raise InvalidDataError(f"{path.name} has no vertex element")
-    v = ply["vertex"].data
-    names = v.dtype.names or ()
-    if not all(c in names for c in "xyz"):
-        raise InvalidDataError(f"{path.name} has vertices without x, y, z")
-    pts = np.column_stack([np.asarray(v[c], dtype=np.float64) for c in "xyz"])
+    v, names, pts = ply_vertices(ply, path)
     if len(pts) == 0:
         raise InvalidDataError(f"{path.name} holds no vertices")
     if not np.all(np.isfinite(pts)):

@@ -106,16 +106,23 @@ def read_ply_data(path: Path):
         raise CorruptFileError(f"{path.name} has a damaged PLY payload: {exc}") from None
 
 
+def ply_vertices(ply, path: Path):
+    """The vertex element of a parsed PLY file: its records, their field names and the
+    (N, 3) float64 coordinates; :class:`InvalidDataError` without vertices or x, y, z.
+    Shared by the point and mesh readers."""
+    if "vertex" not in ply:
+        raise InvalidDataError(f"{path.name} has no vertex element")
+    v = ply["vertex"].data
+    names = v.dtype.names or ()
+    if not all(c in names for c in "xyz"):
+        raise InvalidDataError(f"{path.name} has vertices without x, y, z")
+    return v, names, np.column_stack([np.asarray(v[c], dtype=np.float64) for c in "xyz"])
+
+
 def _read_ply(path: Path) -> PointData:
     ply = read_ply_data(path)
     try:
-        if "vertex" not in ply:
-            raise InvalidDataError(f"{path.name} has no vertex element")
-        v = ply["vertex"].data
-        names = v.dtype.names or ()
-        if not all(c in names for c in "xyz"):
-            raise InvalidDataError(f"{path.name} has vertices without x, y, z")
-        pts = np.column_stack([np.asarray(v[c], dtype=np.float64) for c in "xyz"])
+        v, names, pts = ply_vertices(ply, path)
         normals = None
         if all(c in names for c in ("nx", "ny", "nz")):
             normals = np.column_stack([np.asarray(v[c], np.float64)

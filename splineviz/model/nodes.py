@@ -165,40 +165,18 @@ class IsosurfaceNode(Node):
     #: the isosurface node whose surface the distance is measured to (``"distance"``)
     color_isosurface_id: str | None = None
 
-    @field_validator("color_by")
+    @field_validator("color_by", "color_map", "color_range", "model")
     @classmethod
-    def _known_field(cls, v: str) -> str:
-        from splineviz.core.colour_by import FIELDS
-
-        if v not in FIELDS:
-            raise ValueError(f"unknown colour-by field {v!r}; choose one of {', '.join(FIELDS)}")
-        return v
-
-    @field_validator("color_map")
-    @classmethod
-    def _known_map(cls, v: str) -> str:
-        from splineviz.core.colour_by import COLORMAPS
-
-        if v not in COLORMAPS:
-            raise ValueError(f"unknown colour map {v!r}; choose one of {', '.join(COLORMAPS)}")
-        return v
-
-    @field_validator("color_range")
-    @classmethod
-    def _known_range(cls, v: str) -> str:
-        from splineviz.core.colour_by import RANGE_MODES
-
-        if v not in RANGE_MODES:
-            raise ValueError(f"unknown range mode {v!r}; choose one of {', '.join(RANGE_MODES)}")
-        return v
-
-    @field_validator("model")
-    @classmethod
-    def _known_model(cls, v: str) -> str:
+    def _known_choice(cls, v: str, info) -> str:
+        from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
         from splineviz.core.splines import MODELS
 
-        if v not in MODELS:
-            raise ValueError(f"unknown spline model {v!r}; choose one of {', '.join(MODELS)}")
+        what, choices = {"color_by": ("colour-by field", FIELDS),
+                         "color_map": ("colour map", COLORMAPS),
+                         "color_range": ("range mode", RANGE_MODES),
+                         "model": ("spline model", MODELS)}[info.field_name]
+        if v not in choices:
+            raise ValueError(f"unknown {what} {v!r}; choose one of {', '.join(choices)}")
         return v
 
     def model_options(self) -> dict:
