@@ -528,7 +528,8 @@ class RayCaster:
         self._nunion = int(np.diff(pts["union_start"]).max())
         self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
         self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
-        self._prelude = to_program.relevance_source(k, TO_WORDS)
+        self._prelude = (to_program.relevance_source(k, TO_WORDS)
+                         + to_program.subcell_source(TO_WORDS))
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))

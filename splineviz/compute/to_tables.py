@@ -174,3 +174,53 @@ def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
                 "pieces": np.array(pieces, np.uint32)}
 
     return cached_arrays(f"to-class-points-k{k:g}-w{words}", _TABLE_SOURCES, make)
+
+
+#: subcells per axis of a cell for :func:`subcell_masks` (odd: the TO centre of the classes
+#: 0 and 7 lies inside one subcell, where all 144 pieces meet, instead of on the corners of 8)
+SUBCELLS = 5
+#: widening of each subcell box (cell units) in :func:`subcell_masks`: it covers the rounding
+#: of the ray's cell-local points and of the subcell walk, so the masks stay conservative
+SUBCELL_MARGIN = 1e-3
+
+
+@cache
+def subcell_masks(words: int = 5, subcells: int = SUBCELLS) -> np.ndarray:
+    """Per cell class and subcell, the bit set of the class's pieces meeting the subcell.
+
+    A cell is split into ``subcells``^3 boxes; a ray segment in the cell can only meet the
+    pieces of the subcells it crosses, so the ray caster tests a piece's four planes only when
+    its bit is set in the union of those subcells' masks (about a third of a class's pieces
+    for a chord of the cell). Each box is widened by :data:`SUBCELL_MARGIN`, so a piece that
+    touches the segment within rounding of a crossed subcell is kept. Kept on disk between
+    runs.
+
+    Parameters
+    ----------
+    words : 32-bit words of a class's piece bit set
+    subcells : subcells per axis
+
+    Returns
+    -------
+    (8, subcells, subcells, subcells, words) uint32
+        ``[c, a, b, e]``: bit ``p - start[c]`` set when piece p of class c meets the box
+        ``[a, a+1] x [b, b+1] x [e, e+1] / subcells`` (cell-local, widened).
+    """
+    from splineviz.compute.table_cache import cached_arrays
+
+    def make():
+        start, centre, tet = cell_classes()
+        verts = to.generic_tetrahedra()[0]
+        n = subcells
+        out = np.zeros((8, n, n, n, words), np.uint32)
+        for c in range(8):
+            tv = verts[tet[start[c]:start[c + 1]]] + centre[start[c]:start[c + 1], None, :]
+            for sub in np.ndindex(n, n, n):
+                lo = np.array(sub, np.float64) / n - SUBCELL_MARGIN
+                hi = (np.array(sub, np.float64) + 1) / n + SUBCELL_MARGIN
+                for bit in np.flatnonzero(_overlaps(tv, lo, hi)):
+                    out[(c, *sub, bit >> 5)] |= np.uint32(1 << (bit & 31))
+        return {"masks": out}
+
+    return cached_arrays(f"to-subcell-masks-s{subcells}-w{words}", _TABLE_SOURCES,
+                         make)["masks"]

@@ -579,6 +579,35 @@ __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
+// The pieces of class `cls` that the segment p0 + s d, s in [0, len], of a cell (cell-local
+// p0) may meet: the union of the masks of the TO_SUB^3 subcells it crosses (to_sub_masks of
+// the prelude, each subcell widened by a margin that covers rounding), found by a walk
+// through the subcells. The walk never leaves the cell's subcells: a point of the segment
+// just outside the cell (rounding of the cell traversal) counts to the boundary subcell.
+inline void to_segment_pieces(int cls, int nw, float3 p0, float3 d, float len, uint *near)
+{
+    for (int w = 0; w < NWORDS; ++w) near[w] = 0u;
+    const float3 q = p0 * (float)TO_SUB, dq = d * (float)TO_SUB;
+    int3 c = clamp(convert_int3_rtn(q), (int3)(0), (int3)(TO_SUB - 1));
+    for (int it = 0; it < 3 * TO_SUB; ++it) {
+        __constant const uint *m = to_sub_masks
+            + (((cls * TO_SUB + c.x) * TO_SUB + c.y) * TO_SUB + c.z) * NWORDS;
+        for (int w = 0; w < nw; ++w) near[w] |= m[w];
+        // the next crossing of an inner subcell plane per axis (none past the cell's last)
+        const float tx = (dq.x > 0.0f && c.x < TO_SUB - 1) ? (c.x + 1 - q.x) / dq.x
+                       : (dq.x < 0.0f && c.x > 0) ? (c.x - q.x) / dq.x : INFINITY;
+        const float ty = (dq.y > 0.0f && c.y < TO_SUB - 1) ? (c.y + 1 - q.y) / dq.y
+                       : (dq.y < 0.0f && c.y > 0) ? (c.y - q.y) / dq.y : INFINITY;
+        const float tz = (dq.z > 0.0f && c.z < TO_SUB - 1) ? (c.z + 1 - q.z) / dq.z
+                       : (dq.z < 0.0f && c.z > 0) ? (c.z - q.z) / dq.z : INFINITY;
+        const float tn = fmin(tx, fmin(ty, tz));
+        if (!(tn <= len)) break;
+        if (tx == tn) c.x += dq.x > 0.0f ? 1 : -1;
+        else if (ty == tn) c.y += dq.y > 0.0f ? 1 : -1;
+        else c.z += dq.z > 0.0f ? 1 : -1;
+    }
+}
+
 // First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
 // corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
 // only those with their bit set in `words` are tested.
@@ -594,9 +623,13 @@ inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, con
     float best = -1.0f;
     const int e0 = ent_start[cls];
     const int nw = (ent_start[cls + 1] - e0 + 31) >> 5;
-    // the set bits only (about 30 of the class's 64 or 144 pieces), lowest first
+    // only the pieces near the segment (about a third of the class's) need their planes
+    uint near[NWORDS];
+    to_segment_pieces(cls, nw, p0, d, len, near);
+    // the set bits only (about 30 of the class's 64 or 144 pieces relevant, a third of them
+    // near the segment), lowest first
     for (int w = 0; w < nw; ++w)
-    for (uint bits = words[w]; bits != 0u; bits &= bits - 1u) {
+    for (uint bits = words[w] & near[w]; bits != 0u; bits &= bits - 1u) {
         const int e = e0 + (w << 5) + (31 - (int)clz(bits & (0u - bits)));
         const int t = ent_tet[e];
         const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
