@@ -349,6 +349,8 @@ class RayCaster:
             bricks = int(np.prod(levels[0][1:]))
             out["classification cache"] = 4 * (bricks + self._entry_words()
                                                * _initial_pool(bricks))
+        if self._family == "MODEL_TO":
+            out["cell ranges"] = 2 * int(np.prod(cells))
         return out
 
     def _entry_words(self) -> int:
@@ -443,6 +445,10 @@ class RayCaster:
             self._counts = cla.zeros(q, 3, np.int32)
             self._pool_cap = _initial_pool(bricks)
             self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
+        if self._family == "MODEL_TO":
+            # isovalue-independent cell ranges (raycast.cl), all (0, 255): "not known yet"
+            self._ranges = cla.empty(q, int(np.prod(self._cells)), np.uint16)
+            self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
         q.finish()
 
     def _cell_args(self) -> list:
@@ -834,7 +840,7 @@ class RayCaster:
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
-            model_args = [*self._cache_args(), self._cls_start.data,
+            model_args = [*self._cache_args(), self._ranges.data, self._cls_start.data,
                           self._cls_offsets.data, e["start"].data, e["centre"].data,
                           e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]

@@ -28,10 +28,12 @@ def _literal(w: float) -> str:
 @cache
 def relevance_source(k: float = 2, words: int = 5) -> str:
     """OpenCL C defining ``int to_class_points(const float *v, int cls, float iso, uint
-    *words)``.
+    *words, float2 *range)``.
 
     ``v`` holds the values the class reads (its union, in table order); ``words`` receives
-    the bit set of the class's pieces that straddle ``iso``; returns their number.
+    the bit set of the class's pieces that straddle ``iso``; returns their number. ``range``
+    receives the (min, max) of all the points, an isovalue-independent bound of the spline on
+    the cell (the ray caster keeps it for the next isovalues).
     """
     from splineviz.compute.to_tables import class_points
 
@@ -41,9 +43,10 @@ def relevance_source(k: float = 2, words: int = 5) -> str:
     for c in range(8):
         lo, hi = int(t["pt_start"][c]), int(t["pt_start"][c + 1])
         used = [w for w in range(words) if pieces[lo:hi, w].any()]
-        out.append(f"inline int to_points_{c}(const float *v, float iso, uint *words)\n{{")
+        out.append(f"inline int to_points_{c}(const float *v, float iso, uint *words, "
+                   "float2 *range)\n{")
         out.append("    uint " + ", ".join(f"a{w} = 0u, b{w} = 0u" for w in used) + ";")
-        out.append("    float x;")
+        out.append("    float x, lo = INFINITY, hi = -INFINITY;")
         for p in range(lo, hi):
             terms = " + ".join(f"{_literal(weights[q])} * v[{cols[q]}]"
                                for q in range(rows[p], rows[p + 1]))
@@ -52,6 +55,8 @@ def relevance_source(k: float = 2, words: int = 5) -> str:
             above = " ".join(f"a{w} |= {m:#x}u;" for w, m in mask)
             out.append(f"    x = {terms};")
             out.append(f"    if (x <= iso) {{ {below} }} if (x >= iso) {{ {above} }}")
+            out.append("    lo = fmin(lo, x); hi = fmax(hi, x);")
+        out.append("    *range = (float2)(lo, hi);")
         out.append("    int n = 0;")
         for w in range(words):
             if w in used:
@@ -59,9 +64,10 @@ def relevance_source(k: float = 2, words: int = 5) -> str:
             else:
                 out.append(f"    words[{w}] = 0u;")
         out.append("    return n;\n}")
-    out.append("inline int to_class_points(const float *v, int cls, float iso, uint *words)\n{")
+    out.append("inline int to_class_points(const float *v, int cls, float iso, uint *words, "
+               "float2 *range)\n{")
     out.append("    switch (cls) {")
-    out.extend(f"    case {c}: return to_points_{c}(v, iso, words);" for c in range(8))
+    out.extend(f"    case {c}: return to_points_{c}(v, iso, words, range);" for c in range(8))
     out.append("    default: return 0;\n    }\n}\n")
     return "\n".join(out)
 
