@@ -257,3 +257,55 @@ def test_to_relevance_bits_match_core_coefficients():
         agree += np.sum(got == want)
         total += len(ents)
     assert total > 1000 and agree / total > 0.9999
+
+
+def _subcells_crossed(p0, d, n):
+    """The subcells of an n^3 split of the unit cell that the segment p0 + s d, s in [0, 1],
+    crosses with positive length (exact: the midpoints between its plane crossings)."""
+    s = [0.0, 1.0]
+    for a in range(3):
+        if d[a] != 0:
+            s.extend(t for t in (np.arange(1, n) / n - p0[a]) / d[a] if 0 < t < 1)
+    s = np.sort(s)
+    mid = p0 + 0.5 * (s[1:] + s[:-1])[:, None] * d
+    return {tuple(c) for c in np.clip(np.floor(mid * n).astype(int), 0, n - 1)}
+
+
+def test_to_subcell_masks_hold_every_piece_a_segment_meets():
+    # the rays test only the pieces of the subcells their segment crosses: a piece met by a
+    # chord of the cell must be in the union of those masks (and most pieces are not)
+    from splineviz.compute.to_tables import SUBCELLS, cell_classes, subcell_masks
+    from splineviz.core.partitions import truncated_octahedra as to
+
+    start, centre, tet = cell_classes()
+    bary = to.barycentric_matrices()  # (144, 4, 4): rows (a, b, c, w), lambda = a.x + w
+    masks = subcell_masks()
+    rng = np.random.default_rng(7)
+    kept = []
+    for cls in range(8):
+        n_p = start[cls + 1] - start[cls]
+        for _ in range(60):
+            # a chord between two points on the cell's faces
+            ends = rng.random((2, 3))
+            ends[np.arange(2), rng.integers(0, 3, 2)] = rng.integers(0, 2, 2)
+            p0, d = ends[0], ends[1] - ends[0]
+            union = np.zeros(masks.shape[-1], np.uint32)
+            for c in _subcells_crossed(p0, d, SUBCELLS):
+                union |= masks[(cls, *c)]
+            for b in range(n_p):
+                e = start[cls] + b
+                rows = bary[tet[e]]
+                lam0 = rows[:, :3] @ (p0 - centre[e]) + rows[:, 3]
+                dl = rows[:, :3] @ d
+                lo, hi = 0.0, 1.0
+                for m in range(4):  # the segment part inside the tetrahedron
+                    if dl[m] > 0:
+                        lo = max(lo, -lam0[m] / dl[m])
+                    elif dl[m] < 0:
+                        hi = min(hi, -lam0[m] / dl[m])
+                    elif lam0[m] < 0:
+                        hi = -1.0
+                if hi - lo > 1e-9:
+                    assert (union[b >> 5] >> (b & 31)) & 1, (cls, b, p0, d)
+            kept.append(sum(bin(int(w)).count("1") for w in union) / n_p)
+    assert np.mean(kept) < 0.5

@@ -162,3 +162,29 @@ def test_cube_program_is_determining_set_plus_rules(model):
     b_m = (scheme.determining_masks @ vals)[None]
     np.testing.assert_allclose(got, type6_rules.apply_rules(b_m, scheme)[0], atol=1e-5)
     assert len(cols) < 0.65 * np.count_nonzero(scheme.cube_masks)
+
+
+@needs_cl
+def test_to_cell_ranges_from_other_isovalues_give_the_same_frames(ml):
+    # the isovalue-independent cell ranges, filled at other isovalues, skip cells whose range
+    # excludes the new isovalue: the frames are those of a caster that never saw another
+    vol, iso = ml
+    path = _path(vol, iso)
+    seasoned = RayCaster(vol, model="to-quadratic")
+    for value in (iso - 0.3, iso + 0.2, iso - 0.15):
+        seasoned.set_isovalue(value)
+        for cam, _ in path[:4]:
+            seasoned.render(cam, SIZE)
+    ranges = seasoned._ranges.get(queue=seasoned._device.queue)
+    known = np.count_nonzero(ranges != 0xFF00)
+    assert known > 0.2 * ranges.size
+    for value in (iso, iso - 0.15):
+        seasoned.set_isovalue(value)
+        fresh = RayCaster(vol, model="to-quadratic")
+        fresh.set_isovalue(value)
+        for cam, _ in path[3:6]:
+            _assert_same(seasoned.render(cam, SIZE), fresh.render(cam, SIZE))
+        assert seasoned.stats["active_tets"] == fresh.stats["active_tets"]
+    # new data forget the ranges
+    seasoned.set_volume(vol)
+    assert np.all(seasoned._ranges.get(queue=seasoned._device.queue) == 0xFF00)
