@@ -41,7 +41,7 @@ for plugin in plugins/*/; do
 done
 # the truncated-octahedral ray caster's tables (a second of Python) into the user cache now,
 # not the first time the model is chosen in the app
-.venv/bin/python -c "from splineviz.compute.to_tables import cell_classes, class_points, stencils; stencils(2); cell_classes(); class_points(2)" \
+.venv/bin/python -c "from splineviz.compute.to_tables import cell_classes, class_points, stencils, subcell_masks; stencils(2); cell_classes(); class_points(2); subcell_masks()" \
   || echo "install.sh: could not prepare the ray-casting tables (they are made on first use)" >&2
 # the point projection's numba kernels into numba's cache (10-20 s once, not at first use)
 .venv/bin/python -c "from splineviz.pointcloud.local_fits import compile_kernels; compile_kernels()" \
