@@ -31,7 +31,10 @@ Models with an OpenCL kernel:
   the neighbour table (same result, no special cases at cube faces).
 * ``"to-quadratic"`` (truncated octahedra, §5.2): unit cells of the grid with per-parity-class
   tables of the (TO, tet) pieces meeting a cell; a cell's relevance bit set computes each
-  distinct B-net point of its pieces once, and the ray tests only the relevant pieces.
+  distinct B-net point of its pieces once, and the ray tests only the relevant pieces of the
+  subcells (5^3 per cell) its segment crosses. Each classified cell's range (the min/max of
+  its points, 2 bytes) is kept while the data stay, so a later isovalue outside it skips the
+  cell without its sums (isovalue-independent work once per data change, thesis §6.1.1).
 
 Other models render through the NumPy reference ray caster
 (:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.
