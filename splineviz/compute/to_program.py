@@ -47,17 +47,14 @@ def relevance_source(k: float = 2, words: int = 5) -> str:
                    "float2 *range)\n{")
         out.append("    uint " + ", ".join(f"a{w} = 0u, b{w} = 0u" for w in used) + ";")
         out.append("    float x, lo = INFINITY, hi = -INFINITY;")
-        out.append("    uint le, ge;")
         for p in range(lo, hi):
             terms = " + ".join(f"{_literal(weights[q])} * v[{cols[q]}]"
                                for q in range(rows[p], rows[p + 1]))
             mask = [(w, int(pieces[p, w])) for w in used if pieces[p, w]]
-            # branch-free: near the surface the two comparisons are as good as random, and
-            # the mispredicted branches cost more than the masked ORs
-            below = " ".join(f"b{w} |= le & {m:#x}u;" for w, m in mask)
-            above = " ".join(f"a{w} |= ge & {m:#x}u;" for w, m in mask)
+            below = " ".join(f"b{w} |= {m:#x}u;" for w, m in mask)
+            above = " ".join(f"a{w} |= {m:#x}u;" for w, m in mask)
             out.append(f"    x = {terms};")
-            out.append(f"    le = -(uint)(x <= iso); ge = -(uint)(x >= iso); {below} {above}")
+            out.append(f"    if (x <= iso) {{ {below} }} if (x >= iso) {{ {above} }}")
             out.append("    lo = fmin(lo, x); hi = fmax(hi, x);")
         out.append("    *range = (float2)(lo, hi);")
         out.append("    int n = 0;")
