@@ -155,7 +155,8 @@ def render_brick(volume, task: BrickTask) -> Fragment:
         timing["read_s"] = time.perf_counter() - t
         return RayCaster(vol, model=task.model, device=task.device, **dict(task.model_kwargs))
 
-    key = (task.token, task.index, task.model, task.model_kwargs, task.device)
+    # the samples read (not the brick's index, which another grid of the volume reuses)
+    key = (task.token, task.read, task.model, task.model_kwargs, task.device)
     rc, build_s, cached = _cached_caster(key, make, task.cache_bytes)
     # one frame at a time per caster (threads of one worker process share the cache)
     with _caster_lock(rc):
