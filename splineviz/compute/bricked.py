@@ -565,9 +565,10 @@ class BrickedRayCaster:
         return None
 
     def _record(self, frag: Fragment) -> None:
-        """Per-brick timings of the last frame (``stats["brick_times"]``)."""
+        """Per-brick timings of the last frame (``stats["brick_times"]``; ``pixels``: of the
+        brick's window)."""
         self.stats["brick_times"].append({"index": frag.index, **{k: frag.stats.get(k) for k in (
-            "read_s", "build_s", "render_s", "cached", "worker")}})
+            "read_s", "build_s", "render_s", "cached", "worker", "pixels")}})
 
     def _render_preview(self, camera, size, planes) -> Frame:
         """The coarse level, ray cast here (its caster is kept for later frames)."""
