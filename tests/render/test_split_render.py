@@ -1,0 +1,30 @@
+"""render_scene of a split scene: its two views side by side, each the picture of its own
+objects."""
+
+import numpy as np
+
+import splineviz as sv
+from splineviz.core.testfunctions import ml
+from splineviz.model import Scene
+from splineviz.render.scene_view import render_scene
+
+
+def test_render_scene_draws_the_split_as_two_half_pictures():
+    scene = Scene()
+    scene.add_volume(sv.Volume.from_function(ml, (25, 25, 25), ml.domain), name="ML")
+    left = scene.isosurfaces[0]
+    scene.aspect = 1.0
+    scene.frame(view="isometric")
+    right = scene.compare(left, model="trilinear")
+    img = render_scene(scene, (240, 120))
+    assert img.shape == (120, 240, 3)
+    # each half is the picture of one view alone
+    scene.view.split = False
+    right.visible = False
+    only_left = render_scene(scene, (120, 120))
+    right.visible, left.visible = True, False
+    only_right = render_scene(scene, (120, 120))
+    np.testing.assert_array_equal(img[:, :120], only_left)
+    np.testing.assert_array_equal(img[:, 120:], only_right)
+    differ = np.abs(only_left.astype(int) - only_right).max(axis=2) > 10
+    assert differ.mean() > 0.02  # cubic C1 and trilinear surfaces look different
