@@ -231,7 +231,6 @@ def test_session_round_trip_keeps_the_split_and_the_views_settings(window, tmp_p
     assert w.view2 is None and not w.scene.view.split
     assert w.linked_views.splitter.count() == 1
     assert [la.visible for la in w.spline_scene.layers] == [True, True]
-    w.wait_for_refine(60)
     right.update(model="cubic-c1", shown_in="both")
     # loading the session splits the view again with the saved isosurfaces
     w.open_path(path, block=True)
