@@ -17,6 +17,7 @@ frames in their own workers once the drag ends.
 
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QSplitter
 
@@ -64,7 +65,37 @@ class LinkedViews:
     def set_split(self, on: bool) -> None:
         """Split the view (the View menu's toggle). When nothing is assigned to a side yet,
         the current isosurface (or the first) is compared with a copy in another model
-        (:meth:`~splineviz.model.Scene.compare`): the two views then differ at once."""
+        (:meth:`~splineviz.model.Scene.compare`): the two views then differ at once.
+
+        The camera keeps what it showed across: a view half as wide moves it back so that
+        the same width of the scene fits (and forward again when the split ends)."""
+        before = self._first_aspect()
+        try:
+            self._set_split(on)
+        finally:
+            self._keep_width(before)
+
+    def _first_aspect(self, width: int | None = None) -> float:
+        p = self.window.view.plotter
+        w = p.width() if width is None else width
+        return w / p.height() if self.splitter.isVisible() and p.height() > 0 else 0.0
+
+    def _keep_width(self, before: float) -> None:
+        """Move the camera along its line of sight so that the first view, now of another
+        aspect ratio, shows the scene as wide as before (a perspective view shows a width
+        of ``2 d tan(angle / 2) aspect`` at distance ``d``)."""
+        sizes = self.splitter.sizes()
+        # the splitter lays out a removed view's room later: the first view gets it all
+        after = self._first_aspect(sizes[0] if self.second is not None
+                                   else self.splitter.width())
+        if before <= 0.0 or after <= 0.0 or abs(after / before - 1.0) < 0.02:
+            return
+        cam = self.scene.camera
+        focal = np.asarray(cam.focal_point, dtype=float)
+        offset = np.asarray(cam.position, dtype=float) - focal
+        cam.position = tuple(map(float, focal + offset * (before / after)))
+
+    def _set_split(self, on: bool) -> None:
         if on and not self.scene.view.split and not any(
                 getattr(n, "shown_in", "both") != "both" for n in self.scene):
             iso = self.scene.selected

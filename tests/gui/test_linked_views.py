@@ -133,6 +133,14 @@ def camera_pose(view):
                            [c.GetViewAngle()]])
 
 
+def shown_width(w) -> float:
+    """Width of the scene the first view shows at the focal point (world units)."""
+    cam = w.scene.camera
+    d = np.linalg.norm(np.subtract(cam.position, cam.focal_point))
+    p = w.view.plotter
+    return 2.0 * d * np.tan(np.radians(cam.view_angle) / 2.0) * p.width() / p.height()
+
+
 def test_split_shows_each_views_own_model(window):
     w = window
     left, right = w.scene.isosurfaces
@@ -157,10 +165,10 @@ def test_split_shows_each_views_own_model(window):
     assert near_own > 0.95 and near_other < 0.05
     # the two windows' pictures differ there too (same camera, sizes within a pixel)
     a, b = image(w.view), image(w.view2)
-    h, wd = min(a.shape[0], b.shape[0]), min(a.shape[1], b.shape[1])
-    if abs(a.shape[1] - b.shape[1]) <= 1:
-        d = np.abs(a[:h, :wd].astype(int) - b[:h, :wd]).max(axis=2) > 24
-        assert d.mean() > 0.01
+    assert a.shape[0] == b.shape[0] and abs(a.shape[1] - b.shape[1]) <= 1  # halves
+    wd = min(a.shape[1], b.shape[1])
+    d = np.abs(a[:, :wd].astype(int) - b[:, :wd]).max(axis=2) > 24
+    assert d.mean() > 0.01
 
 
 @pytest.mark.parametrize("dragged", [0, pytest.param(1, marks=pytest.mark.slow)])
@@ -225,10 +233,13 @@ def test_session_round_trip_keeps_the_split_and_the_views_settings(window, tmp_p
     assert src.source is not None  # the default data is a synthetic source: no data file
     path = w.save_session(tmp_path / "split.svs")
     assert path is not None
-    # split off: the second view closes
+    # split off: the second view closes; the first, twice as wide, shows the same width of
+    # the scene (the camera moved closer by the ratio of the aspect ratios)
+    width_on = shown_width(w)
     w.actions_by_name["split"].trigger()
     pump(0.2)
     assert w.view2 is None and not w.scene.view.split
+    assert shown_width(w) == pytest.approx(width_on, rel=0.02)
     assert w.linked_views.splitter.count() == 1
     assert [la.visible for la in w.spline_scene.layers] == [True, True]
     right.update(model="cubic-c1", shown_in="both")
