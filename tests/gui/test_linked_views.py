@@ -233,13 +233,19 @@ def test_session_round_trip_keeps_the_split_and_the_views_settings(window, tmp_p
     assert src.source is not None  # the default data is a synthetic source: no data file
     path = w.save_session(tmp_path / "split.svs")
     assert path is not None
-    # split off: the second view closes; the first, twice as wide, shows the same width of
+    # split off: the second view closes (with its plane widgets: a plane moved afterwards
+    # must reach only the first view's); the first, twice as wide, shows the same width of
     # the scene (the camera moved closer by the ratio of the aspect ratios)
+    plane = w.scene.add_clip_plane(enabled=False)
+    assert plane.id in w.linked_views._second_planes.widgets
     width_on = shown_width(w)
     w.actions_by_name["split"].trigger()
     pump(0.2)
     assert w.view2 is None and not w.scene.view.split
     assert shown_width(w) == pytest.approx(width_on, rel=0.02)
+    plane.origin = (0.1, 0.0, 0.0)
+    assert w.plane_widgets.widgets[plane.id].GetOrigin() == pytest.approx(plane.origin)
+    w.scene.remove(plane)
     assert w.linked_views.splitter.count() == 1
     assert [la.visible for la in w.spline_scene.layers] == [True, True]
     right.update(model="cubic-c1", shown_in="both")
