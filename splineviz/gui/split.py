@@ -23,7 +23,7 @@ from PySide6.QtWidgets import QSplitter
 
 from splineviz.gui.panels import PlaneWidgets
 from splineviz.gui.view import View3D
-from splineviz.model import IsosurfaceNode
+from splineviz.model import IsosurfaceNode, VolumeNode
 
 
 class LinkedViews:
@@ -162,11 +162,18 @@ class LinkedViews:
 
     def _activated(self, side: str) -> None:
         """A click in one of the split views: the panels turn to that view's isosurface
-        when the current one is not shown there."""
+        when the current one is not shown there (a selected volume counts as its first
+        isosurface; a selected plane, mesh or cloud stays selected: the click may be a
+        drag of its widget)."""
         if not self.scene.view.split:
             return
         sel = self.scene.selected
-        if isinstance(sel, IsosurfaceNode) and sel.shown_in in ("both", side):
+        if isinstance(sel, VolumeNode):
+            isos = self.scene.isosurfaces_of(sel)
+            sel = isos[0] if isos else None
+        if sel is not None and not isinstance(sel, IsosurfaceNode):
+            return
+        if sel is not None and sel.shown_in in ("both", side):
             return
         own = [n for n in self.scene.isosurfaces if n.shown_in == side]
         if own:

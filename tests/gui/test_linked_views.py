@@ -169,6 +169,14 @@ def test_split_shows_each_views_own_model(window):
     wd = min(a.shape[1], b.shape[1])
     d = np.abs(a[:, :wd].astype(int) - b[:, :wd]).max(axis=2) > 24
     assert d.mean() > 0.01
+    # a click in a view turns the panels to its isosurface (its own model and isovalue)
+    w.scene.select(w.scene.volumes[0])
+    for view, iso in ((w.view2, right), (w.view, left)):
+        p = (view.plotter.width() / 2.0, view.plotter.height() / 2.0)
+        drag(view.plotter, p, p, n=1)
+        assert w.scene.selected is iso and w.iso_panel.node is iso
+        assert w.iso_panel.model.currentData() == iso.model
+        assert w.iso_panel.shown_in.currentData() == iso.shown_in
 
 
 @pytest.mark.parametrize("dragged", [0, pytest.param(1, marks=pytest.mark.slow)])
