@@ -229,6 +229,15 @@ def test_each_view_has_its_own_isovalue_and_both_are_clipped(window):
             w.scene.remove(plane)
     finally:
         right.isovalue = old
+    # a second isovalue added from the right isosurface stays in the right view
+    w.scene.select(right)
+    extra = w.iso_panel.add_isosurface()
+    try:
+        assert extra.shown_in == "right"
+        assert [la.visible for la in w.view.spline_scene.layers] == [True, False, False]
+        assert [la.visible for la in w.view2.spline_scene.layers] == [False, True, True]
+    finally:
+        w.scene.remove(extra)
     settle(w)
 
 

@@ -244,6 +244,10 @@ class IsosurfacePanel(QWidget):
     def add_isosurface(self) -> IsosurfaceNode | None:
         if self._volume is None:
             return None
-        node = self.scene.add_isosurface(self._volume)
+        # while split, a new isosurface joins the side of the current one (a second
+        # isovalue in the right view stays in the right view)
+        side = self.node.shown_in if self.node is not None and self.scene.view.split \
+            else "both"
+        node = self.scene.add_isosurface(self._volume, shown_in=side)
         self.scene.select(node)
         return node
