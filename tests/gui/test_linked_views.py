@@ -62,6 +62,7 @@ def window(qapp, tmp_path_factory):
     pump(0.3)
     assert w.view2 is not None
     w.view2.plotter.hide_axes()
+    w.view.standard_view("isometric")  # the data framed for the narrower views
     w.wait_for_refine(120)
     yield w
     w.wait_idle()
@@ -110,8 +111,8 @@ def settle(w) -> float:
 
 def assert_exact(view, what, compare_image=True):
     """The view shows the exact frame of its current camera and surface: by the frame's
-    state and the blockiness of its picture, and, with ``compare_image``, by an off-screen
-    exact render (~1 s each: used where the picture itself is the claim)."""
+    state, and by an off-screen exact render (``compare_image``; ~1 s each: used where the
+    picture itself is the claim) or else by the blockiness of its picture."""
     img = image(view)
     ref = reference(view) if compare_image else img
     mask = surface_mask(ref, view.plotter.renderer.GetBackground())
@@ -122,9 +123,11 @@ def assert_exact(view, what, compare_image=True):
         state += f", {agree:.4f} of pixels agree with the exact render"
     print(state)
     assert mask.mean() > 0.02, f"{state}: the view shows almost no surface"
-    assert exact(view) and block < 0.15, state
+    assert exact(view), state
     if compare_image:
         assert agree >= MIN_AGREEMENT, state
+    else:  # a preview's pixels come in equal blocks (flat cut faces raise it: compare there)
+        assert block < 0.15, state
 
 
 def camera_pose(view):
@@ -195,8 +198,11 @@ def test_orbit_in_one_view_moves_the_other(window, dragged):
     np.testing.assert_allclose(model.position, camera_pose(src)[:3], atol=1e-9)
     print(f"orbit in the {src.side} view: both exact {waited:.2f} s after the drag")
     after = image(dst)
-    changed = (np.abs(after.astype(int) - before).max(axis=2) > 10).mean()
-    assert changed > 0.05, f"the {dst.side} view's picture changed in only {changed:.3f}"
+    bg = dst.plotter.renderer.GetBackground()
+    drawn = surface_mask(before, bg) | surface_mask(after, bg)
+    changed = (np.abs(after.astype(int) - before).max(axis=2) > 10)[drawn].mean()
+    assert changed > 0.2, (f"the {dst.side} view's picture changed in only {changed:.3f} "
+                           "of its drawn pixels")
     assert_exact(src, f"orbit in the {src.side} view", compare_image=False)
     assert_exact(dst, f"orbit in the {src.side} view")  # the follower's picture itself
 
@@ -224,7 +230,7 @@ def test_each_view_has_its_own_isovalue_and_both_are_clipped(window):
             for v in views(w):
                 (got,) = shown_layer(v).clip_planes
                 np.testing.assert_allclose(np.ravel(got), np.ravel(plane.as_pair()))
-                assert_exact(v, "clip plane", compare_image=False)
+                assert_exact(v, "clip plane")
         finally:
             w.scene.remove(plane)
     finally:
