@@ -146,8 +146,13 @@ class LinkedViews:
         view.close()
         view.plotter.hide()
         view.plotter.setParent(None)
-        # kept until exit: a frame it was ray casting is joined there (pocl aborts a
-        # process that exits while one of its threads is inside OpenCL)
+        # kept while a frame it was ray casting may still run (joined at exit: pocl aborts
+        # a process that exits while one of its threads is inside OpenCL); earlier ones
+        # whose workers ended are let go
+        for old in [v for v in self._retired if v.join(0.0)]:
+            self._retired.remove(old)
+            old.plotter.deleteLater()
+            old.deleteLater()
         self._retired.append(view)
         self.window.view.request_render()
 
