@@ -26,3 +26,24 @@ def test_render_scene_draws_the_split_as_two_half_pictures():
     np.testing.assert_array_equal(img[:, 120:], only_right)
     differ = np.abs(img[:, :120].astype(int) - only_right).max(axis=2) > 10
     assert differ.mean() > 0.02  # cubic C1 and trilinear surfaces look different
+
+
+def test_narrow_views_get_scalar_bars_whose_labels_fit():
+    import pyvista as pv
+
+    from splineviz.render.isosurface import IsosurfaceLayer
+    from splineviz.render.scene import NARROW_BAR_PX, SplineScene
+
+    vol = sv.Volume.from_function(ml, (9, 9, 9), ml.domain)
+    for width, labels in ((NARROW_BAR_PX - 1, 3), (NARROW_BAR_PX, 5)):
+        pl = pv.Plotter(off_screen=True, window_size=(width, 200))
+        scene = SplineScene(pl)
+        layer = IsosurfaceLayer(vol, model="trilinear", isovalue=0.5)
+        scene.add_layer(layer)
+        scene._fit_scalar_bars()
+        bar = scene._views[id(layer)].scalar_bar
+        x, _ = bar.GetPosition()
+        assert bar.GetNumberOfLabels() == labels
+        assert 0.0 <= x and x + bar.GetWidth() <= 1.0  # inside the view
+        scene.close()
+        pl.close()
