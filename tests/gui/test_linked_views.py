@@ -22,10 +22,14 @@ pytest.importorskip("pytestqt")
 pytest.importorskip("pyvistaqt")
 
 from interaction import (  # noqa: E402  (tests/gui helper, on sys.path via pytest)
+    StallMeter,
     agreement,
     blockiness,
     drag,
+    drag_steps,
+    line,
     pump,
+    run_steps,
     surface_mask,
 )
 
@@ -189,8 +193,24 @@ def test_orbit_in_one_view_moves_the_other(window, dragged):
     before = image(dst)
     pose = camera_pose(dst)
     cx, cy = src.plotter.width() / 2.0, src.plotter.height() / 2.0
-    drag(src.plotter, (cx - 50, cy), (cx + 50, cy + 15), n=12)
-    waited = settle(w)
+    # during the drag the other view follows with previews (reduced resolution, cast in
+    # the GUI thread within a budget) and its camera is never behind by more than a step
+    seen = []
+
+    def probe():
+        f = dst.spline_scene.shown_frame(shown_layer(dst))
+        seen.append((f.final, f.scale))
+
+    steps = drag_steps(src.plotter, line((cx - 50, cy), (cx + 50, cy + 15), 12))
+    probed = [s for step in steps for s in (step, probe)]
+    with StallMeter() as stall:
+        run_steps(probed, interval_ms=16)
+        waited = settle(w)
+    previews = [scale for final, scale in seen if not final]
+    print(f"{dst.side} view during the drag: {len(previews)} of {len(seen)} steps showed a "
+          f"preview (scales {sorted(set(round(p, 3) for p in previews))}); longest "
+          f"GUI-thread stall {stall.max_ms:.0f} ms (two views)")
+    assert previews and min(previews) < 1.0
     moved = np.linalg.norm(camera_pose(src)[:3] - pose[:3])
     assert moved > 1e-3 * np.linalg.norm(pose[:3]), "the drag did not reach the interactor"
     np.testing.assert_allclose(camera_pose(dst), camera_pose(src), rtol=0, atol=1e-9)
