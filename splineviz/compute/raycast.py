@@ -55,6 +55,8 @@ from splineviz.core.volume import Volume
 
 #: work-group size of the ray-casting kernel (pixels): fixed so the kernel is compiled once
 RAY_GROUP = (8, 8)
+#: most samples (ghost layers included) one ray caster's kernels address with 32-bit ints
+MAX_SAMPLES = 2**31 - 1
 #: ghost layers of the padded samples per kernel family (the registry's, per family define)
 GHOSTS = {define: max((s.ghost_layers for s in MODELS.values() if s.kernel_define == define),
                       default=0) for define in KERNEL_FAMILIES.values()}
@@ -358,7 +360,8 @@ class RayCaster:
         return 8 * (1 if self._family == "MODEL_TYPE6" else TO_WORDS + 1)
 
     def _check_device_memory(self, shape, cells, itemsize: int = 4) -> None:
-        """Refuse, before allocating anything, a volume the device cannot hold."""
+        """Refuse, before allocating anything, a volume the device cannot hold or the kernels
+        cannot address."""
         dev = self._device.device
         need = self.device_bytes(shape, cells, itemsize)
         gib = 2.0**30
@@ -372,6 +375,16 @@ class RayCaster:
                 f"but {self._device.name} has {dev.global_mem_size / gib:.2f} GiB (at most "
                 f"{dev.max_mem_alloc_size / gib:.2f} GiB per buffer); use a smaller or "
                 f"downsampled volume")
+        samples = int(np.prod([n + 2 * self._ghost() for n in shape]))
+        if samples > MAX_SAMPLES:
+            # the kernels index samples with 32-bit ints (64-bit index arithmetic costs every
+            # sample fetch); past this the offsets wrap (seen on an H200 at 1536^3: a wrong
+            # picture for trilinear, a kernel fault for super-quadratic)
+            raise RayCastError(
+                f"a {'x'.join(map(str, shape))} volume has {samples:,} device samples with the "
+                f"{self.model} model, more than one ray caster addresses ({MAX_SAMPLES:,}); "
+                f"open it as a chunked volume (Zarr, HDF5 or sv.Volume.from_dask), which is "
+                f"rendered in bricks, or downsample it")
 
     #: device bytes per pixel of the frame buffers of _render_cl: hit flag, position and
     #: normal (float4 each), depth, RGBA colour; the largest single buffer is a float4
@@ -924,10 +937,15 @@ class RayCaster:
                 self.stats.update(active_cells=cells, active_tets=tets)
             self._grow_pool(asked)
         hit_h = hit.get(queue=q).astype(bool).reshape(wh, ww)
-        pos_h = pos.get(queue=q).reshape(wh, ww, 4)
-        position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
-                            np.nan)
-        normal = nor.get(queue=q).reshape(wh, ww, 4)[..., :3].astype(np.float64)
+
+        def position():
+            pos_h = pos.get(queue=q).reshape(wh, ww, 4)
+            return np.where(hit_h[..., None],
+                            origin + spacing * pos_h[..., :3].astype(np.float64), np.nan)
+
+        def normal():
+            return nor.get(queue=q).reshape(wh, ww, 4)[..., :3].astype(np.float64)
+
         hess_w = grad_norm = None
         if hessian:
             hess_w, grad_norm = _world_hessian(hess.get(queue=q).reshape(wh, ww, 8))
