@@ -413,10 +413,11 @@ class RayCaster:
                      NUNION=self._nunion)
         return d
 
-    def _ray_kernel(self, kernel: str):
-        """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude)."""
-        return get_kernel(self._device.context, "raycast", kernel, self._defines(),
-                          self._prelude)
+    def _ray_kernel(self, kernel: str, bricks: bool = False):
+        """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude);
+        ``bricks``: the variant that casts a brick of a bigger volume (``BRICKS``)."""
+        defines = {**self._defines(), "BRICKS": 1} if bricks else self._defines()
+        return get_kernel(self._device.context, "raycast", kernel, defines, self._prelude)
 
     def _upload(self):
         """Samples, min-max octree and the cleared classification cache on the device."""
@@ -856,7 +857,7 @@ class RayCaster:
 
         dev = self._device
         q = dev.queue
-        k_ray = self._ray_kernel("raycast")
+        k_ray = self._ray_kernel("raycast", bricks=placement is not None)
         vol = self._volume
         r0, r1, c0, c1 = (0, h, 0, w) if window is None else window
         ww, wh = c1 - c0, r1 - r0

@@ -12,6 +12,8 @@
 //   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
 //   DATA_T               device type of the samples (uchar/short/ushort: integer data kept
 //                        in a small type, converted to float when read; else float)
+//   BRICKS               the ray kernel of a brick of a bigger volume (below); without it,
+//                        the kernel of a single cast, which ignores cell_lo/hi/off
 //
 // Nothing here needs a pass over the volume per isovalue (thesis §6.2.3 "only the work the
 // picture needs"): the skip index of a cell comes from the isovalue-independent min-max octree
@@ -31,7 +33,18 @@
 // [cell_lo, cell_hi). So every float a brick's ray computes (entry point, cell boundary
 // parameters, the restriction to the ray in each cell, its roots) is the one the ray of a
 // single cast of the whole volume computes in the same cell: the bricks' first hits are the
-// single cast's, bit for bit. A single cast is the brick of all cells at offset 0.
+// single cast's, bit for bit. A single cast is the brick of all cells at offset 0; it is
+// compiled without BRICKS, so that its loop carries none of the offsets and clamps (they
+// cost it 3-8 % on PoCL).
+#ifdef BRICKS
+#define LOCAL_CELL(c) ((c) - cell_off)
+#define FIRST_CELL cell_lo
+#define END_CELL cell_hi
+#else
+#define LOCAL_CELL(c) (c)
+#define FIRST_CELL ((int3)(0))
+#define END_CELL grid_cells
+#endif
 
 #ifndef DATA_T
 #define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
@@ -231,6 +244,7 @@ inline int argmin3(float3 t) { return (t.x <= t.y && t.x <= t.z) ? 0 : (t.y <= t
 // parameter *s (from the entry point we, cell coordinates) of the crossing with the box of
 // those cells, computed as the whole grid's traversal computes cell boundaries ((plane - we)
 // / d), and the cell there; false when the ray misses them before `send`.
+#ifdef BRICKS
 inline bool enter_cells(float3 we, float3 d, float3 inv_d, int3 lo, int3 hi, float send,
                         float *s, int3 *cell)
 {
@@ -253,6 +267,7 @@ inline bool enter_cells(float3 we, float3 d, float3 inv_d, int3 lo, int3 hi, flo
     *cell = c;
     return true;
 }
+#endif
 
 // Skip index of `cell` at isovalue iso (thesis §6.2.1): -1 when the bounds of its level-1
 // node (2^3 cells) straddle iso (the cell is a candidate; its own bounds are not stored, the
@@ -752,15 +767,19 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
         const float3 ue = eye_u + t0 * d;           // entry point, index space
         const float3 we = ue + grid_shift;          // the same in cell coordinates
         const float send = t1 - t0;
-        // the whole grid's first cell; a brick not holding it starts where the ray enters it
         int3 cell = clamp(convert_int3_rtn(we), (int3)(0), grid_cells - 1);
         float s = 0.0f;
+#ifdef BRICKS
+        // the whole grid's first cell; a brick not holding it starts where the ray enters it
         const bool enters = (all(cell >= cell_lo) && all(cell < cell_hi))
                             || enter_cells(we, d, inv_d, cell_lo, cell_hi, send, &s, &cell);
         const int3 span = cell_hi - cell_lo;
         const int max_steps = enters ? 4 * (span.x + span.y + span.z) + 16 : 0;
+#else
+        const int max_steps = 4 * (grid_cells.x + grid_cells.y + grid_cells.z) + 16;
+#endif
         for (int step = 0; step < max_steps; ++step) {
-            const int3 lc = cell - cell_off;  // the cell in this cast's data and octree
+            const int3 lc = LOCAL_CELL(cell);  // the cell in this cast's data and octree
             const int L = skip_level(bounds, levels, n_levels, lc, iso);
             if (L < 0) {
                 const float3 te = exit_params(we, d, inv_d, cell, cell + 1);
@@ -838,10 +857,15 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
             } else {
                 // empty-space leaping over the macro cube of 2^L cells (thesis §6.2.1);
                 // the next cell comes from integer bounds, not from an epsilon step
-                // (of a brick: the octree's macro cube in whole-grid cells, within the brick)
+#ifdef BRICKS
+                // the octree's macro cube in whole-grid cells, within the brick
                 const int3 mlo = ((lc >> L) << L) + cell_off;
                 const int3 lo = max(mlo, cell_lo);
                 const int3 hi = min(mlo + (1 << L), cell_hi);
+#else
+                const int3 lo = (cell >> L) << L;
+                const int3 hi = min(lo + (1 << L), grid_cells);
+#endif
                 const float3 te = exit_params(we, d, inv_d, lo, hi);
                 const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
                 if (s_exit >= send) break;
@@ -854,7 +878,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 cell = nc;
                 s = s_exit;
             }
-            if (any(cell < cell_lo) || any(cell >= cell_hi)) break;
+            if (any(cell < FIRST_CELL) || any(cell >= END_CELL)) break;
         }
     }
 
