@@ -33,6 +33,11 @@ Models with an OpenCL kernel:
   tables of the (TO, tet) pieces meeting a cell; a cell's relevance bit set computes each
   distinct B-net point of its pieces once, and the ray tests only the relevant pieces.
 
+A brick of a bigger volume (:mod:`splineviz.compute.bricked`) is cast by the same kernel,
+compiled with ``BRICKS``, in the whole volume's coordinates and over a window of the frame
+(``RayCaster.render(placement=..., window=...)``): its hits are those of one cast of the
+whole volume, bit for bit.
+
 Other models render through the NumPy reference ray caster
 (:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.
 """

@@ -93,8 +93,8 @@ class Placement:
 
     def face_planes(self, spacing) -> list:
         """Clip planes ``(origin, normal)`` (world) keeping :meth:`box`, on the faces inside
-        the volume only: the brick's rays without a cast in whole-volume coordinates (the
-        NumPy path; exact only up to the rounding of each brick's own coordinates)."""
+        the volume only: the restriction of a cast in the brick's own coordinates (the NumPy
+        path), the same hits up to the rounding of those coordinates."""
         box = np.asarray(self.origin, float)[:, None] + self.box() * np.asarray(
             spacing, float)[:, None]
         planes = []
