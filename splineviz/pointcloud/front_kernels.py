@@ -120,6 +120,8 @@ def covered(head, nxt, cells, cell, geometry, probes, centre, length, margin, he
         g = geometry[t]
         d00, d01, d11 = g[12], g[13], g[14]
         denom = d00 * d11 - d01 * d01
+        if denom <= 0:  # a degenerate triangle covers nothing
+            continue
         for p in range(probes.shape[0]):
             r0 = probes[p, 0] - g[0]
             r1 = probes[p, 1] - g[1]
