@@ -234,10 +234,13 @@ class AdvancingFront:
         self.scan_border: set[tuple[int, int]] = set()  # ... because the cloud ends there
         self.heap: list = []
         # front edge -> (projected apex (3,), its normal (3,), whether it lies outside the
-        # cloud), computed ahead in batches (see _predict)
+        # cloud, the guidance length there), computed ahead in batches (see _predict)
         self.predictions: dict[tuple[int, int], tuple] = {}
         self.counter = 0
         self.cell = float(np.max(guidance.lengths))
+        # the cloud's points in a grid for the border test's neighbour queries (cells of
+        # three spacings: the BORDER_NEIGHBOURS nearest lie within one or two cells)
+        self.pgrid = fk.PointGrid(projector.points, 3.0 * float(np.median(projector.scale)))
         # the cloud's arrays in the layout the compiled border test reads
         self._cloud = (np.ascontiguousarray(projector.points, dtype=np.float64),
                        np.ascontiguousarray(projector.normals, dtype=np.float64),
@@ -256,7 +259,9 @@ class AdvancingFront:
         return (int(math.floor(x[0] / self.cell)), int(math.floor(x[1] / self.cell)),
                 int(math.floor(x[2] / self.cell)))
 
-    def _add_vertex(self, x, n):
+    def _add_vertex(self, x, n, length=None):
+        """Append vertex ``x (3,)`` with normal ``n (3,)`` and the guidance length at ``x``
+        (``length`` if known); returns its id."""
         if self.nv == len(self.V):
             def grow(a, fill):
                 return np.concatenate([a, np.full_like(a, fill)])
@@ -269,7 +274,9 @@ class AdvancingFront:
         i = self.nv
         self.V[i], self.N[i] = x, n
         self.P.append(tuple(float(c) for c in x))
-        self.L[i] = self.length_factor * float(self.guide(x[None])[0])
+        if length is None:
+            length = float(self.guide(x[None])[0])
+        self.L[i] = self.length_factor * length
         self.nv += 1
         self.out_nb.append(set())
         self.in_nb.append(set())
@@ -284,14 +291,6 @@ class AdvancingFront:
             setattr(self, side + "_adj", adj)
         adj[u, cnt[u]] = w
         cnt[u] += 1
-
-    @staticmethod
-    def _adj_remove(adj, cnt, u, w):
-        row = adj[u, : cnt[u]]
-        k = int(np.flatnonzero(row == w)[0])
-        row[k] = row[-1]
-        row[-1] = -1
-        cnt[u] -= 1
 
     def _front_add(self, a, b):
         for v in (a, b):
@@ -311,8 +310,8 @@ class AdvancingFront:
         self.scan_border.discard((a, b))
         self.out_nb[a].discard(b)
         self.in_nb[b].discard(a)
-        self._adj_remove(self.out_adj, self.out_cnt, a, b)
-        self._adj_remove(self.in_adj, self.in_cnt, b, a)
+        fk.adj_remove(self.out_adj, self.out_cnt, a, b)
+        fk.adj_remove(self.in_adj, self.in_cnt, b, a)
         for v in (a, b):
             if not self.out_nb[v] and not self.in_nb[v]:
                 fk.grid_remove(*self.vgrid, v)
@@ -477,15 +476,15 @@ class AdvancingFront:
 
     def _outside_any(self, xs, n):
         """Whether any of the points ``xs (K, 3)`` lies beyond a border (:meth:`_outside`)."""
-        return bool(self._outside_flags(xs, np.tile(np.asarray(n, dtype=np.float64),
-                                                    (len(xs), 1)), False).any())
+        return bool(self._outside_flags(xs, np.asarray(n, dtype=np.float64).reshape(1, 3),
+                                        False).any())
 
     def _outside_flags(self, xs, ns, strict):
         """:meth:`_outside` of points ``xs (K, 3)`` with normals ``ns (K, 3)``: ``(K,)`` bool;
         one k-d tree query for all of them."""
-        dist, idx = self.proj.conn.tree.query(xs, k=BORDER_NEIGHBOURS)
+        dist, idx = self.pgrid.query(xs, BORDER_NEIGHBOURS, self.proj.conn.tree)
         points, normals, spacing = self._cloud
-        return fk.outside_flags(xs, ns, dist, idx.astype(np.int64), points, normals, spacing,
+        return fk.outside_flags(xs, ns, dist, idx, points, normals, spacing,
                                 INSIDE_SPACINGS, self.outside_spacings, bool(strict),
                                 BORDER_GAP)
 
@@ -541,7 +540,7 @@ class AdvancingFront:
         height = math.sqrt(max(length**2 - 0.25 * lab**2, 0.1 * lab**2))
         if (a, b) not in self.predictions:
             self._predict(a, b)
-        xp, npn, outside = self.predictions.pop((a, b))
+        xp, npn, outside, guided = self.predictions.pop((a, b))
         if outside:
             # 3. the point left the cloud: this edge is a border of an open scan.  A flatter
             # triangle may still fit before the rim and bring the border up to the last samples
@@ -569,7 +568,7 @@ class AdvancingFront:
                 st.connections += 1
                 return
         # 5. a new vertex, if nothing is too close to it
-        if self._new_vertex(a, b, xp, npn, n, d, target):
+        if self._new_vertex(a, b, xp, npn, n, d, target, guided):
             return
         # 6. postpone; after GIVE_UP attempts leave the edge as an unresolved border
         if attempts + 1 >= GIVE_UP:
@@ -607,13 +606,14 @@ class AdvancingFront:
         guess = 0.5 * (xa + xb) + height[:, None] * d
         pts, nrm = self.proj.project_with_normals(guess, n)
         outside = self._outside_flags(pts, nrm, False)
+        lengths = self.guide(pts)
         for k, edge in enumerate(edges):
-            self.predictions[edge] = (pts[k], nrm[k], bool(outside[k]))
+            self.predictions[edge] = (pts[k], nrm[k], bool(outside[k]), float(lengths[k]))
 
-    def _new_vertex(self, a, b, xp, npn, n, d, target):
-        """Add the triangle ``(a, b, new vertex at xp)`` (normal ``npn``) if no front vertex
-        is too close to ``xp``, it lies ahead of the edge (direction ``d``) and the triangle is
-        valid; returns whether it was added."""
+    def _new_vertex(self, a, b, xp, npn, n, d, target, length=None):
+        """Add the triangle ``(a, b, new vertex at xp)`` (normal ``npn``, guidance
+        ``length`` if known) if no front vertex is too close to ``xp``, it lies ahead of the
+        edge (direction ``d``) and the triangle is valid; returns whether it was added."""
         close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target, n)
         close = close[(close != a) & (close != b)]
         if len(close):
@@ -624,7 +624,7 @@ class AdvancingFront:
         if _dot(_sub(xpt, mid), d) <= 0.2 * _norm(_sub(xb, xa)) or \
                 not self._triangle_ok(a, b, -1, xpt, n, MIN_ANGLE_NEW, False):
             return False
-        v = self._add_vertex(xp, npn)
+        v = self._add_vertex(xp, npn, length)
         self._add_triangle(a, b, v)
         self.stats.new_vertices += 1
         return True

@@ -150,7 +150,7 @@ def outside_flags(xs, ns, dist, idx, points, normals, spacing, inside, outside, 
 
     Parameters
     ----------
-    xs : (K, 3) surface points; ns : (K, 3) their normals
+    xs : (K, 3) surface points; ns : (K, 3) their normals, or (1, 3) one normal for all
     dist, idx : (K, B) distances to and ids of their B nearest input points, nearest first
     points, normals : (N, 3) input points and their oriented normals; spacing : (N,)
     inside, outside : spacings within which a point is inside / beyond which outside
@@ -165,7 +165,8 @@ def outside_flags(xs, ns, dist, idx, points, normals, spacing, inside, outside, 
     out = np.zeros(k_pts, dtype=np.bool_)
     sel = np.empty(b, dtype=np.int64)
     for p in range(k_pts):
-        n0, n1, n2 = ns[p, 0], ns[p, 1], ns[p, 2]
+        r = p if len(ns) > 1 else 0
+        n0, n1, n2 = ns[r, 0], ns[r, 1], ns[r, 2]
         x0, x1, x2 = xs[p, 0], xs[p, 1], xs[p, 2]
         # neighbours of the same sheet (not the back of a thin part), if there are any
         count = 0
@@ -219,6 +220,19 @@ def outside_flags(xs, ns, dist, idx, points, normals, spacing, inside, outside, 
             widest = max(widest, ang[c] - ang[c - 1])
         out[p] = widest > gap
     return out
+
+
+@numba.njit(cache=True)
+def adj_remove(adj, cnt, u, w):
+    """Remove ``w`` from the ``cnt[u]`` ids in row ``u`` of ``adj`` (the last takes its
+    place)."""
+    last = cnt[u] - 1
+    for m in range(last + 1):
+        if adj[u, m] == w:
+            adj[u, m] = adj[u, last]
+            adj[u, last] = -1
+            cnt[u] = last
+            return
 
 
 @numba.njit(cache=True)
@@ -292,6 +306,99 @@ def front_clear(head, nxt, cells, cell, V, N, out_adj, out_cnt, in_adj, in_cnt, 
     return True
 
 
+class PointGrid:
+    """Input points filed in a hash grid of cells ``cell`` wide, for nearest-neighbour queries
+    from compiled code (:func:`knn`): a k-d tree query costs ~45 microseconds per call however
+    few points it is asked about, and the front asks about a few points at a time.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+    cell : float, the cell width (about twice the sample spacing keeps the searches short)
+    """
+
+    def __init__(self, points, cell):
+        self.points = np.ascontiguousarray(points, dtype=np.float64)
+        self.cell = float(cell)
+        self.cells = np.floor(self.points / self.cell).astype(np.int64)
+        n_slots = 1 << max(10, (2 * len(self.points)).bit_length())
+        c = self.cells
+        slot = ((c[:, 0] * 73856093) ^ (c[:, 1] * 19349663) ^ (c[:, 2] * 83492791)) & (
+            n_slots - 1)
+        self.order = np.argsort(slot, kind="stable").astype(np.int64)
+        self.start = np.searchsorted(slot[self.order], np.arange(n_slots + 1)).astype(np.int64)
+
+    def query(self, xs, k, tree=None):
+        """The ``k`` nearest points of ``xs (M, 3)``: ``dist (M, k)`` and ``idx (M, k)``
+        nearest first; queries far from every point (beyond ``MAX_SHELL`` cells) go to
+        ``tree`` (a ``cKDTree`` of the same points)."""
+        xs = np.ascontiguousarray(xs, dtype=np.float64).reshape(-1, 3)
+        k = min(int(k), len(self.points))
+        dist = np.empty((len(xs), k))
+        idx = np.empty((len(xs), k), dtype=np.int64)
+        ok = knn(self.points, self.cells, self.start, self.order, self.cell, xs, k, MAX_SHELL,
+                 dist, idx)
+        if not ok.all():
+            from scipy.spatial import cKDTree
+
+            tree = cKDTree(self.points) if tree is None else tree
+            d, i = tree.query(xs[~ok], k=k)
+            dist[~ok], idx[~ok] = np.reshape(d, (-1, k)), np.reshape(i, (-1, k))
+        return dist, idx
+
+
+#: :func:`knn` searches at most this many cells out from a query's own cell
+MAX_SHELL = 6
+
+
+@numba.njit(cache=True)
+def knn(points, cells, start, order, cell, xs, k, max_shell, dist, idx):
+    """``k`` nearest points of each query by growing shells of grid cells (see
+    :class:`PointGrid`); fills ``dist (M, k)`` and ``idx (M, k)`` nearest first (ties by id)
+    and returns ``(M,)`` bool: False where ``max_shell`` shells did not settle the answer."""
+    mask = len(start) - 2
+    ok = np.zeros(len(xs), dtype=np.bool_)
+    for q in range(len(xs)):
+        x0, x1, x2 = xs[q, 0], xs[q, 1], xs[q, 2]
+        ci = int(math.floor(x0 / cell))
+        cj = int(math.floor(x1 / cell))
+        ck = int(math.floor(x2 / cell))
+        count = 0
+        for r in range(max_shell + 1):
+            for i in range(ci - r, ci + r + 1):
+                for j in range(cj - r, cj + r + 1):
+                    for kk in range(ck - r, ck + r + 1):
+                        if max(abs(i - ci), abs(j - cj), abs(kk - ck)) != r:
+                            continue  # inner cells were searched by earlier shells
+                        s = _slot(i, j, kk, mask)
+                        for m in range(start[s], start[s + 1]):
+                            p = order[m]
+                            if cells[p, 0] != i or cells[p, 1] != j or cells[p, 2] != kk:
+                                continue
+                            d = math.sqrt((points[p, 0] - x0) ** 2 + (points[p, 1] - x1) ** 2
+                                          + (points[p, 2] - x2) ** 2)
+                            if count == k and (d > dist[q, k - 1] or (
+                                    d == dist[q, k - 1] and p > idx[q, k - 1])):
+                                continue
+                            # insertion into the sorted list of the best so far
+                            pos = count if count < k else k - 1
+                            while pos > 0 and (dist[q, pos - 1] > d or (
+                                    dist[q, pos - 1] == d and idx[q, pos - 1] > p)):
+                                if pos < k:
+                                    dist[q, pos] = dist[q, pos - 1]
+                                    idx[q, pos] = idx[q, pos - 1]
+                                pos -= 1
+                            dist[q, pos] = d
+                            idx[q, pos] = p
+                            if count < k:
+                                count += 1
+            # points of cells beyond shell r lie farther than r cells from the query
+            if count == k and dist[q, k - 1] <= r * cell:
+                ok[q] = True
+                break
+    return ok
+
+
 def compile_kernels() -> None:
     """Compile the kernels into numba's on-disk cache (install.sh runs this once)."""
     cap, slots = 8, 16
@@ -304,6 +411,7 @@ def compile_kernels() -> None:
     for item in range(4):
         grid_insert(head, nxt, prv, cells, item, int(V[item, 0]), int(V[item, 1]), 0)
     grid_remove(head, nxt, prv, cells, 3)
+    adj_remove(np.zeros((2, 2), dtype=np.int64), np.ones(2, dtype=np.int64), 0, 0)
     n = np.array([0.0, 0.0, 1.0])
     adj = np.full((cap, 4), -1, dtype=np.int64)
     adj[0, 0], adj[1, 0], adj[2, 0] = 1, 2, 0
@@ -317,3 +425,4 @@ def compile_kernels() -> None:
     idx = np.tile(np.arange(4, dtype=np.int64), (2, 1))
     outside_flags(V[:2], N[:2], np.ones((2, 4)), idx, V[:4], N[:4], np.ones(4), 0.75, 1.5,
                   False, math.pi)
+    PointGrid(V[:4], 1.0).query(V[:2], 3)
