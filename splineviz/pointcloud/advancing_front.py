@@ -771,8 +771,9 @@ class AdvancingFront:
         such triangulation exists."""
         k = len(loop)
         pts = self.V[loop]
-        normal = np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0)
-        nrm = self.N[loop]
+        normal = tuple(np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0).tolist())
+        P = [self.P[u] for u in loop]
+        nrm = [tuple(x) for x in self.N[loop].tolist()]
 
         def edge_free(i, j):
             u, w = loop[i], loop[j]
@@ -783,38 +784,43 @@ class AdvancingFront:
             return ((u, w) if u < w else (w, u)) not in self.edge_faces
 
         def cost(i, m, j):
-            p, q, r = pts[i], pts[m], pts[j]
-            tn = np.cross(q - p, r - p)
-            area2 = float(np.linalg.norm(tn))
+            # scalar tuple math: NumPy's per-call overhead dominated on single triangles
+            p, q, r = P[i], P[m], P[j]
+            tn = _cross(_sub(q, p), _sub(r, p))
+            area2 = _norm(tn)
             # a loop twisted by a sharp fold has no single facing direction: a triangle may
             # face along the loop's normal or along its own corners' normals
-            if area2 <= 0 or (float(tn @ normal) <= 0 and
-                              float(tn @ (nrm[i] + nrm[m] + nrm[j])) <= 0):
+            if area2 <= 0 or (_dot(tn, normal) <= 0 and
+                              _dot(tn, (nrm[i][0] + nrm[m][0] + nrm[j][0],
+                                        nrm[i][1] + nrm[m][1] + nrm[j][1],
+                                        nrm[i][2] + nrm[m][2] + nrm[j][2])) <= 0):
                 return math.inf
-            sides = float(np.sum((q - p) ** 2) + np.sum((r - q) ** 2) + np.sum((p - r) ** 2))
+            qp, rq, pr = _sub(q, p), _sub(r, q), _sub(p, r)
+            sides = _dot(qp, qp) + _dot(rq, rq) + _dot(pr, pr)
             return sides / (2 * math.sqrt(3) * area2)
 
-        best = np.full((k, k), math.inf)
-        split = np.full((k, k), -1, dtype=int)
+        best = [[math.inf] * k for _ in range(k)]  # lists: O(k^3) scalar lookups
+        split = [[-1] * k for _ in range(k)]
         for i in range(k - 1):
-            best[i, i + 1] = 0.0
+            best[i][i + 1] = 0.0
         for span in range(2, k):
             for i in range(k - span):
                 j = i + span
                 if not edge_free(i, j):
                     continue
+                row = best[i]
                 for m in range(i + 1, j):
-                    c = best[i, m] + best[m, j]
-                    if c < best[i, j]:
+                    c = row[m] + best[m][j]
+                    if c < row[j]:
                         c += cost(i, m, j)
-                        if c < best[i, j]:
-                            best[i, j], split[i, j] = c, m
-        if not math.isfinite(best[0, k - 1]):
+                        if c < row[j]:
+                            row[j], split[i][j] = c, m
+        if not math.isfinite(best[0][k - 1]):
             return []
         tris, stack = [], [(0, k - 1)]
         while stack:
             i, j = stack.pop()
-            m = split[i, j]
+            m = split[i][j]
             if m < 0:
                 continue
             tris.append((loop[i], loop[m], loop[j]))
