@@ -227,9 +227,10 @@ class AdvancingFront:
         self.edge_faces: dict[tuple[int, int], int] = {}
         self.length_factor = 1.0  # lowered by the refinement passes (see _retry_given_up)
         self.fan: list[float] = []  # sum of the corner angles of each vertex's triangles
-        # per triangle, for _covered: first corner, two edge vectors, unit normal, and the
-        # Gram matrix entries of the edges, (F, 15)
-        self.face_geometry = np.empty((cap, 15))
+        # per triangle, for _covered: first corner, two edge vectors, unit normal, the Gram
+        # matrix entries of the edges, the centroid and the corners' largest distance from
+        # it, (F, 19)
+        self.face_geometry = np.empty((cap, 19))
         self.border: set[tuple[int, int]] = set()  # front edges no longer advanced
         self.scan_border: set[tuple[int, int]] = set()  # ... because the cloud ends there
         self.heap: list = []
@@ -343,8 +344,11 @@ class AdvancingFront:
         e1, e2 = _sub(pb, pa), _sub(pc, pa)
         normal = _cross(e1, e2)
         length = _norm(normal) or 1.0
+        radius = math.sqrt(max(_dot(d, d) for d in (_sub(pa, centroid), _sub(pb, centroid),
+                                                      _sub(pc, centroid))))
         self.face_geometry[nf] = (*pa, *e1, *e2, normal[0] / length, normal[1] / length,
-                                  normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2))
+                                  normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2),
+                                  *centroid, radius)
         self.area_done += 0.5 * _norm(_cross(_sub(pb, pa), _sub(pc, pa)))
         for o, angle in zip((a, b, c), _corner_angles(pa, pb, pc), strict=True):
             self.fan[o] += angle

@@ -112,8 +112,9 @@ def vertices_near(head, nxt, cells, cell, V, N, x, radius, n, use_normal):
 def covered(head, nxt, cells, cell, geometry, probes, centre, length, margin, height):
     """Whether any of ``probes (K, 3)`` projects strictly inside (barycentric coordinates above
     ``margin``) a triangle filed within one cell of ``centre``, closer than ``height *
-    length`` to its plane.  ``geometry (F, 15)``: per triangle its first corner, two edge
-    vectors, unit normal and the Gram entries ``e1.e1, e1.e2, e2.e2``."""
+    length`` to its plane.  ``geometry (F, 19)``: per triangle its first corner, two edge
+    vectors, unit normal, the Gram entries ``e1.e1, e1.e2, e2.e2``, its centroid and the
+    largest distance of a corner from the centroid."""
     ids = _gather(head, nxt, cells, cell, centre, 1, np.empty(64, dtype=np.int64))
     limit = height * length
     for t in ids:
@@ -122,7 +123,15 @@ def covered(head, nxt, cells, cell, geometry, probes, centre, length, margin, he
         denom = d00 * d11 - d01 * d01
         if denom <= 0:  # a degenerate triangle covers nothing
             continue
+        # a probe over the triangle lies within its corner radius plus the height limit of
+        # its centroid: most triangles of the neighbourhood are rejected by that alone
+        reach = (g[18] + limit) * (g[18] + limit)
         for p in range(probes.shape[0]):
+            c0 = probes[p, 0] - g[15]
+            c1 = probes[p, 1] - g[16]
+            c2 = probes[p, 2] - g[17]
+            if c0 * c0 + c1 * c1 + c2 * c2 > reach:
+                continue
             r0 = probes[p, 0] - g[0]
             r1 = probes[p, 1] - g[1]
             r2 = probes[p, 2] - g[2]
@@ -420,7 +429,7 @@ def compile_kernels() -> None:
     radj[1, 0], radj[2, 0], radj[0, 0] = 0, 1, 2
     front_clear(head, nxt, cells, 1.0, V, N, adj, cnt, radj, cnt, 0, 1, -1,
                 np.array([0.5, -0.8, 0.0]), n, 2.0)
-    geometry = np.zeros((cap, 15))
+    geometry = np.zeros((cap, 19))
     covered(head, nxt, cells, 1.0, geometry, V[:2], V[0], 1.0, 0.02, 0.3)
     idx = np.tile(np.arange(4, dtype=np.int64), (2, 1))
     outside_flags(V[:2], N[:2], np.ones((2, 4)), idx, V[:4], N[:4], np.ones(4), 0.75, 1.5,
