@@ -677,10 +677,12 @@ class AdvancingFront:
 
                 tree = cKDTree(self.V[: self.nv])
                 dist, _ = tree.query(proj.points[kappa_order])
-                far = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
-                if len(far) < SEED_MIN_POINTS:
+                # vertices are never removed: a point near the mesh stays near it, so each
+                # round asks only about the points that were far in the previous one
+                kappa_order = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
+                if len(kappa_order) < SEED_MIN_POINTS:
                     break
-                start = far[0]
+                start = kappa_order[0]
             else:
                 start = kappa_order[0]
             tried += 1

@@ -427,6 +427,7 @@ def compile_kernels() -> None:
     cnt = np.array([1, 1, 1, 0, 0, 0, 0, 0], dtype=np.int64)
     radj = np.full((cap, 4), -1, dtype=np.int64)
     radj[1, 0], radj[2, 0], radj[0, 0] = 0, 1, 2
+    vertices_near(head, nxt, cells, 1.0, V, N, V[0].copy(), 2.0, n, True)
     front_clear(head, nxt, cells, 1.0, V, N, adj, cnt, radj, cnt, 0, 1, -1,
                 np.array([0.5, -0.8, 0.0]), n, 2.0)
     geometry = np.zeros((cap, 19))
