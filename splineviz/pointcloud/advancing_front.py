@@ -66,7 +66,9 @@ RELAXED_RADIUS = 1.3
 #: ear angle limit after RETRIES failures
 RELAXED_EAR_ANGLE = np.deg2rad(110.0)
 #: new seeds are placed at input points farther than this many target lengths from the mesh
-SEED_DISTANCE = 1.5
+#: vertices (inside a triangle of the front a point is at most ~0.6 of its longest side from
+#: a corner): thin parts that the fronts around them could not enter get fronts of their own
+SEED_DISTANCE = 1.0
 #: ... when at least this many input points are that far (a region the fronts did not reach)
 SEED_MIN_POINTS = 10
 #: at most this many seeds (connected components)
@@ -650,6 +652,10 @@ class AdvancingFront:
         tri = np.stack([p, q[0], q[1]])
         tn = np.cross(tri[1] - tri[0], tri[2] - tri[0])
         if np.dot(tn, nrm) <= 0.5 * np.linalg.norm(tn):
+            return False
+        # a seed beside the mesh (a thin part the fronts could not enter) must not lie on it
+        probes = np.vstack([tri.mean(axis=0), 0.5 * (tri + np.roll(tri, -1, axis=0))])
+        if self.nv and self._covered(probes, probes[0], length):
             return False
         ids = [self._add_vertex(p, nrm), self._add_vertex(q[0], qn[0]),
                self._add_vertex(q[1], qn[1])]
