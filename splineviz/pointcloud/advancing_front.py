@@ -486,13 +486,24 @@ class AdvancingFront:
                                         False).any())
 
     def _outside_flags(self, xs, ns, strict):
-        """:meth:`_outside` of points ``xs (K, 3)`` with normals ``ns (K, 3)``: ``(K,)`` bool;
-        one k-d tree query for all of them."""
-        dist, idx = self.pgrid.query(xs, BORDER_NEIGHBOURS, self.proj.conn.tree)
-        points, normals, spacing = self._cloud
-        return fk.outside_flags(xs, ns, dist, idx, points, normals, spacing,
-                                INSIDE_SPACINGS, self.outside_spacings, bool(strict),
-                                BORDER_GAP)
+        """:meth:`_outside` of points ``xs (K, 3)`` with normals ``ns (K, 3)`` or one normal
+        ``(1, 3)``: ``(K,)`` bool."""
+        g = self.pgrid
+        _points, normals, spacing = self._cloud
+        k = min(BORDER_NEIGHBOURS, len(g.points))
+        xs = np.ascontiguousarray(xs, dtype=np.float64)
+        ns = np.ascontiguousarray(ns, dtype=np.float64)
+        flags = fk.outside_near(g.points, g.cells, g.start, g.order, g.cell, normals, spacing,
+                                xs, ns, k, INSIDE_SPACINGS, self.outside_spacings, bool(strict),
+                                BORDER_GAP, fk.MAX_SHELL)
+        undecided = flags < 0
+        if undecided.any():  # far from every input point: the k-d tree finds the neighbours
+            dist, idx = g.query(xs[undecided], k, self.proj.conn.tree)
+            flags[undecided] = fk.outside_flags(
+                xs[undecided], ns if len(ns) == 1 else ns[undecided], dist, idx, g.points,
+                normals, spacing, INSIDE_SPACINGS, self.outside_spacings, bool(strict),
+                BORDER_GAP)
+        return flags.astype(bool)
 
     # -- the front step --------------------------------------------------------------------
     def _neighbour(self, vertex, other, incoming, n):

@@ -408,6 +408,23 @@ def knn(points, cells, start, order, cell, xs, k, max_shell, dist, idx):
     return ok
 
 
+@numba.njit(cache=True)
+def outside_near(points, cells, start, order, cell, normals, spacing, xs, ns, k, inside,
+                 outside, strict, gap, max_shell):
+    """:func:`knn` and :func:`outside_flags` in one call (the front asks about two or three
+    points at a time, so the calls' fixed costs mattered): ``(K,)`` int8, 1 outside, 0
+    inside, -1 where the grid search did not settle the neighbours (ask a k-d tree)."""
+    dist = np.empty((len(xs), k))
+    idx = np.empty((len(xs), k), dtype=np.int64)
+    ok = knn(points, cells, start, order, cell, xs, k, max_shell, dist, idx)
+    flags = outside_flags(xs, ns, dist, idx, points, normals, spacing, inside, outside,
+                          strict, gap)
+    out = np.empty(len(xs), dtype=np.int8)
+    for p in range(len(xs)):
+        out[p] = (1 if flags[p] else 0) if ok[p] else -1
+    return out
+
+
 def compile_kernels() -> None:
     """Compile the kernels into numba's on-disk cache (install.sh runs this once)."""
     cap, slots = 8, 16
@@ -435,4 +452,7 @@ def compile_kernels() -> None:
     idx = np.tile(np.arange(4, dtype=np.int64), (2, 1))
     outside_flags(V[:2], N[:2], np.ones((2, 4)), idx, V[:4], N[:4], np.ones(4), 0.75, 1.5,
                   False, math.pi)
-    PointGrid(V[:4], 1.0).query(V[:2], 3)
+    grid = PointGrid(V[:4], 1.0)
+    grid.query(V[:2], 3)
+    outside_near(grid.points, grid.cells, grid.start, grid.order, grid.cell, N[:4], np.ones(4),
+                 V[:2].copy(), N[:1].copy(), 3, 0.75, 1.5, False, math.pi, MAX_SHELL)
