@@ -181,13 +181,13 @@ def outside_flags(xs, ns, dist, idx, points, normals, spacing, inside, outside, 
         count = 0
         for j in range(b):
             i = idx[p, j]
-            if i < len(points) and normals[i, 0] * n0 + normals[i, 1] * n1 + \
+            if 0 <= i < len(points) and normals[i, 0] * n0 + normals[i, 1] * n1 + \
                     normals[i, 2] * n2 > 0:
                 sel[count] = j
                 count += 1
         if count == 0:
             for j in range(b):
-                if idx[p, j] < len(points):
+                if 0 <= idx[p, j] < len(points):
                     sel[count] = j
                     count += 1
         if count == 0:
@@ -417,6 +417,10 @@ def outside_near(points, cells, start, order, cell, normals, spacing, xs, ns, k,
     dist = np.empty((len(xs), k))
     idx = np.empty((len(xs), k), dtype=np.int64)
     ok = knn(points, cells, start, order, cell, xs, k, max_shell, dist, idx)
+    for p in range(len(xs)):
+        if not ok[p]:  # rows the search left half filled: any valid ids (answer discarded)
+            idx[p, :] = 0
+            dist[p, :] = np.inf
     flags = outside_flags(xs, ns, dist, idx, points, normals, spacing, inside, outside,
                           strict, gap)
     out = np.empty(len(xs), dtype=np.int8)

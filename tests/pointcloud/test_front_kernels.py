@@ -106,3 +106,19 @@ def test_flips_bring_valences_towards_six_and_keep_the_mesh_valid():
     again, more = flip_edges(v, f)
     np.testing.assert_array_equal(again, out)  # deterministic
     assert more == flips
+
+
+def test_border_test_far_from_the_cloud():
+    """Points beyond the grid search (MAX_SHELL cells) are answered through the k-d tree."""
+    from splineviz.pointcloud.advancing_front import AdvancingFront
+    from splineviz.pointcloud.guidance import guidance_field
+    from splineviz.pointcloud.projection import Projector
+
+    rng = np.random.default_rng(9)
+    pts = np.c_[rng.uniform(-2, 2, (1500, 2)), np.zeros(1500)]
+    proj = Projector(pts)
+    front = AdvancingFront(proj, guidance_field(proj, edge_length=0.2))
+    xs = np.array([[0.0, 0.0, 0.0], [40.0, 0.0, 0.0], [0.0, 1.9, 0.0], [0.0, 2.6, 0.0]])
+    up = np.array([[0.0, 0.0, 1.0]])
+    n = up if proj.normals[0, 2] > 0 else -up
+    np.testing.assert_array_equal(front._outside_flags(xs, n, False), [False, True, False, True])
