@@ -206,6 +206,9 @@ class AdvancingFront:
         :class:`Cancelled`.
     """
 
+    #: at most this many seeds (subclasses for surfaces of many pieces raise it)
+    max_seeds = MAX_SEEDS
+
     def __init__(self, projector, guidance, progress=None):
         self.proj = projector
         self.guide = guidance
@@ -672,7 +675,7 @@ class AdvancingFront:
         proj = self.proj
         kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
         tried = 0
-        for _ in range(MAX_SEEDS):
+        for _ in range(self.max_seeds):
             if self.stats.truncated:
                 break
             if self.nv:
