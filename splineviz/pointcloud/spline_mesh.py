@@ -339,11 +339,12 @@ def _guidance(projector, rho, min_length, max_length):
     k1, k2 = spline_curvatures(projector.spline, projector.points)
     kappa = np.nan_to_num(np.maximum(np.abs(k1), np.abs(k2)), nan=0.0)
     ideal = 2.0 * np.sin(rho / 2.0) / np.maximum(kappa, 1e-300)
-    # curvature alone allows long edges on flat sheets that lie close together (leaves)
+    lengths = np.clip(ideal, min_length, max_length)
+    # curvature alone allows long edges on flat sheets that lie close together (leaves); the
+    # gap bound wins over min_length: a longer edge would join the two sheets
     gaps = sheet_gaps(projector.spline, projector.iso, projector.points, projector.normals,
                       max_length / GAP_FACTOR)
-    ideal = np.minimum(ideal, GAP_FACTOR * gaps)
-    lengths = np.clip(ideal, min_length, max_length)
+    lengths = np.minimum(lengths, GAP_FACTOR * gaps)
     lengths = limit_gradation(lengths, projector.conn.graph, GRADATION)
     return GuidanceField(lengths, projector.conn.tree)
 
@@ -561,6 +562,8 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         Angle (radians) one edge subtends on the osculating circle: smaller is finer.
     min_length, max_length : float, optional
         Edge-length bounds (default ``DEFAULT_MIN_LENGTH`` / ``DEFAULT_MAX_LENGTH`` grid steps).
+        Where two sheets of the surface are closer than ``min_length`` along the normal, edges
+        are shorter: ``GAP_FACTOR`` times that distance.
     progress : callable, optional
         ``progress(fraction, message)``; returning False cancels.
 
