@@ -85,6 +85,8 @@ def measure(spline, iso, vertices, faces, other_vertices):
 
 
 def run(data_dir: Path, name: str, model: str, rhos):
+    """Mesh one set with flying edges and the front (one per ``rho``), print the table and
+    return its rows ``[(label, seconds, measures)]``, flying edges first."""
     import splineviz as sv
     from splineviz.pointcloud.spline_mesh import spline_front_mesh
     from splineviz.render.extract import spline_isosurface
@@ -116,6 +118,7 @@ def run(data_dir: Path, name: str, model: str, rhos):
               f"{m['on_surface']:.1e} | {m['radius_ratio']:.3f} | {m['valence6']:.1%} | "
               f"{m['hausdorff']:.4f} | {m['to_surface_max']:.4f} | "
               f"{m['from_surface_max']:.4f} | {m['off_surface']} |")
+    return rows
 
 
 def main(argv=None):

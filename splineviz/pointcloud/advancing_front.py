@@ -208,6 +208,9 @@ class AdvancingFront:
 
     #: at most this many seeds (subclasses for surfaces of many pieces raise it)
     max_seeds = MAX_SEEDS
+    #: vertices per input point before the run stops (subclasses whose edges may be shorter
+    #: than the points' spacing raise it)
+    vertex_budget = VERTEX_BUDGET
 
     def __init__(self, projector, guidance, progress=None):
         self.proj = projector
@@ -834,7 +837,7 @@ class AdvancingFront:
         steps = 0
         # runaway guard: with edges never shorter than ~the sample spacing, a valid mesh has
         # fewer vertices than the cloud has points; far more means the front overlaps itself
-        budget = VERTEX_BUDGET * len(self.proj.points) + 1000
+        budget = self.vertex_budget * len(self.proj.points) + 1000
         while self.heap:
             if self.nv > budget:
                 self.stats.truncated = True

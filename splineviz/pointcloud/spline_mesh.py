@@ -81,6 +81,9 @@ PROBE_FLOOR = 0.2
 MAX_CORNER_TURN = np.deg2rad(90.0)
 #: at most this many probe subdivisions per side
 MAX_PROBE_DIVISIONS = 16
+#: the front stops beyond this many times the vertices the target lengths call for (a
+#: front that runs over itself)
+VERTEX_SLACK = 3.0
 #: at most this many seeds (the front's default is for one scanned object; an isosurface
 #: such as the bonsai's leaves has many small pieces)
 MAX_SPLINE_SEEDS = 5000
@@ -314,6 +317,10 @@ class SplineFront(AdvancingFront):
         super().__init__(projector, guidance, progress)
         #: number of candidate triangles refused for leaving the surface
         self.off_surface = 0
+        # the samples are one per grid cell, the edges may be shorter (curved or close
+        # sheets): a mesh of equilateral triangles has 2 / (sqrt 3 L^2) vertices per unit area
+        per_sample = np.mean(2.0 / np.sqrt(3.0) * (projector.scale / guidance.lengths) ** 2)
+        self.vertex_budget = max(self.vertex_budget, VERTEX_SLACK * float(per_sample))
 
     def _on_surface(self, corners) -> bool:
         if triangles_on_surface(self.proj.spline, self.proj.iso, np.asarray(corners))[0]:
