@@ -75,6 +75,10 @@ SURFACE_CROSSING = 0.06
 #: smallest triangles sit where the curvature is highest, the first-order distance is least
 #: exact there, and no gap narrower than this is resolved by the data
 PROBE_FLOOR = 0.2
+#: the triangles closing a hole the front left may stand this many grid steps off the surface
+#: (a hole of the front's edge length is farther from the surface than that; triangles across
+#: a gap between sheets stand off by half the gap, and face each other, see MAX_CORNER_TURN)
+HOLE_SLACK = 0.4
 #: the spline normals at a triangle's corners may differ by at most this angle: corners on
 #: the two sides of a gap or of a thin part face each other (in the bonsai crop 5 of 42,000
 #: triangles on one sheet exceed it)
@@ -250,7 +254,8 @@ def _probe_weights(divisions: int) -> np.ndarray:
     return w[~(w == 1.0).any(axis=1)]
 
 
-def triangles_on_surface(spline, iso: float, triangles: np.ndarray) -> np.ndarray:
+def triangles_on_surface(spline, iso: float, triangles: np.ndarray,
+                         slack: float = 0.0) -> np.ndarray:
     """Whether triangles with corners on ``s = iso`` lie on one sheet of the surface.
 
     Each triangle is probed at points at most ``PROBE_SPACING`` grid steps apart; at each the
@@ -264,6 +269,8 @@ def triangles_on_surface(spline, iso: float, triangles: np.ndarray) -> np.ndarra
     spline : Spline
     iso : float
     triangles : (T, 3, 3) corner positions
+    slack : float, optional
+        Probes this many grid steps from the surface are accepted too.
 
     Returns
     -------
@@ -293,7 +300,7 @@ def triangles_on_surface(spline, iso: float, triangles: np.ndarray) -> np.ndarra
         dist = (value - iso) / np.maximum(np.linalg.norm(grad, axis=1), 1e-300)
         dist = dist.reshape(len(sel), len(w))[:, 3:]
         floor = PROBE_FLOOR * step
-        dev = np.maximum(SURFACE_DEVIATION * longest[sel], floor)
+        dev = np.maximum(SURFACE_DEVIATION * longest[sel], max(floor, slack * step))
         cross = np.maximum(SURFACE_CROSSING * longest[sel], floor)
         both_sides = (dist.max(axis=1) > cross) & (dist.min(axis=1) < -cross)
         ok[sel] = (np.abs(dist).max(axis=1) <= dev) & ~both_sides & \
@@ -450,7 +457,7 @@ def fill_holes(spline, iso, vertices, faces, keep_open):
         if len(ring) and np.abs(spline.evaluate(ring) - iso).max() > tol:
             continue
         allv = np.concatenate([vertices, np.array(new_v).reshape(-1, 3), ring])
-        if not triangles_on_surface(spline, iso, allv[np.array(loop_f)]).all():
+        if not triangles_on_surface(spline, iso, allv[np.array(loop_f)], HOLE_SLACK).all():
             continue
         new_v += loop_v
         new_f += loop_f
@@ -611,8 +618,9 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
     vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
     # valence flips and tangential relaxation, every moved vertex put back onto the spline
     vertices, faces, _flips = optimize(vertices, faces, proj)
-    # a flip or a relaxed vertex may still join two sheets: such triangles leave a hole
-    faces = faces[triangles_on_surface(spline, iso, vertices[faces])]
+    # a flip or a relaxed vertex may still join two sheets: such triangles leave a hole (the
+    # closed holes' slack: their triangles passed with it)
+    faces = faces[triangles_on_surface(spline, iso, vertices[faces], HOLE_SLACK)]
     used = np.unique(faces)
     remap = np.full(len(vertices), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
