@@ -7,8 +7,9 @@ onto the spline) and advancing-front meshes on the spline for a few ``rho``, and
 mesh: triangles, time, largest |s - iso| at the vertices over the data range, mean radius
 ratio, valence-6 share of interior vertices, and the Hausdorff distance to the exact surface
 (in grid steps): mesh -> surface from 7 samples per triangle projected onto s = iso by Newton
-steps, surface -> mesh from the other mesh's vertices (which lie on the surface), leaving out
-points within 1.5 grid steps of the data box (the front stops about one sample short of the
+steps, surface -> mesh from the other mesh's vertices (which lie on the surface), both leaving
+out points within 1.5 grid steps of the data box (Newton steps keep a point on a box face
+within that face: its distance there is not the distance to the surface) (the front stops about one sample short of the
 box faces; flying edges reaches them); and the triangles that leave the surface by the spline
 mesher's own test (:func:`splineviz.pointcloud.spline_mesh.triangles_on_surface`: bridges
 between sheets).
@@ -70,6 +71,9 @@ def measure(spline, iso, vertices, faces, other_vertices):
     inner = np.ones(len(vertices), dtype=bool)
     inner[np.unique(edges[counts == 1])] = False
     samples = surface_samples(vertices, faces, per_face=4)
+    # a point on a face of the data box is projected within that face: its distance is not
+    # the distance to the surface
+    samples = samples[_interior(spline, samples, 1.5 * step)]
     proj, _ = project_to_isosurface(spline, samples, iso, steps=10)
     forward = np.linalg.norm(samples - proj, axis=1)
     keep = _interior(spline, other_vertices, 1.5 * step)
