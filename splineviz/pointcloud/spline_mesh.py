@@ -178,7 +178,10 @@ def surface_samples(spline, iso: float, cell: float | None = None):
         t = np.divide(iso - f0, f1 - f0, out=np.full_like(f0, 0.5), where=f1 != f0)
         idx = np.stack([i, j, k], axis=1).astype(np.float64)
         idx[:, 0] += t
-        found.append(np.roll(idx, axis, axis=1) if axis else idx)
+        # the moved array's axes are (axis, then the other two in order): back to (x, y, z)
+        xyz = np.empty_like(idx)
+        xyz[:, [axis] + [d for d in range(3) if d != axis]] = idx
+        found.append(xyz)
     if not found:
         raise SplineMeshError(f"the isovalue {iso:g} is not crossed by the data")
     index = np.concatenate(found)

@@ -207,3 +207,16 @@ def test_data_meshes_against_flying_edges(name):
     assert front["off_surface"] == 0
     assert front["triangles"] <= 0.5 * fe["triangles"]
     assert front["hausdorff"] <= fe["hausdorff"]
+
+
+def test_samples_of_crossings_along_every_axis():
+    from splineviz.pointcloud.spline_mesh import surface_samples
+
+    # the plane y = 3.3 in a box of three different sizes: crossed along y edges alone
+    vol = sv.Volume.from_function(lambda x, y, z: y + 0 * x, (5, 9, 13), ((0, 4), (0, 8), (0, 12)))
+    p, n, _cell = surface_samples(sv.build_spline(vol, "cubic-c1"), 3.3)
+    np.testing.assert_allclose(p[:, 1], 3.3, atol=1e-9)
+    np.testing.assert_allclose(n, [[0.0, -1.0, 0.0]] * len(p), atol=1e-9)
+    # one sample per grid edge crossed: every (x, z) node of the grid
+    assert {(round(x), round(z)) for x, _y, z in p} == {(x, z) for x in range(5)
+                                                         for z in range(13)}
