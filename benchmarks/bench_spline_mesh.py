@@ -1,18 +1,19 @@
 """Benchmark: spline-isosurface meshes by the advancing front against flying edges (issue 14).
 
-For each data set (a 64x96x64 crop of the bonsai's crown and the whole bonsai at 40.5, tooth at
-100.5; cubic-c1 by default) it builds
-"Export mesh"'s flying-edges mesh (spline samples on the grid refined twice, vertices moved
-onto the spline) and advancing-front meshes on the spline for a few ``rho``, and prints per
-mesh: triangles, time, largest |s - iso| at the vertices over the data range, mean radius
-ratio, valence-6 share of interior vertices, and the Hausdorff distance to the exact surface
-(in grid steps): mesh -> surface from 7 samples per triangle projected onto s = iso by Newton
-steps, surface -> mesh from the other mesh's vertices (which lie on the surface), both leaving
-out points within 1.5 grid steps of the data box (Newton steps keep a point on a box face
-within that face: its distance there is not the distance to the surface) (the front stops about one sample short of the
-box faces; flying edges reaches them); and the triangles that leave the surface by the spline
-mesher's own test (:func:`splineviz.pointcloud.spline_mesh.triangles_on_surface`: bridges
-between sheets).
+For each data set (a 40^3 crop of the bonsai's crown and the whole bonsai at 40.5, tooth at
+100.5; cubic-c1 by default) it builds "Export mesh"'s flying-edges mesh (spline samples on the
+grid refined twice, vertices moved onto the spline) and advancing-front meshes on the spline
+for a few ``rho``, and prints per mesh: triangles (and their share of flying edges'), time,
+largest |s - iso| at the vertices over the data range, mean radius ratio, valence-6 share of
+interior vertices, the Hausdorff distance to the exact surface (in grid steps), and the
+triangles that leave the surface by the spline mesher's own test
+(:func:`splineviz.pointcloud.spline_mesh.triangles_on_surface`: bridges between sheets).
+
+Hausdorff: mesh -> surface from 7 samples per triangle projected onto s = iso by Newton steps,
+surface -> mesh from the other mesh's vertices (which lie on the surface). Both leave out
+points within 1.5 grid steps of the data box: the front stops about one sample short of the
+box faces (flying edges reaches them), and Newton steps keep a point on a box face within that
+face, so its distance there is not the distance to the surface.
 
 Run: ``.venv/bin/python benchmarks/bench_spline_mesh.py [--data DIR] [--rho 0.3 0.45]
 [--sets bonsai-crop bonsai tooth] [--model cubic-c1]``
@@ -28,8 +29,8 @@ import numpy as np
 
 #: name -> (file, isovalue, crop as (start index, shape) or None for the whole volume)
 SETS = {"bonsai": ("bonsai.vti", 40.5, None),
-        # a leafy part of the crown (most isovalue crossings among 64x96x64 windows)
-        "bonsai-crop": ("bonsai.vti", 40.5, ((64, 128, 112), (64, 96, 64))),
+        # a leafy part of the crown (most isovalue crossings among 40^3 windows in the crown)
+        "bonsai-crop": ("bonsai.vti", 40.5, ((128, 168, 32), (40, 40, 40))),
         "tooth": ("tooth.nrrd", 100.5, None)}
 
 

@@ -10,6 +10,11 @@ the projector (thesis §7.3 with the volume's spline in place of the local polyn
 * Samples: where the data cross the isovalue along grid edges, one per grid cell, projected
   onto the spline surface. They tell the front where the surface is (seeds, the data box's
   border) exactly as the input points of a scan do.
+* One sheet: the front's tests see samples and front edges near a candidate triangle, not
+  the surface between its corners. Every triangle must lie on one sheet of the spline surface
+  (:func:`triangles_on_surface`: probes near ``s = iso``, not on both sides of it, corner
+  normals less than a right angle apart), and edges are at most the distance along the
+  normal to the next sheet (:func:`sheet_gaps`): leaves a voxel apart are not joined.
 * Holes: where the front gives up edges (its point-cloud tests misjudge sharp folds), the
   border loops left inside the surface are closed by rings on the surface
   (:func:`fill_holes`); then valence flips and tangential relaxation
