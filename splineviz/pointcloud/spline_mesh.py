@@ -41,7 +41,7 @@ from splineviz.core import sections
 from splineviz.core.curvature import spline_curvatures
 from splineviz.core.errors import SplinevizError
 from splineviz.core.isosurface import project_to_isosurface
-from splineviz.pointcloud.advancing_front import AdvancingFront, simple_loops
+from splineviz.pointcloud.advancing_front import VERTEX_BUDGET, AdvancingFront, simple_loops
 from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 
@@ -335,7 +335,7 @@ class SplineFront(AdvancingFront):
         # the samples are one per grid cell, the edges may be shorter (curved or close
         # sheets): a mesh of equilateral triangles has 2 / (sqrt 3 L^2) vertices per unit area
         per_sample = np.mean(2.0 / np.sqrt(3.0) * (projector.scale / guidance.lengths) ** 2)
-        self.vertex_budget = max(self.vertex_budget, VERTEX_SLACK * float(per_sample))
+        self.vertex_budget = max(VERTEX_BUDGET, VERTEX_SLACK * float(per_sample))
 
     def _on_surface(self, corners) -> bool:
         if triangles_on_surface(self.proj.spline, self.proj.iso, np.asarray(corners))[0]:
