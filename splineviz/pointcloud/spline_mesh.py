@@ -45,8 +45,10 @@ from splineviz.pointcloud.advancing_front import VERTEX_BUDGET, AdvancingFront, 
 from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 
-#: default angle (radians) one edge subtends on the osculating circle
-DEFAULT_RHO = 0.3
+#: default angle (radians) one edge subtends on the osculating circle: at 0.5 the bonsai crop
+#: and the tooth have 39 % and 45 % of flying edges' triangles at a quarter of its Hausdorff
+#: distance (0.3: 63 % and 64 %; the chords stand off the surface by ~3 % of their length)
+DEFAULT_RHO = 0.5
 #: default edge-length bounds, in grid steps
 DEFAULT_MIN_LENGTH = 0.4
 DEFAULT_MAX_LENGTH = 6.0
