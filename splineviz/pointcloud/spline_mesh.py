@@ -46,8 +46,9 @@ from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 
 #: default angle (radians) one edge subtends on the osculating circle: at 0.5 the bonsai crop
-#: and the tooth have 39 % and 45 % of flying edges' triangles at a quarter of its Hausdorff
-#: distance (0.3: 63 % and 64 %; the chords stand off the surface by ~3 % of their length)
+#: and the tooth have 39 % and 45 % of flying edges' triangles, Hausdorff distances 0.39 and
+#: 0.24 grid steps against its 1.02 and 1.58 (benchmarks/bench_spline_mesh.py); a chord of
+#: this angle stands off the surface by 3 % of its length
 DEFAULT_RHO = 0.5
 #: default edge-length bounds, in grid steps
 DEFAULT_MIN_LENGTH = 0.4
