@@ -200,6 +200,13 @@ class AdvancingFront:
         :class:`Cancelled`.
     """
 
+    #: at most this many seeds, MAX_SEEDS when None (subclasses for surfaces of many pieces
+    #: raise it)
+    max_seeds: int | None = None
+    #: vertices per input point before the run stops, VERTEX_BUDGET when None (subclasses
+    #: whose edges may be shorter than the points' spacing raise it)
+    vertex_budget: float | None = None
+
     def __init__(self, projector, guidance, progress=None):
         self.proj = projector
         self.guide = guidance
@@ -688,7 +695,7 @@ class AdvancingFront:
         proj = self.proj
         kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
         tried = 0
-        for _ in range(MAX_SEEDS):
+        for _ in range(MAX_SEEDS if self.max_seeds is None else self.max_seeds):
             if self.stats.truncated:
                 break
             if self.nv:
@@ -856,7 +863,8 @@ class AdvancingFront:
         steps = 0
         # runaway guard: with edges never shorter than ~the sample spacing, a valid mesh has
         # fewer vertices than the cloud has points; far more means the front overlaps itself
-        budget = VERTEX_BUDGET * len(self.proj.points) + 1000
+        factor = VERTEX_BUDGET if self.vertex_budget is None else self.vertex_budget
+        budget = factor * len(self.proj.points) + 1000
         while self.heap:
             if self.nv > budget:
                 self.stats.truncated = True
