@@ -38,12 +38,38 @@ def test_read_boxes_keep_the_lattice_parity():
                                                                    strict=True))
 
 
-def test_face_planes_keep_the_brick_box_inside_the_volume_only():
+@pytest.mark.parametrize("centred", [False, True])
+def test_bricks_own_every_cell_once_within_their_samples(centred):
+    """Unit cells between samples, or cubes centred at them (type-6: one more per axis):
+    every cell of the ray caster's grid belongs to one brick, whose read box holds the
+    samples the cell's stencil reads (the halo of the model) at its placement's offset."""
+    shape, halo = (23, 17, 9), 1
+    g = BrickGrid(shape, size=(8, 5, 8), halo=halo, centred=centred)
+    grid = [n - 1 + centred for n in shape]
+    owner = np.zeros(grid, int)
+    for b in g:
+        cells = g.cells(b)
+        owner[tuple(slice(lo, hi) for lo, hi in cells)] += 1
+        p = g.placement(b, (1.0, 2.0, 3.0))
+        assert p.cells == cells and p.offset == tuple(r0 for r0, _ in b.read)
+        assert p.shape == shape and p.centred == centred
+        for (lo, hi), (r0, r1), n in zip(cells, b.read, shape, strict=True):
+            # a cube reads its neighbours (ghosts beyond the data); a unit cell its corners
+            need = (lo - 1, hi + 1) if centred else (lo, hi + 1)
+            assert r0 <= max(need[0], 0) and min(need[1], n) <= r1
+    assert np.all(owner == 1)
+
+
+def test_placement_box_and_face_planes():
     g = BrickGrid((9, 9, 9), size=4, halo=1)
     spacing, origin = (1.0, 2.0, 0.5), (10.0, 0.0, -1.0)
     b = g[(0, 1, 0)]
-    planes = g.face_planes(b, spacing, origin)
+    p = g.placement(b, origin)
+    np.testing.assert_array_equal(p.box(), [[0, 4], [4, 8], [0, 4]])
     box = g.world_box(b, spacing, origin)
+    np.testing.assert_allclose(box, np.asarray(origin)[:, None] + p.box()
+                               * np.asarray(spacing)[:, None])
+    planes = p.face_planes(spacing)
     # inner faces only: x high, y low, z high (y high and the low x, z faces are the data's)
     assert len(planes) == 3
     inside = box.mean(axis=1)
@@ -51,13 +77,19 @@ def test_face_planes_keep_the_brick_box_inside_the_volume_only():
         assert np.dot(inside - np.asarray(o), n) > 0
         assert np.isclose(abs(np.dot(np.asarray(o), n)),
                           abs(np.dot(box[:, 0 if np.sum(n) > 0 else 1], n)))
+    # centred cells: the box is shifted by half a cell and kept within the data box
+    c = BrickGrid((9, 9, 9), size=4, halo=1, centred=True)
+    np.testing.assert_array_equal(c.placement(c[(0, 1, 0)], origin).box(),
+                                  [[0, 3.5], [3.5, 8], [0, 3.5]])
 
 
-@pytest.mark.parametrize("eye", [(-30, 4, 50), (4.5, 4.5, 4.5), (3, 20, -7), (100, 100, 100)])
-def test_visibility_order_puts_occluders_first(eye):
+@pytest.mark.parametrize("centred", [False, True])
+@pytest.mark.parametrize("eye", [(-30, 4, 50), (4.5, 4.5, 4.5), (3.8, 7.7, 8.2), (3, 20, -7),
+                                 (100, 100, 100)])
+def test_visibility_order_puts_occluders_first(eye, centred):
     """Brute force: a brick hit first by a ray from the eye comes before every brick the same
-    ray meets later."""
-    g = BrickGrid((13, 13, 13), size=4, halo=0)
+    ray meets later (centred cells: bricks meet half a cell before the cuts)."""
+    g = BrickGrid((13, 13, 13), size=4, halo=0, centred=centred)
     spacing, origin = (1.0, 1.0, 1.0), (0.0, 0.0, 0.0)
     rank = {b.index: n for n, b in enumerate(g.visibility_order(eye, spacing, origin))}
     rng = np.random.default_rng(1)
@@ -67,7 +99,7 @@ def test_visibility_order_puts_occluders_first(eye):
         ts = np.linspace(0, 1.5, 600)
         pts = eye + ts[:, None] * d
         inside = np.all((pts >= 0) & (pts <= 12), axis=1)
-        idx = np.minimum(pts[inside] // 4, 2).astype(int)
+        idx = np.clip((pts[inside] + 0.5 * centred) // 4, 0, 2).astype(int)
         seq = [tuple(i) for i, _ in itertools.groupby(map(tuple, idx))]
         for a, b in itertools.pairwise(seq):
             assert rank[a] < rank[b]
@@ -176,5 +208,9 @@ def test_fragment_crops_to_its_hits():
     f.hit[3:5, 7:12] = True
     frag = Fragment.from_frame((0, 0, 0), f)
     assert frag.rect == (3, 5, 7, 12) and frag.hit.all()
+    # a window of a bigger frame: the rectangle in the whole frame's pixels
+    moved = Fragment.from_frame((0, 0, 0), f, offset=(20, 30))
+    assert moved.rect == (23, 25, 37, 42)
+    np.testing.assert_array_equal(moved.depth, frag.depth)
     f.hit[:] = False
-    assert Fragment.from_frame((0, 0, 0), f).rect == (0, 0, 0, 0)
+    assert Fragment.from_frame((0, 0, 0), f, offset=(20, 30)).rect == (0, 0, 0, 0)

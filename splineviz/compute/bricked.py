@@ -6,8 +6,11 @@ the ghost layers its spline model reads, so each brick's spline on its own box i
 spline. Per frame every brick that may hold the surface is sent to a dask worker
 (:func:`render_brick`): it reads its samples (only its box plus halo, never the volume),
 builds a :class:`~splineviz.compute.raycast.RayCaster` on them (kept in a per-worker cache
-for later frames), and ray casts the camera's frame with the rays clipped to the brick's own
-box by clip planes on its inner faces, with the *global* clipping range so depths agree. The
+for later frames), and ray casts the pixels of the brick's screen footprint in the *whole*
+volume's coordinates, restricted to the cells the brick owns
+(:class:`~splineviz.core.bricks.Placement`): the same eye, entry points, clipping range and
+clip planes as one ray caster of the whole volume, and the same cell boundaries and
+polynomials in every cell, so each brick's first hits are that caster's, bit for bit. The
 client composites the returned fragments (:mod:`splineviz.core.compositing`): least depth for
 opaque surfaces, back-to-front brick order for translucent ones.
 
@@ -36,7 +39,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from splineviz.compute.raycast import RayCaster, RayCastError
-from splineviz.core.bricks import BrickGrid, occluded, screen_footprint, value_margin
+from splineviz.core.bricks import (
+    BrickGrid,
+    Placement,
+    occluded,
+    screen_footprint,
+    value_margin,
+)
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.chunked import ChunkedVolume
 from splineviz.core.compositing import Composite, Fragment
@@ -111,6 +120,10 @@ class BrickTask:
     size: tuple
     planes: tuple
     cache_bytes: int
+    #: pixels cast: (r0, r1, c0, c1) of the frame, the brick's screen footprint
+    window: tuple
+    #: the brick in the whole volume (its rays are the whole volume's)
+    placement: Placement
 
 
 def render_brick(volume, task: BrickTask) -> Fragment:
@@ -125,8 +138,8 @@ def render_brick(volume, task: BrickTask) -> Fragment:
     -------
     Fragment
         The brick's hits; ``stats``: ``read_s``, ``build_s`` (upload and octree), ``render_s``
-        seconds, ``cached``, ``bounds`` (conservative spline bounds over the brick) and
-        ``worker`` (process id).
+        seconds, ``cached``, ``bounds`` (conservative spline bounds over the brick),
+        ``pixels`` (of its window) and ``worker`` (process id).
     """
     timing = {"read_s": 0.0}
 
@@ -142,18 +155,21 @@ def render_brick(volume, task: BrickTask) -> Fragment:
         timing["read_s"] = time.perf_counter() - t
         return RayCaster(vol, model=task.model, device=task.device, **dict(task.model_kwargs))
 
-    key = (task.token, task.index, task.model, task.model_kwargs, task.device)
+    # the samples read (not the brick's index, which another grid of the volume reuses)
+    key = (task.token, task.read, task.model, task.model_kwargs, task.device)
     rc, build_s, cached = _cached_caster(key, make, task.cache_bytes)
     # one frame at a time per caster (threads of one worker process share the cache)
     with _caster_lock(rc):
         rc.set_isovalue(task.isovalue)
-        frame = rc.render(task.camera, size=task.size, clip_planes=task.planes)
+        frame = rc.render(task.camera, size=task.size, clip_planes=task.planes,
+                          window=task.window, placement=task.placement)
         render_s = rc.stats["render_s"]
         bounds = rc.value_bounds() if rc.stats.get("path") == "opencl" else None
+    r0, r1, c0, c1 = task.window
     return Fragment.from_frame(task.index, frame, {
         "read_s": timing["read_s"], "build_s": build_s - timing["read_s"] if not cached else 0.0,
         "render_s": render_s, "cached": cached, "bounds": bounds, "worker": os.getpid(),
-        "device": rc.stats.get("device")})
+        "device": rc.stats.get("device"), "pixels": (r1 - r0) * (c1 - c0)}, offset=(r0, c0))
 
 
 _locks = weakref.WeakKeyDictionary()
@@ -288,13 +304,13 @@ class BrickedRayCaster:
         self.device = device
         self._model_kwargs = tuple(sorted(model_kwargs.items()))
         self._volume = volume
-        halo, align = spec.ghost_layers, spec.lattice_period
+        halo, align, centred = spec.ghost_layers, spec.lattice_period, spec.centred_cells
         if bricks is not None:
-            self.grid = BrickGrid.split(volume.shape, bricks, halo, align)
+            self.grid = BrickGrid.split(volume.shape, bricks, halo, align, centred)
         else:
             chunks = volume.chunks if isinstance(volume, ChunkedVolume) else volume.shape
             self.grid = BrickGrid(volume.shape, brick_size or default_brick_size(chunks), halo,
-                                  align)
+                                  align, centred)
         self.cull = bool(cull)
         self.cache_bytes = int(cache_bytes)
         self._client = client
@@ -459,6 +475,9 @@ class BrickedRayCaster:
                  and not (self.brick_bounds[b.index][0] <= self._isovalue
                           <= self.brick_bounds[b.index][1])}
         todo = [b for b in order if b.index not in empty]
+        # each brick casts only the pixels its box can cover (and is skipped when off screen)
+        foot = {b.index: screen_footprint(cam, self.grid.world_box(b, vol.spacing, vol.origin),
+                                          (w, h), clip) for b in todo}
         total = len(todo)
         comp = Composite((w, h))
         shared = self._volume_future()
@@ -469,8 +488,6 @@ class BrickedRayCaster:
         cull = self.cull and composite == "nearest"
         fragments, culled, t_comp = [], [], 0.0
         steps = self.grid.slab_steps(cam.position, vol.spacing, vol.origin)
-        foot = {b.index: screen_footprint(cam, self.grid.world_box(b, vol.spacing, vol.origin),
-                                          (w, h), clip) for b in todo} if cull else {}
         pending = as_completed()
         self._pending = []
         inflight = {}  # future key -> brick
@@ -483,14 +500,16 @@ class BrickedRayCaster:
                     if n is None:
                         break  # every brick in reach waits for one in front of it
                     brick = queue.pop(n)
-                    if cull and occluded(comp.depth, comp.hit, *foot[brick.index]):
-                        culled.append(brick.index)
+                    rect = foot[brick.index][0]
+                    if rect[0] >= rect[1] or rect[2] >= rect[3] or (
+                            cull and occluded(comp.depth, comp.hit, *foot[brick.index])):
+                        culled.append(brick.index)  # off screen or hidden: nothing to see
                         done += 1
                         continue
                     task = BrickTask(self._token, brick.index, brick.read, self.model,
                                      self._model_kwargs, self.device, self._isovalue, cam,
-                                     (w, h), tuple(user + self.grid.face_planes(
-                                         brick, vol.spacing, vol.origin)), self.cache_bytes)
+                                     (w, h), tuple(user), self.cache_bytes, rect,
+                                     self.grid.placement(brick, vol.origin))
                     fut = client.submit(render_brick, shared, task, pure=False)
                     self._pending.append(fut)
                     inflight[fut.key] = brick
@@ -546,9 +565,10 @@ class BrickedRayCaster:
         return None
 
     def _record(self, frag: Fragment) -> None:
-        """Per-brick timings of the last frame (``stats["brick_times"]``)."""
+        """Per-brick timings of the last frame (``stats["brick_times"]``; ``pixels``: of the
+        brick's window)."""
         self.stats["brick_times"].append({"index": frag.index, **{k: frag.stats.get(k) for k in (
-            "read_s", "build_s", "render_s", "cached", "worker")}})
+            "read_s", "build_s", "render_s", "cached", "worker", "pixels")}})
 
     def _render_preview(self, camera, size, planes) -> Frame:
         """The coarse level, ray cast here (its caster is kept for later frames)."""

@@ -36,6 +36,11 @@ Models with an OpenCL kernel:
   its points, 2 bytes) is kept while the data stay, so a later isovalue outside it skips the
   cell without its sums (isovalue-independent work once per data change, thesis §6.1.1).
 
+A brick of a bigger volume (:mod:`splineviz.compute.bricked`) is cast by the same kernel,
+compiled with ``BRICKS``, in the whole volume's coordinates and over a window of the frame
+(``RayCaster.render(placement=..., window=...)``): its hits are those of one cast of the
+whole volume, bit for bit.
+
 Other models render through the NumPy reference ray caster
 (:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.
 """
@@ -50,6 +55,7 @@ import numpy as np
 from splineviz.compute.device import get_device, try_get_device
 from splineviz.compute.program import get_kernel
 from splineviz.core import raycast_reference as ref
+from splineviz.core.bricks import Placement
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.errors import SplinevizError
 from splineviz.core.splines.registry import KERNEL_FAMILIES, MODELS
@@ -57,6 +63,8 @@ from splineviz.core.volume import Volume
 
 #: work-group size of the ray-casting kernel (pixels): fixed so the kernel is compiled once
 RAY_GROUP = (8, 8)
+#: most samples (ghost layers included) one ray caster's kernels address with 32-bit ints
+MAX_SAMPLES = 2**31 - 1
 #: ghost layers of the padded samples per kernel family (the registry's, per family define)
 GHOSTS = {define: max((s.ghost_layers for s in MODELS.values() if s.kernel_define == define),
                       default=0) for define in KERNEL_FAMILIES.values()}
@@ -353,7 +361,7 @@ class RayCaster:
             out["classification cache"] = 4 * (bricks + self._entry_words()
                                                * _initial_pool(bricks))
         if self._family == "MODEL_TO":
-            out["cell ranges"] = 2 * int(np.prod(cells))
+            out["cell ranges"] = 2 * 8 * int(np.prod(levels[0][1:]))
         return out
 
     def _entry_words(self) -> int:
@@ -362,7 +370,8 @@ class RayCaster:
         return 8 * (1 if self._family == "MODEL_TYPE6" else TO_WORDS + 1)
 
     def _check_device_memory(self, shape, cells, itemsize: int = 4) -> None:
-        """Refuse, before allocating anything, a volume the device cannot hold."""
+        """Refuse, before allocating anything, a volume the device cannot hold or the kernels
+        cannot address."""
         dev = self._device.device
         need = self.device_bytes(shape, cells, itemsize)
         gib = 2.0**30
@@ -376,6 +385,16 @@ class RayCaster:
                 f"but {self._device.name} has {dev.global_mem_size / gib:.2f} GiB (at most "
                 f"{dev.max_mem_alloc_size / gib:.2f} GiB per buffer); use a smaller or "
                 f"downsampled volume")
+        samples = int(np.prod([n + 2 * self._ghost() for n in shape]))
+        if samples > MAX_SAMPLES:
+            # the kernels index samples with 32-bit ints (64-bit index arithmetic costs every
+            # sample fetch); past this the offsets wrap (seen on an H200 at 1536^3: a wrong
+            # picture for trilinear, a kernel fault for super-quadratic)
+            raise RayCastError(
+                f"a {'x'.join(map(str, shape))} volume has {samples:,} device samples with the "
+                f"{self.model} model, more than one ray caster addresses ({MAX_SAMPLES:,}); "
+                f"open it as a chunked volume (Zarr, HDF5 or sv.Volume.from_dask), which is "
+                f"rendered in bricks, or downsample it")
 
     #: device bytes per pixel of the frame buffers of _render_cl: hit flag, position and
     #: normal (float4 each), depth, RGBA colour; the largest single buffer is a float4
@@ -404,10 +423,11 @@ class RayCaster:
                      NUNION=self._nunion)
         return d
 
-    def _ray_kernel(self, kernel: str):
-        """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude)."""
-        return get_kernel(self._device.context, "raycast", kernel, self._defines(),
-                          self._prelude)
+    def _ray_kernel(self, kernel: str, bricks: bool = False):
+        """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude);
+        ``bricks``: the variant that casts a brick of a bigger volume (``BRICKS``)."""
+        defines = {**self._defines(), "BRICKS": 1} if bricks else self._defines()
+        return get_kernel(self._device.context, "raycast", kernel, defines, self._prelude)
 
     def _upload(self):
         """Samples, min-max octree and the cleared classification cache on the device."""
@@ -450,7 +470,7 @@ class RayCaster:
             self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
         if self._family == "MODEL_TO":
             # isovalue-independent cell ranges (raycast.cl), all (0, 255): "not known yet"
-            self._ranges = cla.empty(q, int(np.prod(self._cells)), np.uint16)
+            self._ranges = cla.empty(q, 8 * int(np.prod(levels[0][1:])), np.uint16)
             self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
         q.finish()
 
@@ -741,7 +761,8 @@ class RayCaster:
     # -- rendering -----------------------------------------------------------------------
 
     def render(self, camera: Camera, size=(640, 480), clip_planes=(),
-               hessian: bool = False) -> ref.Frame:
+               hessian: bool = False, window=None, placement: Placement | None = None
+               ) -> ref.Frame:
         """Ray cast one frame.
 
         Parameters
@@ -753,26 +774,69 @@ class RayCaster:
             Also return the spline's Hessian and gradient norm at every hit
             (``Frame.hessian``, ``Frame.gradient_norm``), computed in the kernel from the hit
             piece's B-coefficients (colour by curvature). The NumPy path leaves them None.
+        window : (r0, r1, c0, c1), optional
+            Cast only the pixels of these half-open rows and columns of the ``size`` frame
+            (e.g. the screen footprint of a brick); the same rays as in the whole frame.
+        placement : Placement, optional
+            This caster's volume is a brick of a bigger volume
+            (:class:`splineviz.core.bricks.Placement`): the rays are those of the whole
+            volume (its index space, data box, clipping range and clip planes) restricted to
+            the brick's cells, so a hit is the hit of a single cast of the whole volume, bit
+            for bit (OpenCL path; the NumPy path clips the brick's own rays to its box).
 
         Returns
         -------
         Frame
+            Of the window's size when one is given.
         """
         if self._isovalue is None:
             raise RayCastError("set an isovalue before rendering")
         if not isinstance(camera, Camera):
             raise RayCastError("render needs a splineviz Camera")
         w, h = parse_size(size)
+        r0, r1, c0, c1 = (0, h, 0, w) if window is None else (int(v) for v in window)
+        if not (0 <= r0 <= r1 <= h and 0 <= c0 <= c1 <= w):
+            raise RayCastError(f"the window {tuple(window)} (rows r0, r1, columns c0, c1) is "
+                               f"not inside the {w}x{h} frame")
         planes = ref.normalize_clip_planes(clip_planes)
+        if placement is not None:
+            self._check_placement(placement)
         if self._device is not None:
-            self._check_frame_memory(w, h)
+            self._check_frame_memory(c1 - c0, r1 - r0)
         t = time.perf_counter()
         if self._device is None:
-            frame = ref.reference_raycast(self.spline, camera, (w, h), self._isovalue, planes)
+            if placement is not None:
+                camera = self._whole_clipping(camera, placement)
+                planes = np.concatenate([planes, ref.normalize_clip_planes(
+                    placement.face_planes(self._volume.spacing))])
+            frame = _crop(ref.reference_raycast(self.spline, camera, (w, h), self._isovalue,
+                                                planes), (r0, r1, c0, c1))
         else:
-            frame = self._render_cl(camera, w, h, planes, hessian)
+            frame = self._render_cl(camera, w, h, planes, hessian, (r0, r1, c0, c1), placement)
         self.stats["render_s"] = time.perf_counter() - t
         return frame
+
+    def _check_placement(self, placement: Placement) -> None:
+        """Refuse a placement that does not fit this caster's volume and model."""
+        if placement.centred != (self._family == "MODEL_TYPE6"):
+            raise RayCastError(f"the brick's cells do not match the {self.model} model's "
+                               f"({'centred' if placement.centred else 'unit'} cells)")
+        for a in range(3):
+            (lo, hi), off = placement.cells[a], placement.offset[a]
+            if not (0 <= off and off + self._volume.shape[a] <= placement.shape[a]
+                    and off <= lo < hi <= off + self._cells[a]):
+                raise RayCastError(
+                    f"the brick's cells {placement.cells} are not within its samples "
+                    f"{self._volume.shape} at offset {placement.offset} of a volume of "
+                    f"{placement.shape}")
+
+    def _whole_clipping(self, camera: Camera, placement: Placement) -> Camera:
+        """``camera`` with the clipping range of the whole volume (window depths agree)."""
+        spacing = self._volume.spacing
+        bounds = [(o, o + (n - 1) * s) for o, n, s in zip(
+            placement.origin, placement.shape, spacing, strict=True)]
+        return Camera(camera.position, camera.focal_point, camera.view_up, camera.view_angle,
+                      camera.fit_clipping_range(bounds))
 
     def _cache_args(self) -> list:
         """Kernel arguments of the classification cache: slots, pool, capacity, epoch, the
@@ -801,16 +865,33 @@ class RayCaster:
         used = int(self._counts[2:3].get(queue=q)[0])
         self._counts[2:3].set(np.array([min(used, old)], np.int32), queue=q)
 
-    def _render_cl(self, camera, w, h, planes, hessian: bool = False) -> ref.Frame:
+    def _render_cl(self, camera, w, h, planes, hessian: bool = False, window=None,
+                   placement: Placement | None = None) -> ref.Frame:
         import pyopencl.array as cla
         from pyopencl import cltypes
 
         dev = self._device
         q = dev.queue
-        k_ray = self._ray_kernel("raycast")
+        k_ray = self._ray_kernel("raycast", bricks=placement is not None)
         vol = self._volume
+        r0, r1, c0, c1 = (0, h, 0, w) if window is None else window
+        ww, wh = c1 - c0, r1 - r0
+        if ww == 0 or wh == 0:
+            return _empty_frame(wh, ww, hessian)
+        # a brick casts in the whole volume's index space (the same floats as a single cast)
+        if placement is None:
+            origin = np.asarray(vol.origin, dtype=np.float64)
+            shape = vol.shape
+            grid = hi = self._cells
+            lo = off = (0, 0, 0)
+        else:
+            camera = self._whole_clipping(camera, placement)
+            origin = np.asarray(placement.origin, dtype=np.float64)
+            shape = placement.shape
+            grid = tuple(n - 1 + (self._family == "MODEL_TYPE6") for n in shape)
+            lo, hi = zip(*placement.cells, strict=True)
+            off = placement.offset
         spacing = np.asarray(vol.spacing, dtype=np.float64)
-        origin = np.asarray(vol.origin, dtype=np.float64)
         right, up, dop = camera.basis()
         tan_half = np.tan(np.radians(camera.view_angle) / 2.0)
         eye = np.asarray(camera.position, dtype=np.float64)
@@ -827,7 +908,10 @@ class RayCaster:
         def f3(v):
             return cltypes.make_float3(*(float(x) for x in v))
 
-        n = w * h
+        def i3(v):
+            return cltypes.make_int3(*(int(x) for x in v))
+
+        n = ww * wh
         hit = cla.empty(q, n, np.uint8)
         pos = cla.empty(q, (n, 4), np.float32)
         nor = cla.empty(q, (n, 4), np.float32)
@@ -835,7 +919,7 @@ class RayCaster:
         color = cla.empty(q, (n, 4), np.uint8)
         # one float8 per pixel only when asked for (32 bytes a pixel otherwise unused)
         hess = cla.empty(q, (n if hessian else 1, 8), np.float32)
-        nx, ny, nz = vol.shape
+        nx, ny, nz = shape
         model_args = []
         if self._family == "MODEL_TYPE6":
             model_args = [*self._cache_args(), self._stencil.data, *(a.data for a in self._tet_csr),
@@ -852,36 +936,69 @@ class RayCaster:
         # per work-group size, and one chosen from each frame size made every new preview
         # size a 0.2-0.5 s compile in the middle of a drag
         gx, gy = RAY_GROUP
-        k_ray(q, (-(-w // gx) * gx, -(-h // gy) * gy), RAY_GROUP, self._data.data,
+        k_ray(q, (-(-ww // gx) * gx, -(-wh // gy) * gy), RAY_GROUP, self._data.data,
               np.int32(nx), np.int32(ny), np.int32(nz),
               np.int32(self._strides[0]), np.int32(self._strides[1]),
-              *(np.int32(c) for c in self._cells), np.float32(shift),
+              i3(grid), i3(lo), i3(hi), i3(off), np.float32(shift),
               self._bounds.data, self._levels_buf.data, np.int32(len(self._levels)),
               *model_args, np.float32(self._isovalue), f3(eye_u), f3(dop),
               f3(right * tan_half * w / h), f3(up * tan_half), f3(1.0 / spacing),
               planes_buf.data, np.int32(len(planes)), np.float32(depth_a),
               np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data,
-              np.int32(bool(hessian)), hess.data, np.int32(w), np.int32(h))
+              np.int32(bool(hessian)), hess.data, np.int32(w), np.int32(h), np.int32(c0),
+              np.int32(r0), np.int32(ww), np.int32(wh))
         if self._family in CACHED:
             cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
             if self.stats.get("classified") == "visible":
                 self.stats.update(active_cells=cells, active_tets=tets)
             self._grow_pool(asked)
-        hit_h = hit.get(queue=q).astype(bool).reshape(h, w)
-        pos_h = pos.get(queue=q).reshape(h, w, 4)
-        position = np.where(hit_h[..., None], origin + spacing * pos_h[..., :3].astype(np.float64),
-                            np.nan)
-        normal = nor.get(queue=q).reshape(h, w, 4)[..., :3].astype(np.float64)
+        hit_h = hit.get(queue=q).astype(bool).reshape(wh, ww)
+
+        def position():
+            pos_h = pos.get(queue=q).reshape(wh, ww, 4)
+            return np.where(hit_h[..., None],
+                            origin + spacing * pos_h[..., :3].astype(np.float64), np.nan)
+
+        def normal():
+            return nor.get(queue=q).reshape(wh, ww, 4)[..., :3].astype(np.float64)
+
         hess_w = grad_norm = None
         if hessian:
-            hv = hess.get(queue=q).reshape(h, w, 8).astype(np.float64)
-            i, j = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
-            hess_w = np.empty((h, w, 3, 3))
-            hess_w[..., i, j] = hv[..., :6]
-            hess_w[..., j, i] = hv[..., :6]
-            grad_norm = hv[..., 6]
-        return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(h, w),
-                         color.get(queue=q).reshape(h, w, 4), hess_w, grad_norm)
+            hess_w, grad_norm = _world_hessian(hess.get(queue=q).reshape(wh, ww, 8))
+        return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(wh, ww),
+                         color.get(queue=q).reshape(wh, ww, 4), hess_w, grad_norm)
+
+
+def _world_hessian(hv: np.ndarray):
+    """(H, W, 3, 3) symmetric Hessians and (H, W) gradient norms from the kernel's (H, W, 8)
+    rows (xx, yy, zz, xy, xz, yz, |grad|, 0)."""
+    hv = hv.astype(np.float64)
+    i, j = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+    hess_w = np.empty((*hv.shape[:2], 3, 3))
+    hess_w[..., i, j] = hv[..., :6]
+    hess_w[..., j, i] = hv[..., :6]
+    return hess_w, hv[..., 6]
+
+
+def _empty_frame(h: int, w: int, hessian: bool) -> ref.Frame:
+    """A frame of ``h`` x ``w`` pixels without hits (an empty window has none)."""
+    bg = [*(int(round(v * 255)) for v in ref.BACKGROUND), 255]
+    return ref.Frame(np.zeros((h, w), bool), np.full((h, w, 3), np.nan),
+                     np.full((h, w, 3), np.nan), np.ones((h, w), np.float32),
+                     np.tile(np.asarray(bg, np.uint8), (h, w, 1)),
+                     np.full((h, w, 3, 3), np.nan) if hessian else None,
+                     np.full((h, w), np.nan) if hessian else None)
+
+
+def _crop(frame: ref.Frame, window) -> ref.Frame:
+    """The pixels of ``window`` (r0, r1, c0, c1) of a frame."""
+    r0, r1, c0, c1 = window
+    if (r0, c0) == (0, 0) and (r1, c1) == frame.hit.shape:
+        return frame
+    sl = (slice(r0, r1), slice(c0, c1))
+    return ref.Frame(*(None if v is None else v[sl] for v in (
+        frame.hit, frame.position, frame.normal, frame.depth, frame.color, frame.hessian,
+        frame.gradient_norm)))
 
 
 def _to_k(model_kwargs: dict) -> float:

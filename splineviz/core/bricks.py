@@ -8,6 +8,12 @@ not the data boundary (the ghost layers its spline model reads beyond a box, the
 volume). So the spline on a brick's own box is the global spline, and the first hit of a ray
 is the nearest of the bricks' first hits inside their own boxes.
 
+A brick owns whole cells of the ray caster's grid (:meth:`BrickGrid.cells`): the unit cells
+between its samples, or, for models whose cells are cubes centred at the samples (type-6),
+the cubes centred at its samples but the last (which its neighbour owns). It is ray cast in
+the whole volume's coordinates (:class:`Placement`), so its rays compute, cell for cell, the
+floats a single ray cast of the whole volume computes.
+
 All boxes are in sample index space: ``inner`` are closed ranges ``[a, b]`` (the brick's
 box, world ``origin + [a, b] * spacing``), ``read`` half-open ranges ``[r0, r1)``.
 """
@@ -51,6 +57,56 @@ class Brick:
         return any(r0 == 0 or r1 == n for (r0, r1), n in zip(self.read, shape, strict=True))
 
 
+@dataclass(frozen=True)
+class Placement:
+    """Where a brick lies in the whole volume: what a ray caster of the brick's samples needs
+    to cast it in the whole volume's index space (the same eye, entry points and cell
+    boundaries as one cast of the whole volume; :meth:`RayCaster.render
+    <splineviz.compute.raycast.RayCaster.render>`).
+
+    Attributes
+    ----------
+    shape : (3,) int
+        Samples of the whole volume.
+    origin : (3,) float
+        World origin of the whole volume.
+    offset : (3,) int
+        Whole-volume index of the brick's first sample (the start of its read box).
+    cells : ((lo, hi), (lo, hi), (lo, hi)) int
+        Half-open ranges of the whole volume's cells the brick's rays traverse.
+    centred : bool
+        Cells are cubes centred at the samples (cell c covers ``[c - 1/2, c + 1/2)``), not
+        the unit cells between them (``[c, c + 1)``).
+    """
+
+    shape: tuple
+    origin: tuple
+    offset: tuple
+    cells: tuple
+    centred: bool = False
+
+    def box(self) -> np.ndarray:
+        """(3, 2) index-space box of the brick's cells within the data box ``[0, n - 1]``."""
+        shift = 0.5 if self.centred else 0.0
+        return np.array([(max(lo - shift, 0.0), min(hi - shift, n - 1.0))
+                         for (lo, hi), n in zip(self.cells, self.shape, strict=True)])
+
+    def face_planes(self, spacing) -> list:
+        """Clip planes ``(origin, normal)`` (world) keeping :meth:`box`, on the faces inside
+        the volume only: the restriction of a cast in the brick's own coordinates (the NumPy
+        path), the same hits up to the rounding of those coordinates."""
+        box = np.asarray(self.origin, float)[:, None] + self.box() * np.asarray(
+            spacing, float)[:, None]
+        planes = []
+        for a, (lo, hi) in enumerate(self.box()):
+            e = np.eye(3)[a]
+            if lo > 0:
+                planes.append((tuple(e * box[a, 0]), tuple(e)))
+            if hi < self.shape[a] - 1:
+                planes.append((tuple(e * box[a, 1]), tuple(-e)))
+        return planes
+
+
 class BrickGrid:
     """The bricks of a ``shape`` volume (see module docstring).
 
@@ -66,6 +122,10 @@ class BrickGrid:
         The model's lattice period (:attr:`ModelSpec.lattice_period`): brick sizes and the
         starts of read boxes are multiples of it, so every brick's partition is the global
         one (a truncated-octahedral spline of a box starting at an odd offset differs).
+    centred : bool
+        The ray caster's cells are cubes centred at the samples
+        (:attr:`ModelSpec.centred_cells`): a brick owns the cubes of its samples but the
+        last, which the next brick owns (at the volume's end: it too).
 
     Examples
     --------
@@ -76,8 +136,9 @@ class BrickGrid:
     (((4, 8), (0, 4), (0, 4)), ((3, 9), (0, 6), (0, 5)))
     """
 
-    def __init__(self, shape, size, halo: int, align: int = 1):
+    def __init__(self, shape, size, halo: int, align: int = 1, centred: bool = False):
         self.shape = tuple(int(n) for n in shape)
+        self.centred = bool(centred)
         align = max(1, int(align))
         self.size = tuple(-(-int(s) // align) * align for s in np.broadcast_to(size, 3))
         if min(self.shape) < 2 or min(self.size) < 1 or halo < 0:
@@ -97,11 +158,12 @@ class BrickGrid:
             self._bricks[idx] = Brick(idx, inner, read)
 
     @classmethod
-    def split(cls, shape, counts, halo: int, align: int = 1) -> BrickGrid:
+    def split(cls, shape, counts, halo: int, align: int = 1, centred: bool = False
+              ) -> BrickGrid:
         """A grid of ``counts`` bricks per axis (as equal as the cells allow)."""
         counts = np.broadcast_to(np.asarray(counts, int), 3)
         size = [-(-(n - 1) // c) for n, c in zip(shape, counts, strict=True)]
-        return cls(shape, size, halo, align)
+        return cls(shape, size, halo, align, centred)
 
     def __len__(self) -> int:
         return len(self._bricks)
@@ -112,24 +174,23 @@ class BrickGrid:
     def __getitem__(self, index) -> Brick:
         return self._bricks[tuple(index)]
 
-    def world_box(self, brick: Brick, spacing, origin) -> np.ndarray:
-        """(3, 2) world bounds of the brick's own box."""
-        inner = np.asarray(brick.inner, dtype=np.float64)
-        return np.asarray(origin, float)[:, None] + inner * np.asarray(spacing, float)[:, None]
+    def cells(self, brick: Brick) -> tuple:
+        """Half-open ranges of the ray caster's cells the brick owns, per axis (together the
+        bricks own every cell once)."""
+        return tuple((lo, n if self.centred and hi == n - 1 else hi)
+                     for (lo, hi), n in zip(brick.inner, self.shape, strict=True))
 
-    def face_planes(self, brick: Brick, spacing, origin) -> list:
-        """Clip planes ``(origin, normal)`` keeping the brick's own box, on the faces inside
-        the volume only (at the data boundary the ray caster's own box test is exact)."""
-        box = self.world_box(brick, spacing, origin)
-        planes = []
-        for a in range(3):
-            (lo, hi), n = brick.inner[a], self.shape[a]
-            e = np.eye(3)[a]
-            if lo > 0:
-                planes.append((tuple(e * box[a, 0]), tuple(e)))
-            if hi < n - 1:
-                planes.append((tuple(e * box[a, 1]), tuple(-e)))
-        return planes
+    def placement(self, brick: Brick, origin) -> Placement:
+        """The brick's :class:`Placement` in the volume of origin ``origin``."""
+        return Placement(self.shape, tuple(float(o) for o in origin),
+                         tuple(r0 for r0, _ in brick.read), self.cells(brick), self.centred)
+
+    def world_box(self, brick: Brick, spacing, origin) -> np.ndarray:
+        """(3, 2) world bounds of the part of the volume the brick's cells cover (its own box;
+        with centred cells shifted by half a cell, within the data box): its rays' hits lie
+        in it."""
+        box = self.placement(brick, origin).box()
+        return np.asarray(origin, float)[:, None] + box * np.asarray(spacing, float)[:, None]
 
     def visibility_order(self, eye, spacing, origin) -> list[Brick]:
         """Bricks front to back as seen from ``eye`` (world point).
@@ -146,7 +207,10 @@ class BrickGrid:
         """Brick index -> sum over the axes of the brick steps from the eye's slab (the key of
         :meth:`visibility_order`: a brick hides only bricks of larger keys)."""
         u = (np.asarray(eye, float) - np.asarray(origin, float)) / np.asarray(spacing, float)
-        slab = [int(np.searchsorted(self.cuts[a][1:-1], u[a], side="right"))
+        # the planes between bricks' cells: at the cuts, half a cell before them when centred
+        shift = 0.5 if self.centred else 0.0
+        slab = [int(np.searchsorted(np.asarray(self.cuts[a][1:-1]) - shift, u[a],
+                                    side="right"))
                 if 0 <= u[a] <= self.shape[a] - 1
                 else (-1 if u[a] < 0 else self.counts[a]) for a in range(3)]
         return {b.index: sum(abs(m - s) for m, s in zip(b.index, slab, strict=True))

@@ -1,7 +1,7 @@
 """Sort-last compositing of ray-cast bricks into one frame (as IceT does for ParaView).
 
-Each brick's ray caster returns a :class:`Fragment`: its first hits, clipped to the brick's
-own box, cropped to the rectangle of pixels that have one. Because the ray caster gives exact
+Each brick's ray caster returns a :class:`Fragment`: its first hits in the brick's own cells,
+cropped to the rectangle of pixels that have one. Because the ray caster gives exact
 window depth per pixel and the bricks do not overlap, the first hit of the whole volume is
 the brick hit of least depth (:meth:`Composite.add_nearest`, any arrival order), or, painting
 fragments in back-to-front brick order, the last one painted (:meth:`Composite.paint`, the
@@ -42,15 +42,26 @@ class Fragment:
     stats: dict = field(default_factory=dict)
 
     @classmethod
-    def from_frame(cls, index, frame: Frame, stats=None) -> Fragment:
-        """Crop a brick's full-size frame to the bounding rectangle of its hits."""
+    def from_frame(cls, index, frame: Frame, stats=None, offset=(0, 0)) -> Fragment:
+        """Crop a brick's frame to the bounding rectangle of its hits.
+
+        Parameters
+        ----------
+        index : (3,) int
+        frame : Frame
+            The whole frame, or a window of it whose first pixel is at ``offset``.
+        stats : dict, optional
+        offset : (row, column) of the frame's first pixel in the whole frame
+        """
         rows = np.flatnonzero(frame.hit.any(axis=1))
         cols = np.flatnonzero(frame.hit.any(axis=0))
         if rows.size == 0:
+            r0 = r1 = c0 = c1 = 0
             rect = (0, 0, 0, 0)
         else:
-            rect = (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
-        r0, r1, c0, c1 = rect
+            r0, r1, c0, c1 = int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+            dr, dc = (int(v) for v in offset)
+            rect = (r0 + dr, r1 + dr, c0 + dc, c1 + dc)
         crop = (slice(r0, r1), slice(c0, c1))
         return cls(tuple(index), rect, frame.hit[crop].copy(), frame.depth[crop].copy(),
                    frame.position[crop].copy(), frame.normal[crop].copy(),

@@ -17,8 +17,6 @@ Conventions: world coordinates; images ``(H, W)`` with row 0 at the top; see
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from splineviz.core.camera import Camera, parse_size
@@ -44,7 +42,6 @@ BACKGROUND = (0.10, 0.10, 0.14)
 BISECTION_STEPS = 52
 
 
-@dataclass
 class Frame:
     """One rendered image of an isosurface (DESIGN.md, ``RayCaster.render``).
 
@@ -58,15 +55,46 @@ class Frame:
     hessian : (H, W, 3, 3) float64 world Hessian of the spline at the hit, or None
         (only when asked for, and only by the OpenCL ray caster; NaN where no hit)
     gradient_norm : (H, W) float64 |grad s| at the hit, or None (with ``hessian``)
+
+    Notes
+    -----
+    ``position`` and ``normal`` may be given as functions of no argument that return the
+    array: they are then called on first access. Drawing a frame needs only its colour and
+    depth, so the OpenCL ray caster leaves positions and normals on the device until
+    something (picking, colour by, a test) reads them: at 1920x1080 converting them took
+    ~130 ms of a frame whose kernel ran in 1-30 ms on a GPU.
     """
 
-    hit: np.ndarray
-    position: np.ndarray
-    normal: np.ndarray
-    depth: np.ndarray
-    color: np.ndarray
-    hessian: np.ndarray | None = None
-    gradient_norm: np.ndarray | None = None
+    __slots__ = ("hit", "_position", "_normal", "depth", "color", "hessian", "gradient_norm")
+
+    def __init__(self, hit, position, normal, depth, color, hessian=None, gradient_norm=None):
+        self.hit = hit
+        self._position = position
+        self._normal = normal
+        self.depth = depth
+        self.color = color
+        self.hessian = hessian
+        self.gradient_norm = gradient_norm
+
+    @property
+    def position(self) -> np.ndarray:
+        if callable(self._position):
+            self._position = self._position()
+        return self._position
+
+    @position.setter
+    def position(self, value) -> None:
+        self._position = value
+
+    @property
+    def normal(self) -> np.ndarray:
+        if callable(self._normal):
+            self._normal = self._normal()
+        return self._normal
+
+    @normal.setter
+    def normal(self, value) -> None:
+        self._normal = value
 
 
 def normalize_clip_planes(clip_planes) -> np.ndarray:

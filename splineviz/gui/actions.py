@@ -104,6 +104,13 @@ def build_actions(window) -> dict[str, QAction]:
     grid.setCheckable(True)
     grid.setChecked(window.scene.view.show_scale)
     acts["grid"] = grid
+    split = _action(window, "&Split view (linked cameras)",
+                    lambda on: window.linked_views.set_split(on), menu=v, shortcut="F7",
+                    tip="Two views side by side with one camera, each with its own "
+                        "isosurfaces: compare spline models or isovalues")
+    split.setCheckable(True)
+    split.setChecked(window.scene.view.split)  # LinkedViews keeps it in step afterwards
+    acts["split"] = split
     window.panels_menu = v.addMenu("&Panels")
 
     t = window.menuBar().addMenu("&Tools")

@@ -39,6 +39,7 @@ from splineviz.gui.panels import (
     Smoother,
     SmoothingPanel,
 )
+from splineviz.gui.split import LinkedViews
 from splineviz.gui.view import View3D
 from splineviz.model import Scene
 
@@ -87,20 +88,23 @@ class MainWindow(QMainWindow):
         self._closed = False
         self.jobs = JobRunner(self)
         start_process_server()  # remeshing forks from it later, not from this process
-        self.view = View3D(self.scene, self, device=device, min_size=size)
+        self.view = View3D(self.scene, self, device=device, min_size=size, side="left")
         self.plotter = self.view.plotter
         self.spline_scene = self.view.spline_scene
-        self.setCentralWidget(self.plotter)
         self.commands = Commands(self.scene, self.jobs, self)
         self.smoother = Smoother(self.scene, self.jobs, device)
         self.plane_widgets = PlaneWidgets(self.scene, self.plotter, self.view.request_render)
         self._build_panels()
         self.actions_by_name = build_actions(self)
         self._build_status()
+        # after the status bar: a split restored with the scene connects to its labels
+        self.linked_views = LinkedViews(self)
+        self.setCentralWidget(self.linked_views.splitter)
         self.jobs.changed.connect(self._jobs_changed)
         self.jobs.error.connect(self.show_error)
         self.jobs.message.connect(lambda m: self.statusBar().showMessage(m, 4000))
         self.view._refiner.error.connect(self.show_error)
+        # the first view tells a second one of the drag (LinkedViews)
         self.iso_panel.histogram.pressed.connect(self.view.begin_interaction)
         self.iso_panel.histogram.released.connect(self.view.end_interaction)
         self.commands.opened.connect(self._opened)
@@ -370,8 +374,16 @@ class MainWindow(QMainWindow):
         raise TimeoutError(f"background work did not finish in {timeout_s:g} s: "
                            f"{len(self.jobs.jobs)} job(s) running")
 
+    @property
+    def view2(self) -> View3D | None:
+        """The right-hand view while the scene is split (View > Split view), else None."""
+        return self.linked_views.second
+
     def wait_for_refine(self, timeout_s: float = 120.0) -> None:
-        self.view.wait_for_refine(timeout_s)
+        """Process events until every view shows exact frames."""
+        end = time.perf_counter() + timeout_s
+        for view in self.linked_views.views:
+            view.wait_for_refine(max(end - time.perf_counter(), 0.0))
 
     def request_render(self) -> None:
         self.view.request_render()
@@ -383,6 +395,7 @@ class MainWindow(QMainWindow):
         exception", from pocl's threads): the app calls this before it exits."""
         end = time.perf_counter() + timeout_s
         ok = self.view.join(timeout_s)
+        ok = self.linked_views.join(max(end - time.perf_counter(), 0.0)) and ok
         ok = self.jobs.join(max(end - time.perf_counter(), 0.0)) and ok
         return ok
 
@@ -428,5 +441,6 @@ class MainWindow(QMainWindow):
             box.close()
         self.plane_widgets.close()
         self.log.close_log()
+        self.linked_views.close()
         self.view.close()
         super().closeEvent(event)

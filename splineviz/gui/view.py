@@ -36,24 +36,44 @@ class View3D(QObject):
         What is under the cursor ("" when nothing).
     busy(str)
         A message while exact frames are computed ("" when done).
+    interacting(bool)
+        A camera drag (or an isovalue drag) began (True) or ended (False): a linked view
+        shows previews meanwhile (:meth:`follow_interaction`).
+    activated()
+        A mouse button was pressed in the view (the user turned to it).
+
+    Parameters
+    ----------
+    scene : Scene
+    parent_widget : QWidget
+    device : str or None
+        OpenCL device preference.
+    min_size : (width, height) or None
+    side : {None, "left", "right"}
+        The side of a split view this view is (see :class:`SceneView`).
     """
 
     frame_rendered = Signal(float)
     readout = Signal(str)
     busy = Signal(str)
+    interacting = Signal(bool)
+    activated = Signal()
 
-    def __init__(self, scene: Scene, parent_widget, device=None, min_size=None):
+    def __init__(self, scene: Scene, parent_widget, device=None, min_size=None,
+                 side: str | None = None):
         super().__init__(parent_widget)
         from pyvistaqt import QtInteractor
 
         self.scene = scene
+        self.side = side
         # no multisampling: on software GL (llvmpipe) 4x MSAA cost ~80 ms of a 1024x768
         # frame (113 -> 33 ms measured); the ray-cast image is one sample per pixel anyway
         self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0)
         self.plotter.enable_anti_aliasing = None
         if min_size is not None:
             self.plotter.setMinimumSize(*min_size)
-        self.scene_view = SceneView(scene, self.plotter, progressive=True, device=device)
+        self.scene_view = SceneView(scene, self.plotter, progressive=True, device=device,
+                                    side=side)
         self.spline_scene = self.scene_view.spline_scene
         self.spline_scene.request_refine = self._schedule_refine
         self._axes = self.plotter.add_axes()
@@ -135,10 +155,22 @@ class View3D(QObject):
 
     def _interaction_started(self, *_):
         self.spline_scene.set_interacting(True)
+        self.interacting.emit(True)
 
     def _interaction_ended(self, *_):
         self.spline_scene.set_interacting(False)
         self._render_now()  # schedules the exact frames
+        self.interacting.emit(False)
+
+    def follow_interaction(self, on: bool) -> None:
+        """A linked view's drag began or ended: previews only meanwhile (an exact frame
+        started here would compete for the device with the previews of both views), the
+        exact frames once it ended — after the camera it last showed reached this view."""
+        if self._closed:
+            return
+        self.spline_scene.set_interacting(on)
+        if not on:
+            self.request_render()
 
     def begin_interaction(self) -> None:
         """A drag outside the view started (the isovalue slider): previews only, no exact
@@ -237,7 +269,9 @@ class View3D(QObject):
 
     def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
         if obj is self.plotter:
-            if event.type() == QEvent.Type.MouseMove and not event.buttons():
+            if event.type() == QEvent.Type.MouseButtonPress:
+                self.activated.emit()
+            elif event.type() == QEvent.Type.MouseMove and not event.buttons():
                 p = event.position()
                 self._cursor = (p.x(), p.y())
                 self._readout_timer.start()

@@ -13,6 +13,7 @@ from splineviz.model.nodes import (
     MATERIALS,
     MAX_SIGMA,
     PALETTE,
+    SIDES,
     CameraNode,
     ClipPlaneNode,
     IsosurfaceNode,
@@ -26,6 +27,7 @@ from splineviz.model.nodes import (
 )
 from splineviz.model.scene import STANDARD_VIEWS, Scene
 
-__all__ = ["MATERIALS", "MAX_SIGMA", "PALETTE", "STANDARD_VIEWS", "CameraNode", "ClipPlaneNode",
-           "IsosurfaceNode", "MeshNode", "ModelError", "Node", "PointsNode", "Scene",
+__all__ = ["MATERIALS", "MAX_SIGMA", "PALETTE", "SIDES", "STANDARD_VIEWS", "CameraNode",
+           "ClipPlaneNode", "IsosurfaceNode", "MeshNode", "ModelError", "Node", "PointsNode",
+           "Scene",
            "SectionNode", "ViewNode", "VolumeNode"]

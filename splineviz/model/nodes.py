@@ -16,7 +16,7 @@ only at the render/io boundary).
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from psygnal import EventedModel
@@ -44,6 +44,10 @@ MATERIALS = {
 }
 #: the widest range of smoothing sigmas offered (voxels)
 MAX_SIGMA = 8.0
+#: where an object shows while the view is split in two (:attr:`ViewNode.split`): in both
+#: views, or only in the left or the right one (3D Slicer's per-view visibility)
+SIDES = ("both", "left", "right")
+Side = Literal["both", "left", "right"]
 
 
 class ModelError(SplinevizError, ValueError):
@@ -164,6 +168,8 @@ class IsosurfaceNode(Node):
     color_volume_id: str | None = None
     #: the isosurface node whose surface the distance is measured to (``"distance"``)
     color_isosurface_id: str | None = None
+    #: the view it shows in while the view is split (:data:`SIDES`)
+    shown_in: Side = "both"
 
     @field_validator("color_by", "color_map", "color_range", "model")
     @classmethod
@@ -201,6 +207,7 @@ class PointsNode(Node):
     color: RGB = (0.85, 0.85, 0.9)
     point_size: Annotated[float, Field(gt=0.0, le=100.0, allow_inf_nan=False)] = 3.0
     opacity: Unit = 1.0
+    shown_in: Side = "both"
     data: PointCloud | None = Field(default=None, exclude=True, repr=False)
 
 
@@ -219,6 +226,7 @@ class MeshNode(Node):
     color: RGB = (0.75, 0.85, 0.95)
     opacity: Unit = 1.0
     show_edges: bool = True
+    shown_in: Side = "both"
     vertices: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     faces: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     normals: np.ndarray | None = Field(default=None, exclude=True, repr=False)
@@ -303,12 +311,15 @@ class CameraNode(Node):
 
 
 class ViewNode(Node):
-    """What the view shows around the objects: background, axes, scale bar."""
+    """What the view shows around the objects: background, axes, scale bar, and whether it
+    is split into two side-by-side views with one camera (ParaView's "Link Camera"), each
+    showing the objects whose ``shown_in`` names its side or ``"both"``."""
 
     kind: str = Field(default="view", exclude=True, frozen=True)
     background: RGB = (0.10, 0.10, 0.14)
     show_axes: bool = True
     show_scale: bool = True
+    split: bool = False
 
 
 #: session object type -> node class (the one table the session conversion reads)

@@ -146,6 +146,40 @@ class Scene:
             return [p.as_pair() for p in self.clip_planes if p.enabled and p.volume_id is None]
         return []
 
+    def shows(self, node: Node, side: str | None) -> bool:
+        """Whether the view on ``side`` (``"left"``, ``"right"``; None: the single view)
+        shows ``node`` by the split's rule: while :attr:`ViewNode.split` is on, an object
+        whose ``shown_in`` names the other side is left out, and a section shows where one
+        of its isosurfaces does. Visibility flags are not looked at here."""
+        if side is None or not self.view.split:
+            return True
+        if isinstance(node, SectionNode):
+            isos = [self._nodes.get(i) for i in node.inputs]
+            isos = [n for n in isos if isinstance(n, IsosurfaceNode)]
+            return not isos or any(self.shows(n, side) for n in isos)
+        return getattr(node, "shown_in", "both") in ("both", side)
+
+    def compare(self, isosurface: IsosurfaceNode, model: str | None = None,
+                isovalue: float | None = None, *, distance: bool = False) -> IsosurfaceNode:
+        """Split the view to compare ``isosurface`` with a copy of it in another spline model
+        or at another isovalue: the original shows on the left, the copy on the right, the
+        cameras are one. ``model`` defaults to trilinear (the baseline) for a smooth model
+        and to :func:`default_model` for trilinear; ``distance`` also colours the original
+        by its distance to the copy. Returns the copy."""
+        if model is None:
+            model = "trilinear" if isosurface.model != "trilinear" else default_model()
+        props = isosurface.model_dump(exclude={"id", "name", "kind", "model", "isovalue",
+                                               "shown_in", "volume_id", "visible"})
+        copy = self.add(IsosurfaceNode(
+            volume_id=isosurface.volume_id, model=model,
+            isovalue=isosurface.isovalue if isovalue is None else float(isovalue),
+            name=f"{isosurface.name} ({model})", shown_in="right", **props))
+        isosurface.shown_in = "left"
+        if distance:
+            isosurface.update(color_by="distance", color_isosurface_id=copy.id)
+        self.view.split = True
+        return copy
+
     def bounds(self) -> tuple | None:
         """``((xmin, xmax), (ymin, ymax), (zmin, zmax))`` of all data, or None when empty."""
         boxes = []

@@ -19,7 +19,14 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.io.errors import SessionError
-from splineviz.io.session import CameraState, Session, load_session, save_session
+from splineviz.io.session import (
+    CameraState,
+    Layout,
+    Session,
+    View,
+    load_session,
+    save_session,
+)
 from splineviz.model.nodes import (
     ClipPlaneNode,
     IsosurfaceNode,
@@ -119,6 +126,14 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
     view.background = scene.view.background
     view.show_axes = scene.view.show_axes
     view.show_scale = scene.view.show_scale
+    if scene.view.split:
+        # the split as two views side by side with one camera; each hides the objects
+        # shown only on the other side
+        right = View(**view.model_dump(exclude={"id", "layout", "hidden"}), id="view2",
+                     layout=Layout(col=1))
+        view.hidden = [n.id for n in scene if getattr(n, "shown_in", None) == "right"]
+        right.hidden = [n.id for n in scene if getattr(n, "shown_in", None) == "left"]
+        s.views.append(right)
     return s
 
 
@@ -280,6 +295,7 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
                                   other_id=None if is_plane else second, color=p.color,
                                   line_width=p.line_width, visible=p.visible, **common))
     view = session.views[0]
+    _apply_split(scene, session)
     c = view.camera
     scene.camera.update(position=c.position, focal_point=c.focal_point, view_up=c.view_up,
                         view_angle=c.view_angle, parallel_projection=c.parallel_projection,
@@ -288,6 +304,26 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
                       show_scale=view.show_scale)
     scene.mark_saved()
     return scene
+
+
+def _apply_split(scene: Scene, session: Session) -> None:
+    """Two or more views: the scene's split, the left one the view in the first column
+    (the first view when none is), the right one the first other view; an object hidden
+    in one of them and not in the other shows only in the other. Hiding lists of a single
+    view are not read (the scene has no per-view hiding outside a split)."""
+    views = session.views
+    if len(views) < 2:
+        scene.view.split = False
+        return
+    left = next((v for v in views if v.layout.col == 0), views[0])
+    right = next(v for v in views if v is not left)
+    hidden_left, hidden_right = set(left.hidden), set(right.hidden)
+    for node in scene:
+        if hasattr(node, "shown_in"):
+            in_left, in_right = node.id not in hidden_left, node.id not in hidden_right
+            node.shown_in = ("left" if in_left and not in_right else
+                             "right" if in_right and not in_left else "both")
+    scene.view.split = True
 
 
 def load_scene(path, *, repoint=None, scene: Scene | None = None,

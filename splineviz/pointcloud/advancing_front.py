@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from splineviz.core.errors import SplinevizError
-from splineviz.pointcloud.projection import small_median
+from splineviz.pointcloud import front_kernels as fk
 
 #: a front angle below this (radians) is an ear: close it before growing
 EAR_ANGLE = np.deg2rad(75.0)
@@ -66,7 +66,9 @@ RELAXED_RADIUS = 1.3
 #: ear angle limit after RETRIES failures
 RELAXED_EAR_ANGLE = np.deg2rad(110.0)
 #: new seeds are placed at input points farther than this many target lengths from the mesh
-SEED_DISTANCE = 1.5
+#: vertices (inside a triangle of the front a point is at most ~0.6 of its longest side from
+#: a corner): thin parts that the fronts around them could not enter get fronts of their own
+SEED_DISTANCE = 1.0
 #: ... when at least this many input points are that far (a region the fronts did not reach)
 SEED_MIN_POINTS = 10
 #: at most this many seeds (connected components)
@@ -74,7 +76,9 @@ MAX_SEEDS = 64
 #: the front stops (stats.truncated) beyond this many vertices per input point
 VERTEX_BUDGET = 2
 #: given-up edges are retried this many times, each time with REFINE_FACTOR shorter edges
-REFINE_PASSES = 2
+#: (on Lucy a second pass of 0.36 times the length gave up again around the same thin parts
+#: and left 4.7 times the border edges in holes too long to fill, for 23 % more steps)
+REFINE_PASSES = 1
 REFINE_FACTOR = 0.6
 #: front loops left with at most this many edges are filled at the end (unless they are
 #: borders of the scan); the optimal triangulation costs O(edges^3)
@@ -89,6 +93,12 @@ FAN_SLACK = 0.7
 #: COVER_MARGIN) less than COVER_HEIGHT of the candidate's longest side away from it
 COVER_MARGIN = 0.02
 COVER_HEIGHT = 0.3
+#: initial number of front edges per vertex and direction the adjacency arrays hold (they
+#: widen when a vertex lies on more front loops)
+FRONT_DEGREE = 8
+#: the apexes of up to this many front edges next in the queue are predicted and projected in
+#: one call (the projection's fixed cost per call dwarfs its cost per point)
+PREDICT_BATCH = 64
 
 
 class FrontError(SplinevizError, RuntimeError):
@@ -176,22 +186,6 @@ def simple_loops(loop):
     return [part for part in out if len(part) >= 3]
 
 
-def _segments_cross(p, q, r, s):
-    """Whether 2-D segments pq and rs cross properly (shared endpoints excluded by caller).
-
-    ``p, q`` : (2,) one segment; ``r, s`` : (E, 2) many segments.  Returns (E,) bool.
-    """
-    def orient(a, b, c):
-        return (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (
-            c[..., 0] - a[..., 0])
-
-    d1 = orient(r, s, p)
-    d2 = orient(r, s, q)
-    d3 = orient(p, q, r)
-    d4 = orient(p, q, s)
-    return (d1 * d2 < 0) & (d3 * d4 < 0)
-
-
 class AdvancingFront:
     """Advancing-front mesher driven by a projector and a guidance field.
 
@@ -206,6 +200,13 @@ class AdvancingFront:
         :class:`Cancelled`.
     """
 
+    #: at most this many seeds, MAX_SEEDS when None (subclasses for surfaces of many pieces
+    #: raise it)
+    max_seeds: int | None = None
+    #: vertices per input point before the run stops, VERTEX_BUDGET when None (subclasses
+    #: whose edges may be shorter than the points' spacing raise it)
+    vertex_budget: float | None = None
+
     def __init__(self, projector, guidance, progress=None):
         self.proj = projector
         self.guide = guidance
@@ -216,6 +217,19 @@ class AdvancingFront:
         self.N = np.empty((cap, 3))
         self.L = np.empty(cap)
         self.nv = 0
+        # the front edges of each vertex as arrays for the compiled tests (the sets below
+        # serve the Python logic): ids (cap, FRONT_DEGREE), -1 padded, and counts (cap,)
+        self.out_adj = np.full((cap, FRONT_DEGREE), -1, dtype=np.int64)
+        self.in_adj = np.full((cap, FRONT_DEGREE), -1, dtype=np.int64)
+        self.out_cnt = np.zeros(cap, dtype=np.int64)
+        self.in_cnt = np.zeros(cap, dtype=np.int64)
+        # hash grids (front_kernels): front vertices by position, triangles by centroid;
+        # about two slots per input point keep the lists short
+        slots = 1 << max(10, (2 * len(projector.points)).bit_length())
+        self.vgrid = (np.full(slots, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
+                      np.full(cap, -1, dtype=np.int64), np.zeros((cap, 3), dtype=np.int64))
+        self.fgrid = (np.full(slots, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
+                      np.full(cap, -1, dtype=np.int64), np.zeros((cap, 3), dtype=np.int64))
         self.P: list[tuple[float, float, float]] = []  # positions as tuples for scalar math
         self.faces: list[tuple[int, int, int]] = []
         self.front: dict[tuple[int, int], int] = {}  # edge -> number of failed attempts
@@ -224,16 +238,25 @@ class AdvancingFront:
         self.edge_faces: dict[tuple[int, int], int] = {}
         self.length_factor = 1.0  # lowered by the refinement passes (see _retry_given_up)
         self.fan: list[float] = []  # sum of the corner angles of each vertex's triangles
-        # per triangle, for _covered: first corner, two edge vectors, unit normal, and the
-        # Gram matrix entries of the edges, (F, 15)
-        self.face_geometry = np.empty((1024, 15))
-        self.face_grid: dict[tuple[int, int, int], list[int]] = {}  # cell of centroid -> faces
+        # per triangle, for _covered: first corner, two edge vectors, unit normal, the Gram
+        # matrix entries of the edges, the centroid and the corners' largest distance from
+        # it, (F, 19)
+        self.face_geometry = np.empty((cap, 19))
         self.border: set[tuple[int, int]] = set()  # front edges no longer advanced
         self.scan_border: set[tuple[int, int]] = set()  # ... because the cloud ends there
         self.heap: list = []
+        # front edge -> (projected apex (3,), its normal (3,), whether it lies outside the
+        # cloud, the guidance length there), computed ahead in batches (see _predict)
+        self.predictions: dict[tuple[int, int], tuple] = {}
         self.counter = 0
         self.cell = float(np.max(guidance.lengths))
-        self.grid: dict[tuple[int, int, int], set] = {}
+        # the cloud's points in a grid for the border test's neighbour queries (cells of
+        # three spacings: the BORDER_NEIGHBOURS nearest lie within one or two cells)
+        self.pgrid = fk.PointGrid(projector.points, 3.0 * float(np.median(projector.scale)))
+        # the cloud's arrays in the layout the compiled border test reads
+        self._cloud = (np.ascontiguousarray(projector.points, dtype=np.float64),
+                       np.ascontiguousarray(projector.normals, dtype=np.float64),
+                       np.ascontiguousarray(projector.scale, dtype=np.float64))
         self.area_done = 0.0
         self.spacing = projector.scale
         # irregular (e.g. random) samplings have wider empty gaps between samples: the hard
@@ -245,45 +268,65 @@ class AdvancingFront:
 
     # -- bookkeeping -----------------------------------------------------------------------
     def _cell(self, x):
-        return (int(np.floor(x[0] / self.cell)), int(np.floor(x[1] / self.cell)),
-                int(np.floor(x[2] / self.cell)))
+        return (int(math.floor(x[0] / self.cell)), int(math.floor(x[1] / self.cell)),
+                int(math.floor(x[2] / self.cell)))
 
-    def _add_vertex(self, x, n):
+    def _add_vertex(self, x, n, length=None):
+        """Append vertex ``x (3,)`` with normal ``n (3,)`` and the guidance length at ``x``
+        (``length`` if known); returns its id."""
         if self.nv == len(self.V):
-            self.V = np.concatenate([self.V, np.empty_like(self.V)])
-            self.N = np.concatenate([self.N, np.empty_like(self.N)])
-            self.L = np.concatenate([self.L, np.empty_like(self.L)])
+            def grow(a, fill):
+                return np.concatenate([a, np.full_like(a, fill)])
+
+            self.V, self.N, self.L = grow(self.V, 0.0), grow(self.N, 0.0), grow(self.L, 0.0)
+            self.out_adj, self.in_adj = grow(self.out_adj, -1), grow(self.in_adj, -1)
+            self.out_cnt, self.in_cnt = grow(self.out_cnt, 0), grow(self.in_cnt, 0)
+            head, nxt, prv, cells = self.vgrid
+            self.vgrid = (head, grow(nxt, -1), grow(prv, -1), grow(cells, 0))
         i = self.nv
         self.V[i], self.N[i] = x, n
         self.P.append(tuple(float(c) for c in x))
-        self.L[i] = self.length_factor * float(self.guide(x[None])[0])
+        if length is None:
+            length = float(self.guide(x[None])[0])
+        self.L[i] = self.length_factor * length
         self.nv += 1
         self.out_nb.append(set())
         self.in_nb.append(set())
         self.fan.append(0.0)
         return i
 
+    def _adj_add(self, side, u, w):
+        """Append ``w`` to the ``side`` ("out" or "in") front edges of ``u``."""
+        adj, cnt = getattr(self, side + "_adj"), getattr(self, side + "_cnt")
+        if cnt[u] == adj.shape[1]:
+            adj = np.concatenate([adj, np.full_like(adj, -1)], axis=1)
+            setattr(self, side + "_adj", adj)
+        adj[u, cnt[u]] = w
+        cnt[u] += 1
+
     def _front_add(self, a, b):
-        if not self.out_nb[a] and not self.in_nb[a]:
-            self.grid.setdefault(self._cell(self.V[a]), set()).add(a)
-        if not self.out_nb[b] and not self.in_nb[b]:
-            self.grid.setdefault(self._cell(self.V[b]), set()).add(b)
+        for v in (a, b):
+            if not self.out_nb[v] and not self.in_nb[v]:
+                fk.grid_insert(*self.vgrid, v, *self._cell(self.P[v]))
         self.front[(a, b)] = 0
         self.out_nb[a].add(b)
         self.in_nb[b].add(a)
+        self._adj_add("out", a, b)
+        self._adj_add("in", b, a)
         self._push(a, b)
 
     def _front_remove(self, a, b):
         del self.front[(a, b)]
+        self.predictions.pop((a, b), None)
         self.border.discard((a, b))
         self.scan_border.discard((a, b))
         self.out_nb[a].discard(b)
         self.in_nb[b].discard(a)
+        fk.adj_remove(self.out_adj, self.out_cnt, a, b)
+        fk.adj_remove(self.in_adj, self.in_cnt, b, a)
         for v in (a, b):
             if not self.out_nb[v] and not self.in_nb[v]:
-                cell = self.grid.get(self._cell(self.V[v]))
-                if cell is not None:
-                    cell.discard(v)
+                fk.grid_remove(*self.vgrid, v)
 
     def _push(self, a, b, delay=0):
         self.counter += 1
@@ -301,38 +344,35 @@ class AdvancingFront:
         pa, pb, pc = self.P[a], self.P[b], self.P[c]
         centroid = [(pa[i] + pb[i] + pc[i]) / 3.0 for i in range(3)]
         nf = len(self.faces) - 1
-        self.face_grid.setdefault(self._cell(centroid), []).append(nf)
         if nf == len(self.face_geometry):
             self.face_geometry = np.concatenate([self.face_geometry,
                                                  np.empty_like(self.face_geometry)])
+            head, nxt, prv, cells = self.fgrid
+            self.fgrid = (head, np.concatenate([nxt, np.full_like(nxt, -1)]),
+                          np.concatenate([prv, np.full_like(prv, -1)]),
+                          np.concatenate([cells, np.zeros_like(cells)]))
+        fk.grid_insert(*self.fgrid, nf, *self._cell(centroid))
         e1, e2 = _sub(pb, pa), _sub(pc, pa)
         normal = _cross(e1, e2)
         length = _norm(normal) or 1.0
+        radius = math.sqrt(max(_dot(d, d) for d in (_sub(pa, centroid), _sub(pb, centroid),
+                                                      _sub(pc, centroid))))
         self.face_geometry[nf] = (*pa, *e1, *e2, normal[0] / length, normal[1] / length,
-                                  normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2))
+                                  normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2),
+                                  *centroid, radius)
         self.area_done += 0.5 * _norm(_cross(_sub(pb, pa), _sub(pc, pa)))
         for o, angle in zip((a, b, c), _corner_angles(pa, pb, pc), strict=True):
             self.fan[o] += angle
 
     def _front_vertices_near(self, x, radius, n=None):
-        r = int(np.ceil(radius / self.cell))
-        cx, cy, cz = self._cell(x)
-        found = []
-        for i in range(cx - r, cx + r + 1):
-            for j in range(cy - r, cy + r + 1):
-                for k in range(cz - r, cz + r + 1):
-                    s = self.grid.get((i, j, k))
-                    if s:
-                        found.extend(s)
-        if not found:
-            return np.empty(0, dtype=int)
-        found = np.fromiter(found, dtype=int, count=len(found))
-        d = np.linalg.norm(self.V[found] - x, axis=1)
-        keep = d <= radius
-        if n is not None:
-            # vertices facing the other way belong to the back of a thin sheet: not ours
-            keep &= self.N[found] @ np.asarray(n) > 0
-        return found[keep][np.argsort(d[keep])]
+        """Front vertices within ``radius`` of ``x (3,)``, nearest first; with a normal ``n``
+        only those facing along it (vertices facing the other way belong to the back of a
+        thin sheet)."""
+        head, nxt, _prv, cells = self.vgrid
+        return fk.vertices_near(head, nxt, cells, self.cell, self.V, self.N,
+                                np.asarray(x, dtype=np.float64), float(radius),
+                                np.asarray(n if n is not None else (0.0, 0.0, 0.0),
+                                           dtype=np.float64), n is not None)
 
     # -- geometry tests --------------------------------------------------------------------
     def _wedges(self, o, n):
@@ -414,44 +454,11 @@ class AdvancingFront:
             return False
         if self._covered(probes, centre, max(la, lb, lc)):
             return False
-        radius = max(la, lb, lc) * 1.5
-        near = self._front_vertices_near(centre, radius, n)
-        if len(near) == 0:
-            return True
-        nv = np.asarray(n)
-        t1 = np.asarray(e0) / la
-        t2 = np.cross(nv, t1)
-        t2 /= np.linalg.norm(t2)
-        basis = np.stack([t1, t2])
-        pa = basis @ (np.asarray(xa) - centre)
-        pb = basis @ (np.asarray(xb) - centre)
-        pv = basis @ (np.asarray(xv) - centre)
-        # no other front vertex inside the triangle (in the tangent plane)
-        others = near[(near != a) & (near != b) & (near != v)]
-        if len(others):
-            rel = self.V[others] - centre
-            q = rel @ basis.T
-            height = np.abs(rel @ nv)
-            c1 = (pb[0] - pa[0]) * (q[:, 1] - pa[1]) - (pb[1] - pa[1]) * (q[:, 0] - pa[0])
-            c2 = (pv[0] - pb[0]) * (q[:, 1] - pb[1]) - (pv[1] - pb[1]) * (q[:, 0] - pb[0])
-            c3 = (pa[0] - pv[0]) * (q[:, 1] - pv[1]) - (pa[1] - pv[1]) * (q[:, 0] - pv[0])
-            if ((c1 > 0) & (c2 > 0) & (c3 > 0) & (height < radius)).any():
-                return False
-        # no front edge crosses the new edges
-        edges = [(u, w) for u in near for w in self.out_nb[u]]
-        edges += [(w, u) for u in near for w in self.in_nb[u]]
-        if not edges:
-            return True
-        ed = np.array(edges)
-        r = (self.V[ed[:, 0]] - centre) @ basis.T
-        s = (self.V[ed[:, 1]] - centre) @ basis.T
-        for u, pu in ((a, pa), (b, pb)):
-            shared = (ed[:, 0] == u) | (ed[:, 1] == u)
-            if existing:
-                shared |= (ed[:, 0] == v) | (ed[:, 1] == v)
-            if (_segments_cross(pu, pv, r, s) & ~shared).any():
-                return False
-        return True
+        head, nxt, _prv, cells = self.vgrid
+        return fk.front_clear(head, nxt, cells, self.cell, self.V, self.N, self.out_adj,
+                              self.out_cnt, self.in_adj, self.in_cnt, a, b, v,
+                              np.asarray(xv, dtype=np.float64), np.asarray(n),
+                              max(la, lb, lc) * 1.5)
 
     def _covered(self, probes, centre, length):
         """Whether any of ``probes (K, 3)`` lies on an existing triangle (see COVER_HEIGHT).
@@ -460,29 +467,9 @@ class AdvancingFront:
         tangent plane mislead it (strongly curved, coarsely sampled regions), a front can
         advance over the already meshed surface, which no front element marks.
         """
-        cx, cy, cz = self._cell(centre)
-        ids = []
-        for i in (cx - 1, cx, cx + 1):
-            for j in (cy - 1, cy, cy + 1):
-                for k in (cz - 1, cz, cz + 1):
-                    cell = self.face_grid.get((i, j, k))
-                    if cell:
-                        ids.extend(cell)
-        if not ids:
-            return False
-        g = self.face_geometry[ids]
-        e1, e2, nrm = g[:, 3:6], g[:, 6:9], g[:, 9:12]
-        d00, d01, d11 = g[:, 12], g[:, 13], g[:, 14]
-        rel = probes[:, None, :] - g[None, :, 0:3]  # (K, T, 3)
-        height = np.abs(np.einsum("ktc,tc->kt", rel, nrm))
-        # barycentric coordinates of the probes' projections onto each triangle's plane
-        d20 = np.einsum("ktc,tc->kt", rel, e1)
-        d21 = np.einsum("ktc,tc->kt", rel, e2)
-        denom = d00 * d11 - d01 * d01
-        s = (d11 * d20 - d01 * d21) / denom
-        t = (d00 * d21 - d01 * d20) / denom
-        inside = (s > COVER_MARGIN) & (t > COVER_MARGIN) & (1.0 - s - t > COVER_MARGIN)
-        return bool((inside & (height < COVER_HEIGHT * length)).any())
+        head, nxt, _prv, cells = self.fgrid
+        return fk.covered(head, nxt, cells, self.cell, self.face_geometry, probes, centre,
+                          float(length), COVER_MARGIN, COVER_HEIGHT)
 
     def _outside(self, x, n, strict=False):
         """Whether surface point ``x`` (normal ``n``) lies beyond a border of the cloud;
@@ -494,38 +481,38 @@ class AdvancingFront:
         ``BORDER_NEIGHBOURS`` nearest points, seen in the tangent plane, leave a gap wider than
         ``BORDER_GAP``; or unconditionally beyond ``OUTSIDE_SPACINGS`` spacings (more for
         irregular samplings, see :meth:`Connectivity.void_ratio`).  Random
-        sampling gaps are surrounded by points and do not count.
+        sampling gaps are surrounded by points and do not count.  Only input points whose
+        normals face along ``n`` count (not the back of a thin sheet), and the spacing is the
+        median over them (the spacing of a rim point alone is inflated).
         """
-        dist, idx = self.proj.conn.tree.query(x, k=BORDER_NEIGHBOURS)
-        return self._outside_of(x, n, dist, idx, strict)
+        x = np.asarray(x, dtype=np.float64).reshape(1, 3)
+        return bool(self._outside_flags(x, np.asarray(n, dtype=np.float64).reshape(1, 3),
+                                        strict)[0])
 
     def _outside_any(self, xs, n):
-        """Whether any of the points ``xs (K, 3)`` lies beyond a border (:meth:`_outside`);
-        one k-d tree query for all of them."""
-        dist, idx = self.proj.conn.tree.query(xs, k=BORDER_NEIGHBOURS)
-        return any(self._outside_of(x, n, d, i, False)
-                   for x, d, i in zip(xs, dist, idx, strict=True))
+        """Whether any of the points ``xs (K, 3)`` lies beyond a border (:meth:`_outside`)."""
+        return bool(self._outside_flags(xs, np.asarray(n, dtype=np.float64).reshape(1, 3),
+                                        False).any())
 
-    def _outside_of(self, x, n, dist, idx, strict):
-        """:meth:`_outside` given the ``BORDER_NEIGHBOURS`` nearest input points of ``x``."""
-        same_side = self.proj.normals[idx] @ np.asarray(n) > 0  # not the back of a thin sheet
-        if same_side.any():
-            dist, idx = dist[same_side], idx[same_side]
-        # the spacing of a rim point alone is inflated (its neighbours lie on one side): the
-        # median over the neighbours is a steadier local estimate
-        spacing = float(small_median(self.spacing[idx]))
-        if dist[0] <= INSIDE_SPACINGS * spacing:
-            return False
-        if strict or dist[0] > self.outside_spacings * spacing:
-            return True
-        nv = np.asarray(n)
-        rel = self.proj.points[idx] - x
-        rel -= np.outer(rel @ nv, nv)
-        t1 = rel[0] / max(np.linalg.norm(rel[0]), 1e-300)
-        t2 = np.cross(nv, t1)
-        ang = np.sort(np.arctan2(rel @ t2, rel @ t1))
-        gaps = np.diff(np.r_[ang, ang[0] + 2 * np.pi])
-        return bool(gaps.max() > BORDER_GAP)
+    def _outside_flags(self, xs, ns, strict):
+        """:meth:`_outside` of points ``xs (K, 3)`` with normals ``ns (K, 3)`` or one normal
+        ``(1, 3)``: ``(K,)`` bool."""
+        g = self.pgrid
+        _points, normals, spacing = self._cloud
+        k = min(BORDER_NEIGHBOURS, len(g.points))
+        xs = np.ascontiguousarray(xs, dtype=np.float64)
+        ns = np.ascontiguousarray(ns, dtype=np.float64)
+        flags = fk.outside_near(g.points, g.cells, g.start, g.order, g.cell, normals, spacing,
+                                xs, ns, k, INSIDE_SPACINGS, self.outside_spacings, bool(strict),
+                                BORDER_GAP, fk.MAX_SHELL)
+        undecided = flags < 0
+        if undecided.any():  # far from every input point: the k-d tree finds the neighbours
+            dist, idx = g.query(xs[undecided], k, self.proj.conn.tree)
+            flags[undecided] = fk.outside_flags(
+                xs[undecided], ns if len(ns) == 1 else ns[undecided], dist, idx, g.points,
+                normals, spacing, INSIDE_SPACINGS, self.outside_spacings, bool(strict),
+                BORDER_GAP)
+        return flags.astype(bool)
 
     # -- the front step --------------------------------------------------------------------
     def _neighbour(self, vertex, other, incoming, n):
@@ -577,10 +564,10 @@ class AdvancingFront:
         d = _unit(_cross(n, ab))
         length = min(max(target, 0.55 * lab), 1.8 * lab)
         height = math.sqrt(max(length**2 - 0.25 * lab**2, 0.1 * lab**2))
-        guess = np.array([0.5 * (xa[i] + xb[i]) + height * d[i] for i in range(3)])
-        pts, nrm = self.proj.project_with_normals(guess[None], np.asarray(n)[None])
-        xp, npn = pts[0], nrm[0]
-        if self._outside(xp, npn):
+        if (a, b) not in self.predictions:
+            self._predict(a, b)
+        xp, npn, outside, guided = self.predictions.pop((a, b))
+        if outside:
             # 3. the point left the cloud: this edge is a border of an open scan.  A flatter
             # triangle may still fit before the rim and bring the border up to the last samples
             if lab >= RIM_MIN_EDGE * target:
@@ -607,7 +594,7 @@ class AdvancingFront:
                 st.connections += 1
                 return
         # 5. a new vertex, if nothing is too close to it
-        if self._new_vertex(a, b, xp, npn, n, d, target):
+        if self._new_vertex(a, b, xp, npn, n, d, target, guided):
             return
         # 6. postpone; after GIVE_UP attempts leave the edge as an unresolved border
         if attempts + 1 >= GIVE_UP:
@@ -617,10 +604,42 @@ class AdvancingFront:
         self.front[(a, b)] = attempts + 1
         self._push(a, b, delay=attempts + 1)
 
-    def _new_vertex(self, a, b, xp, npn, n, d, target):
-        """Add the triangle ``(a, b, new vertex at xp)`` (normal ``npn``) if no front vertex
-        is too close to ``xp``, it lies ahead of the edge (direction ``d``) and the triangle is
-        valid; returns whether it was added."""
+    def _predict(self, a, b):
+        """Predict, project and test (:meth:`_outside`) the apex of front edge ``(a, b)``
+        and of the edges queued next, in one batch, into ``self.predictions``.
+
+        The apex lies at the height of a triangle of the target side length (between 0.55
+        and 1.8 times the edge's own), along the edge's outward direction in the plane
+        orthogonal to the mean normal of its ends.  Each prediction depends only on its
+        edge's vertices, so the batch gives what one edge at a time would.
+        """
+        edges = {(a, b): None}
+        for _delay, _c, u, w in heapq.nsmallest(PREDICT_BATCH, self.heap):
+            if (u, w) in self.front and (u, w) not in self.border and \
+                    (u, w) not in self.predictions:
+                edges[(u, w)] = None
+        e = np.array(list(edges), dtype=np.int64)
+        xa, xb = self.V[e[:, 0]], self.V[e[:, 1]]
+        n = self.N[e[:, 0]] + self.N[e[:, 1]]
+        n /= np.sqrt(n[:, 0] * n[:, 0] + n[:, 1] * n[:, 1] + n[:, 2] * n[:, 2])[:, None]
+        ab = xb - xa
+        lab = np.sqrt(ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1] + ab[:, 2] * ab[:, 2])
+        target = 0.5 * (self.L[e[:, 0]] + self.L[e[:, 1]])
+        d = np.cross(n, ab)
+        d /= np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])[:, None]
+        length = np.minimum(np.maximum(target, 0.55 * lab), 1.8 * lab)
+        height = np.sqrt(np.maximum(length * length - 0.25 * lab * lab, 0.1 * lab * lab))
+        guess = 0.5 * (xa + xb) + height[:, None] * d
+        pts, nrm = self.proj.project_with_normals(guess, n)
+        outside = self._outside_flags(pts, nrm, False)
+        lengths = self.guide(pts)
+        for k, edge in enumerate(edges):
+            self.predictions[edge] = (pts[k], nrm[k], bool(outside[k]), float(lengths[k]))
+
+    def _new_vertex(self, a, b, xp, npn, n, d, target, length=None):
+        """Add the triangle ``(a, b, new vertex at xp)`` (normal ``npn``, guidance
+        ``length`` if known) if no front vertex is too close to ``xp``, it lies ahead of the
+        edge (direction ``d``) and the triangle is valid; returns whether it was added."""
         close = self._front_vertices_near(xp, MIN_VERTEX_DISTANCE * target, n)
         close = close[(close != a) & (close != b)]
         if len(close):
@@ -631,7 +650,7 @@ class AdvancingFront:
         if _dot(_sub(xpt, mid), d) <= 0.2 * _norm(_sub(xb, xa)) or \
                 not self._triangle_ok(a, b, -1, xpt, n, MIN_ANGLE_NEW, False):
             return False
-        v = self._add_vertex(xp, npn)
+        v = self._add_vertex(xp, npn, length)
         self._add_triangle(a, b, v)
         self.stats.new_vertices += 1
         return True
@@ -654,6 +673,10 @@ class AdvancingFront:
         tn = np.cross(tri[1] - tri[0], tri[2] - tri[0])
         if np.dot(tn, nrm) <= 0.5 * np.linalg.norm(tn):
             return False
+        # a seed beside the mesh (a thin part the fronts could not enter) must not lie on it
+        probes = np.vstack([tri.mean(axis=0), 0.5 * (tri + np.roll(tri, -1, axis=0))])
+        if self.nv and self._covered(probes, probes[0], length):
+            return False
         ids = [self._add_vertex(p, nrm), self._add_vertex(q[0], qn[0]),
                self._add_vertex(q[1], qn[1])]
         self._add_triangle(*ids)
@@ -672,7 +695,7 @@ class AdvancingFront:
         proj = self.proj
         kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
         tried = 0
-        for _ in range(MAX_SEEDS):
+        for _ in range(MAX_SEEDS if self.max_seeds is None else self.max_seeds):
             if self.stats.truncated:
                 break
             if self.nv:
@@ -680,10 +703,12 @@ class AdvancingFront:
 
                 tree = cKDTree(self.V[: self.nv])
                 dist, _ = tree.query(proj.points[kappa_order])
-                far = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
-                if len(far) < SEED_MIN_POINTS:
+                # vertices are never removed: a point near the mesh stays near it, so each
+                # round asks only about the points that were far in the previous one
+                kappa_order = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
+                if len(kappa_order) < SEED_MIN_POINTS:
                     break
-                start = far[0]
+                start = kappa_order[0]
             else:
                 start = kappa_order[0]
             tried += 1
@@ -735,6 +760,7 @@ class AdvancingFront:
         if not stuck:
             return False
         self.length_factor *= REFINE_FACTOR
+        self.predictions.clear()  # they depend on the target lengths
         for a, b in stuck:
             for v in (a, b):
                 self.L[v] = min(self.L[v], self.length_factor * float(self.guide(self.V[v])[0]))
@@ -777,8 +803,9 @@ class AdvancingFront:
         such triangulation exists."""
         k = len(loop)
         pts = self.V[loop]
-        normal = np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0)
-        nrm = self.N[loop]
+        normal = tuple(np.cross(pts, np.roll(pts, -1, axis=0)).sum(axis=0).tolist())
+        P = [self.P[u] for u in loop]
+        nrm = [tuple(x) for x in self.N[loop].tolist()]
 
         def edge_free(i, j):
             u, w = loop[i], loop[j]
@@ -789,38 +816,43 @@ class AdvancingFront:
             return ((u, w) if u < w else (w, u)) not in self.edge_faces
 
         def cost(i, m, j):
-            p, q, r = pts[i], pts[m], pts[j]
-            tn = np.cross(q - p, r - p)
-            area2 = float(np.linalg.norm(tn))
+            # scalar tuple math: NumPy's per-call overhead dominated on single triangles
+            p, q, r = P[i], P[m], P[j]
+            tn = _cross(_sub(q, p), _sub(r, p))
+            area2 = _norm(tn)
             # a loop twisted by a sharp fold has no single facing direction: a triangle may
             # face along the loop's normal or along its own corners' normals
-            if area2 <= 0 or (float(tn @ normal) <= 0 and
-                              float(tn @ (nrm[i] + nrm[m] + nrm[j])) <= 0):
+            if area2 <= 0 or (_dot(tn, normal) <= 0 and
+                              _dot(tn, (nrm[i][0] + nrm[m][0] + nrm[j][0],
+                                        nrm[i][1] + nrm[m][1] + nrm[j][1],
+                                        nrm[i][2] + nrm[m][2] + nrm[j][2])) <= 0):
                 return math.inf
-            sides = float(np.sum((q - p) ** 2) + np.sum((r - q) ** 2) + np.sum((p - r) ** 2))
+            qp, rq, pr = _sub(q, p), _sub(r, q), _sub(p, r)
+            sides = _dot(qp, qp) + _dot(rq, rq) + _dot(pr, pr)
             return sides / (2 * math.sqrt(3) * area2)
 
-        best = np.full((k, k), math.inf)
-        split = np.full((k, k), -1, dtype=int)
+        best = [[math.inf] * k for _ in range(k)]  # lists: O(k^3) scalar lookups
+        split = [[-1] * k for _ in range(k)]
         for i in range(k - 1):
-            best[i, i + 1] = 0.0
+            best[i][i + 1] = 0.0
         for span in range(2, k):
             for i in range(k - span):
                 j = i + span
                 if not edge_free(i, j):
                     continue
+                row = best[i]
                 for m in range(i + 1, j):
-                    c = best[i, m] + best[m, j]
-                    if c < best[i, j]:
+                    c = row[m] + best[m][j]
+                    if c < row[j]:
                         c += cost(i, m, j)
-                        if c < best[i, j]:
-                            best[i, j], split[i, j] = c, m
-        if not math.isfinite(best[0, k - 1]):
+                        if c < row[j]:
+                            row[j], split[i][j] = c, m
+        if not math.isfinite(best[0][k - 1]):
             return []
         tris, stack = [], [(0, k - 1)]
         while stack:
             i, j = stack.pop()
-            m = split[i, j]
+            m = split[i][j]
             if m < 0:
                 continue
             tris.append((loop[i], loop[m], loop[j]))
@@ -831,7 +863,8 @@ class AdvancingFront:
         steps = 0
         # runaway guard: with edges never shorter than ~the sample spacing, a valid mesh has
         # fewer vertices than the cloud has points; far more means the front overlaps itself
-        budget = VERTEX_BUDGET * len(self.proj.points) + 1000
+        factor = VERTEX_BUDGET if self.vertex_budget is None else self.vertex_budget
+        budget = factor * len(self.proj.points) + 1000
         while self.heap:
             if self.nv > budget:
                 self.stats.truncated = True

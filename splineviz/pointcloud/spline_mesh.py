@@ -10,6 +10,11 @@ the projector (thesis §7.3 with the volume's spline in place of the local polyn
 * Samples: where the data cross the isovalue along grid edges, one per grid cell, projected
   onto the spline surface. They tell the front where the surface is (seeds, the data box's
   border) exactly as the input points of a scan do.
+* One sheet: the front's tests see samples and front edges near a candidate triangle, not
+  the surface between its corners. Every triangle must lie on one sheet of the spline surface
+  (:func:`triangles_on_surface`: probes near ``s = iso``, not on both sides of it, corner
+  normals less than a right angle apart), and edges are at most the distance along the
+  normal to the next sheet (:func:`sheet_gaps`): leaves a voxel apart are not joined.
 * Holes: where the front gives up edges (its point-cloud tests misjudge sharp folds), the
   border loops left inside the surface are closed by rings on the surface
   (:func:`fill_holes`); then valence flips and tangential relaxation
@@ -25,6 +30,7 @@ normals, ``normals (V, 3)`` unit.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,12 +41,15 @@ from splineviz.core import sections
 from splineviz.core.curvature import spline_curvatures
 from splineviz.core.errors import SplinevizError
 from splineviz.core.isosurface import project_to_isosurface
-from splineviz.pointcloud.advancing_front import AdvancingFront, simple_loops
+from splineviz.pointcloud.advancing_front import VERTEX_BUDGET, AdvancingFront, simple_loops
 from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 
-#: default angle (radians) one edge subtends on the osculating circle
-DEFAULT_RHO = 0.3
+#: default angle (radians) one edge subtends on the osculating circle: at 0.5 the bonsai crop
+#: and the tooth have 39 % and 45 % of flying edges' triangles, Hausdorff distances 0.39 and
+#: 0.24 grid steps against its 1.02 and 1.58 (benchmarks/bench_spline_mesh.py); a chord of
+#: this angle stands off the surface by 3 % of its length
+DEFAULT_RHO = 0.5
 #: default edge-length bounds, in grid steps
 DEFAULT_MIN_LENGTH = 0.4
 DEFAULT_MAX_LENGTH = 6.0
@@ -54,6 +63,42 @@ GRAPH_NEIGHBOURS = 8
 VALUE_TOL = 1e-9
 #: at most this many surface samples (one per grid cell; coarser cells beyond)
 MAX_SAMPLES = 600_000
+#: the target edge length is at most this many times the distance, along the normal, from a
+#: sample to the next sheet of the surface (the gap to a neighbouring leaf, the thickness of
+#: a thin part): longer edges let a triangle reach across to the other sheet
+GAP_FACTOR = 1.0
+#: ... measured by marching the spline along both normal directions in steps of GAP_STEP
+#: grid steps, starting GAP_START grid steps off the sample
+GAP_STEP = 0.25
+GAP_START = 0.25
+#: a triangle lies on the surface when its samples (at most PROBE_SPACING grid steps apart)
+#: are within SURFACE_DEVIATION of its longest side from s = iso (first-order distance
+#: ``|s - iso| / |grad s|``; a chord of the curvature-adapted length deviates ~0.05 of it) ...
+PROBE_SPACING = 0.5
+SURFACE_DEVIATION = 0.15
+#: ... and do not lie on both sides of the surface by more than SURFACE_CROSSING of its longest
+#: side (a triangle that passes through a thin part of the object, e.g. a leaf)
+SURFACE_CROSSING = 0.06
+#: a triangle's probes never need to be nearer than this (grid steps) to the surface: the
+#: smallest triangles sit where the curvature is highest, the first-order distance is least
+#: exact there, and no gap narrower than this is resolved by the data
+PROBE_FLOOR = 0.2
+#: the triangles closing a hole the front left may stand this many grid steps off the surface
+#: (a hole of the front's edge length is farther from the surface than that; triangles across
+#: a gap between sheets stand off by half the gap, and face each other, see MAX_CORNER_TURN)
+HOLE_SLACK = 0.4
+#: the spline normals at a triangle's corners may differ by at most this angle: corners on
+#: the two sides of a gap or of a thin part face each other (in the bonsai crop 5 of 42,000
+#: triangles on one sheet exceed it)
+MAX_CORNER_TURN = np.deg2rad(90.0)
+#: at most this many probe subdivisions per side
+MAX_PROBE_DIVISIONS = 16
+#: the front stops beyond this many times the vertices the target lengths call for (a
+#: front that runs over itself)
+VERTEX_SLACK = 3.0
+#: at most this many seeds (the front's default is for one scanned object; an isosurface
+#: such as the bonsai's leaves has many small pieces)
+MAX_SPLINE_SEEDS = 5000
 
 
 class SplineMeshError(SplinevizError, ValueError):
@@ -141,7 +186,10 @@ def surface_samples(spline, iso: float, cell: float | None = None):
         t = np.divide(iso - f0, f1 - f0, out=np.full_like(f0, 0.5), where=f1 != f0)
         idx = np.stack([i, j, k], axis=1).astype(np.float64)
         idx[:, 0] += t
-        found.append(np.roll(idx, axis, axis=1) if axis else idx)
+        # the moved array's axes are (axis, then the other two in order): back to (x, y, z)
+        xyz = np.empty_like(idx)
+        xyz[:, [axis] + [d for d in range(3) if d != axis]] = idx
+        found.append(xyz)
     if not found:
         raise SplineMeshError(f"the isovalue {iso:g} is not crossed by the data")
     index = np.concatenate(found)
@@ -161,11 +209,167 @@ def surface_samples(spline, iso: float, cell: float | None = None):
     return pts[ok], normals[ok], cell
 
 
+def sheet_gaps(spline, iso: float, points: np.ndarray, normals: np.ndarray,
+               reach: float) -> np.ndarray:
+    """Distance from each surface point to the next sheet of ``s = iso`` along its normal.
+
+    The spline is marched from each point along ``+normal`` (towards lower values: the gap to
+    a neighbouring sheet) and ``-normal`` (the thickness of the part behind the point) in
+    steps of ``GAP_STEP`` grid steps; the first sample on the other side of the isovalue marks
+    the next sheet.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    points : (N, 3) points on the surface
+    normals : (N, 3) their unit normals ``-grad s / |grad s|``
+    reach : float, farthest distance looked at
+
+    Returns
+    -------
+    (N,) float64: the smaller of the two distances, ``reach`` where no sheet is that near
+    (or the ray leaves the data box first)
+    """
+    step = float(np.min(spline.volume.spacing))
+    ts = np.arange(GAP_START * step, reach + 0.5 * GAP_STEP * step, GAP_STEP * step)
+    gaps = np.full(len(points), float(reach))
+    if len(ts) == 0 or len(points) == 0:
+        return gaps
+    lo = np.array([b[0] for b in spline.bounds])
+    hi = np.array([b[1] for b in spline.bounds])
+    chunk = max(1, 400_000 // len(ts))
+    for start in range(0, len(points), chunk):
+        p, nrm = points[start:start + chunk], normals[start:start + chunk]
+        for sign in (1.0, -1.0):
+            q = p[:, None, :] + sign * ts[None, :, None] * nrm[:, None, :]  # (C, T, 3)
+            inside = np.all((q >= lo) & (q <= hi), axis=2)
+            f = spline.evaluate(q.reshape(-1, 3)).reshape(inside.shape) - iso
+            # along +normal the values fall below iso until the next sheet; along -normal
+            # they stay above it until the far side of the part
+            crossed = (sign * f >= 0) & inside
+            first = np.argmax(crossed, axis=1)
+            found = crossed[np.arange(len(p)), first]
+            gap = np.where(found, ts[first], reach)
+            gaps[start:start + chunk] = np.minimum(gaps[start:start + chunk], gap)
+    return gaps
+
+
+@functools.cache
+def _probe_weights(divisions: int) -> np.ndarray:
+    """Barycentric weights ``(K, 3)`` of the points of a triangle cut ``divisions`` times
+    along each side, its corners left out (they lie on the surface)."""
+    i, j = np.meshgrid(np.arange(divisions + 1), np.arange(divisions + 1), indexing="ij")
+    keep = i + j <= divisions
+    w = np.stack([i[keep], j[keep], divisions - i[keep] - j[keep]], axis=1) / divisions
+    return w[~(w == 1.0).any(axis=1)]
+
+
+def triangles_on_surface(spline, iso: float, triangles: np.ndarray,
+                         slack: float = 0.0) -> np.ndarray:
+    """Whether triangles with corners on ``s = iso`` lie on one sheet of the surface.
+
+    Each triangle is probed at points at most ``PROBE_SPACING`` grid steps apart; at each the
+    first-order distance ``(s - iso) / |grad s|`` to the surface is read. A triangle on the
+    surface deviates from it by its sagitta only; one that spans the gap between two sheets
+    has probes far from both, and one that passes through a thin part of the object has
+    probes well inside and outside it.
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    triangles : (T, 3, 3) corner positions
+    slack : float, optional
+        Probes this many grid steps from the surface are accepted too.
+
+    Returns
+    -------
+    (T,) bool: no probe farther than ``SURFACE_DEVIATION`` of the longest side from the
+    surface, no probes beyond ``SURFACE_CROSSING`` of it on both sides, and corner normals
+    at most ``MAX_CORNER_TURN`` apart
+    """
+    tri = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
+    ok = np.ones(len(tri), dtype=bool)
+    if len(tri) == 0:
+        return ok
+    step = float(np.min(spline.volume.spacing))
+    longest = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    divisions = np.clip(np.ceil(longest / (PROBE_SPACING * step)), 2,
+                        MAX_PROBE_DIVISIONS).astype(np.int64)
+    for k in np.unique(divisions):
+        sel = np.flatnonzero(divisions == k)
+        w = np.concatenate([np.eye(3), _probe_weights(int(k))])  # corners first
+        probes = np.einsum("kc,tcd->tkd", w, tri[sel]).reshape(-1, 3)
+        value, grad = spline.value_gradient(probes)
+        gn = grad.reshape(len(sel), len(w), 3)[:, :3]
+        gn = gn / np.maximum(np.linalg.norm(gn, axis=2, keepdims=True), 1e-300)
+        turn = np.minimum(np.minimum(np.einsum("tc,tc->t", gn[:, 0], gn[:, 1]),
+                                     np.einsum("tc,tc->t", gn[:, 1], gn[:, 2])),
+                          np.einsum("tc,tc->t", gn[:, 2], gn[:, 0]))
+        # a vanishing gradient gives an infinite distance: such a probe is not trusted
+        dist = (value - iso) / np.maximum(np.linalg.norm(grad, axis=1), 1e-300)
+        dist = dist.reshape(len(sel), len(w))[:, 3:]
+        floor = PROBE_FLOOR * step
+        dev = np.maximum(SURFACE_DEVIATION * longest[sel], max(floor, slack * step))
+        cross = np.maximum(SURFACE_CROSSING * longest[sel], floor)
+        both_sides = (dist.max(axis=1) > cross) & (dist.min(axis=1) < -cross)
+        ok[sel] = (np.abs(dist).max(axis=1) <= dev) & ~both_sides & \
+            (turn >= np.cos(MAX_CORNER_TURN))
+    return ok
+
+
+class SplineFront(AdvancingFront):
+    """The advancing front with the spline's own test of every triangle.
+
+    The front's tests see the samples and the front near a candidate triangle, not the
+    surface between its corners: where two sheets lie close (leaves), a triangle could join a
+    vertex of one to an edge of the other. Here a triangle (of a front step or of a filled
+    front loop) is accepted only if it lies on one sheet (:func:`triangles_on_surface`), and
+    the front seeds every piece of the isosurface (``MAX_SPLINE_SEEDS``), not one object.
+    """
+
+    max_seeds = MAX_SPLINE_SEEDS
+
+    def __init__(self, projector, guidance, progress=None):
+        super().__init__(projector, guidance, progress)
+        #: number of candidate triangles refused for leaving the surface
+        self.off_surface = 0
+        # the samples are one per grid cell, the edges may be shorter (curved or close
+        # sheets): a mesh of equilateral triangles has 2 / (sqrt 3 L^2) vertices per unit area
+        per_sample = np.mean(2.0 / np.sqrt(3.0) * (projector.scale / guidance.lengths) ** 2)
+        self.vertex_budget = max(VERTEX_BUDGET, VERTEX_SLACK * float(per_sample))
+
+    def _on_surface(self, corners) -> bool:
+        if triangles_on_surface(self.proj.spline, self.proj.iso, np.asarray(corners))[0]:
+            return True
+        self.off_surface += 1
+        return False
+
+    def _triangle_ok(self, a, b, v, xv, n, min_angle, existing):
+        # the spline probes cost most: they come after the front's own tests
+        return super()._triangle_ok(a, b, v, xv, n, min_angle, existing) and \
+            self._on_surface((self.P[a], self.P[b], xv))
+
+    def _best_triangulation(self, loop):
+        tris = super()._best_triangulation(loop)
+        if tris and not triangles_on_surface(self.proj.spline, self.proj.iso,
+                                             self.V[np.array(tris)]).all():
+            self.off_surface += 1
+            return []
+        return tris
+
+
 def _guidance(projector, rho, min_length, max_length):
     k1, k2 = spline_curvatures(projector.spline, projector.points)
     kappa = np.nan_to_num(np.maximum(np.abs(k1), np.abs(k2)), nan=0.0)
     ideal = 2.0 * np.sin(rho / 2.0) / np.maximum(kappa, 1e-300)
     lengths = np.clip(ideal, min_length, max_length)
+    # curvature alone allows long edges on flat sheets that lie close together (leaves); the
+    # gap bound wins over min_length: a longer edge would join the two sheets
+    gaps = sheet_gaps(projector.spline, projector.iso, projector.points, projector.normals,
+                      max_length / GAP_FACTOR)
+    lengths = np.minimum(lengths, GAP_FACTOR * gaps)
     lengths = limit_gradation(lengths, projector.conn.graph, GRADATION)
     return GuidanceField(lengths, projector.conn.tree)
 
@@ -258,17 +462,13 @@ def fill_holes(spline, iso, vertices, faces, keep_open):
             continue
         first = len(vertices) + len(new_v)
         loop_v, loop_f = _rings(spline, iso, vertices, rev, first)
-        # a hole whose rings do not lie on the surface, or whose triangles stand off it by
-        # more than half the loop's edge length (it spans a gap between sheets, e.g. leaves),
-        # stays open rather than be closed off the surface
+        # a hole whose rings do not lie on the surface, or whose triangles leave it (it spans
+        # a gap between sheets, e.g. leaves), stays open rather than be closed off the surface
         ring = np.array(loop_v).reshape(-1, 3)
         if len(ring) and np.abs(spline.evaluate(ring) - iso).max() > tol:
             continue
         allv = np.concatenate([vertices, np.array(new_v).reshape(-1, 3), ring])
-        centres = allv[np.array(loop_f)].mean(axis=1)
-        on, _ = project_to_isosurface(spline, centres, iso, steps=12)
-        edge = float(np.mean(np.linalg.norm(pts - np.roll(pts, -1, axis=0), axis=1)))
-        if np.linalg.norm(on - centres, axis=1).max() > 0.5 * edge:
+        if not triangles_on_surface(spline, iso, allv[np.array(loop_f)], HOLE_SLACK).all():
             continue
         new_v += loop_v
         new_f += loop_f
@@ -387,6 +587,8 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         Angle (radians) one edge subtends on the osculating circle: smaller is finer.
     min_length, max_length : float, optional
         Edge-length bounds (default ``DEFAULT_MIN_LENGTH`` / ``DEFAULT_MAX_LENGTH`` grid steps).
+        Where two sheets of the surface are closer than ``min_length`` along the normal, edges
+        are shorter: ``GAP_FACTOR`` times that distance.
     progress : callable, optional
         ``progress(fraction, message)``; returning False cancels.
 
@@ -412,7 +614,7 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         raise SplineMeshError("the clip planes leave no part of the isosurface")
     proj = SplineProjector(spline, iso, pts, nrm, cell)
     guide = _guidance(proj, rho, lo_len, hi_len)
-    front = AdvancingFront(proj, guide, progress)
+    front = SplineFront(proj, guide, progress)
     vertices, faces = front.run()
     # the front gives up a few edges where its point-cloud tests misjudge the surface (sharp
     # folds); those holes are closed, borders at the data box and past clip planes are not
@@ -427,6 +629,13 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
     vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
     # valence flips and tangential relaxation, every moved vertex put back onto the spline
     vertices, faces, _flips = optimize(vertices, faces, proj)
+    # a flip or a relaxed vertex may still join two sheets: such triangles leave a hole (the
+    # closed holes' slack: their triangles passed with it)
+    faces = faces[triangles_on_surface(spline, iso, vertices[faces], HOLE_SLACK)]
+    used = np.unique(faces)
+    remap = np.full(len(vertices), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    vertices, faces = vertices[used], remap[faces]
     for origin, normal in planes:
         snap = SNAP * float(np.median(guide.lengths))
         vertices, faces = clip_mesh(spline, iso, vertices, faces, origin, normal, snap)

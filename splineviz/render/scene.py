@@ -44,6 +44,8 @@ MIN_PREVIEW_SCALE = 1.0 / 16.0
 #: drag step a new size and stalled the window for that long. With these few levels each
 #: size of a window is compiled once (and PoCL keeps it in its disk cache).
 PREVIEW_LEVELS = tuple(2.0 ** (-k / 2.0) for k in range(9))
+#: windows narrower than this many pixels get scalar bars with fewer labels across more width
+NARROW_BAR_PX = 480
 
 
 class SceneError(SplinevizError, ValueError):
@@ -320,11 +322,22 @@ class SplineScene:
                     self._show(layer, rf)
                 stale.append(layer)
         self._order_quads()
+        self._fit_scalar_bars()
         self.last_frame_s = time.perf_counter() - t0
         self.frame_times.append(self.last_frame_s)
         del self.frame_times[:-50]
         if stale and self.request_refine is not None and not self._interacting:
             self.request_refine()
+
+    def _fit_scalar_bars(self) -> None:
+        """Fewer, wider-spread labels on the scalar bars of a narrow window (one of two
+        side-by-side views): five labels of ~7 characters overlap below ~480 pixels."""
+        narrow = self.window_size()[0] < NARROW_BAR_PX
+        for lv in self._views.values():
+            bar = lv.scalar_bar
+            bar.SetNumberOfLabels(3 if narrow else 5)
+            bar.SetWidth(0.8 if narrow else 0.5)
+            bar.SetPosition(0.1 if narrow else 0.25, bar.GetPosition()[1])
 
     def _reset_clipping_range(self) -> None:
         """Near/far planes around the visible props *and* every visible layer's data box:

@@ -47,12 +47,17 @@ class SceneView:
         (the GUI); False renders exact frames synchronously (scripts, screenshots).
     device : str or None
         OpenCL device preference of the ray casters.
+    side : {None, "left", "right"}
+        Which of the two views of a split scene this is (:attr:`splineviz.model.ViewNode.split`):
+        it leaves out the objects shown only on the other side. None: every object.
     """
 
-    def __init__(self, scene: Scene, plotter, progressive: bool = False, device=None):
+    def __init__(self, scene: Scene, plotter, progressive: bool = False, device=None,
+                 side: str | None = None):
         self.scene = scene
         self.plotter = plotter
         self.device = device
+        self.side = side
         self.spline_scene = SplineScene(plotter, progressive=progressive)
         self.layers: dict[str, IsosurfaceLayer] = {}
         self._props: dict[str, str] = {}  # node id -> prop name in the SplineScene
@@ -112,11 +117,14 @@ class SceneView:
             elif what in ("visible", "show_outline"):
                 self._show_outline(node)
                 for iso in self.scene.isosurfaces_of(node):
-                    self.layers[iso.id].set_visible(iso.visible and node.visible)
+                    self.layers[iso.id].set_visible(self._layer_visible(iso))
         elif isinstance(node, IsosurfaceNode):
             self._update_layer(node, what)
         elif isinstance(node, PointsNode | MeshNode):
-            self._show_prop(node)
+            if what in ("visible", "shown_in"):
+                self._prop_visibility(node)
+            else:
+                self._show_prop(node)
         elif isinstance(node, ClipPlaneNode):
             self._update_planes()
         elif isinstance(node, SectionNode):
@@ -163,8 +171,28 @@ class SceneView:
             opts = dict(color=node.color, opacity=node.opacity, show_edges=node.show_edges,
                         edge_color=(0.2, 0.25, 0.35), smooth_shading=node.has_normals)
         self.spline_scene.add_mesh(name, data, kind=node.kind, **opts)
-        self.spline_scene.set_prop_visible(name, node.visible)
+        self._prop_visibility(node)
         self._update_grid()
+
+    def _layer_visible(self, node: IsosurfaceNode) -> bool:
+        return (node.visible and self.scene.volume_of(node).visible
+                and self.scene.shows(node, self.side))
+
+    def _prop_visibility(self, node: Node) -> None:
+        """Show or hide the prop of a point cloud, mesh or section (visible and on this
+        view's side)."""
+        name = self._props.get(node.id)
+        if name is not None and name in self.spline_scene.props:
+            self.spline_scene.set_prop_visible(
+                name, node.visible and self.scene.shows(node, self.side))
+
+    def _sides_changed(self) -> None:
+        """The split was turned on or off: every object's visibility in this view again."""
+        for node in self.scene:
+            if isinstance(node, IsosurfaceNode) and node.id in self.layers:
+                self.layers[node.id].set_visible(self._layer_visible(node))
+            elif isinstance(node, PointsNode | MeshNode | SectionNode):
+                self._prop_visibility(node)
 
     def _show_section(self, node: SectionNode, recompute: bool) -> None:
         """(Re)draw a section's curves as lines, computing them first if asked."""
@@ -183,7 +211,7 @@ class SceneView:
         self.spline_scene.add_mesh(name, curves_polydata(node.curves), kind=node.kind,
                                    color=node.color, line_width=node.line_width,
                                    lighting=False)
-        self.spline_scene.set_prop_visible(name, node.visible)
+        self._prop_visibility(node)
 
     def _add_layer(self, node: IsosurfaceNode) -> None:
         vol = self.scene.volume_of(node)
@@ -191,7 +219,7 @@ class SceneView:
                                 color=node.color, opacity=node.opacity, name=node.name,
                                 device=self.device, material=node.material,
                                 model_options=node.model_options())
-        layer.set_visible(node.visible and vol.visible)
+        layer.set_visible(self._layer_visible(node))
         layer.set_clip_planes(self._volume_planes(vol.id))
         self.layers[node.id] = layer
         self.spline_scene.add_layer(layer)
@@ -224,8 +252,12 @@ class SceneView:
             layer.set_opacity(node.opacity)
         elif what == "material":
             layer.set_material(node.material)
-        elif what == "visible":
-            layer.set_visible(node.visible and self.scene.volume_of(node).visible)
+        elif what in ("visible", "shown_in"):
+            layer.set_visible(self._layer_visible(node))
+            # sections show where one of their isosurfaces does
+            for sec in self.scene.sections:
+                if node.id in sec.inputs:
+                    self._prop_visibility(sec)
         elif what == "name":
             layer.name = node.name
         elif what in ("color_by", "color_volume_id", "color_isosurface_id", "color_map",
@@ -288,7 +320,10 @@ class SceneView:
         finally:
             self._camera_lock = False
 
-    def _view_changed(self, *_args) -> None:
+    def _view_changed(self, info=None) -> None:
+        if info is not None and info.signal.name == "split":
+            self._sides_changed()
+            return
         self.plotter.set_background(self.scene.view.background)
         self._update_grid()
 
@@ -340,6 +375,9 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
                  transparent_background: bool = False, device=None) -> np.ndarray:
     """Render ``scene`` off-screen at ``size`` with exact frames; optionally write a PNG.
 
+    A split scene (:attr:`splineviz.model.ViewNode.split`) is drawn as its two views side by
+    side, each half as wide, as the window shows it.
+
     Returns
     -------
     (H, W, 3) or (H, W, 4) uint8 image
@@ -354,16 +392,25 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
     from splineviz.io._vtk import quiet_vtk_logger
 
     smooth_pending(scene, device)
+    if scene.view.split:
+        parts = (("left", w // 2), ("right", w - w // 2))
+        if w < 2:
+            raise SceneError(f"a picture of a split view needs 2 or more pixels across, got {w}")
+    else:
+        parts = ((None, w),)
+    images = []
     with quiet_vtk_logger():
-        pl = pv.Plotter(off_screen=True, window_size=(w, h))
-        view = SceneView(scene, pl, progressive=False, device=device)
-        try:
-            view.render_exact()
-            img = pl.screenshot(None, transparent_background=transparent_background,
-                                return_img=True)
-        finally:
-            view.close()
-            pl.close()
+        for side, width in parts:
+            pl = pv.Plotter(off_screen=True, window_size=(width, h))
+            view = SceneView(scene, pl, progressive=False, device=device, side=side)
+            try:
+                view.render_exact()
+                images.append(pl.screenshot(None, transparent_background=transparent_background,
+                                            return_img=True))
+            finally:
+                view.close()
+                pl.close()
+    img = images[0] if len(images) == 1 else np.concatenate(images, axis=1)
     if filename is not None:
         from splineviz.io.meshes import write_screenshot
 

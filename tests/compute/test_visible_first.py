@@ -143,6 +143,17 @@ def test_volume_too_big_for_the_device_is_refused(ml):
     rc._check_device_memory(vol.shape, rc._cells)  # what it already holds fits
 
 
+@needs_cl
+def test_volume_past_32_bit_sample_indices_is_refused(ml):
+    # 1300^3 is 2.2e9 samples: 2.2 GB of uint8 fits an H200 easily, but the kernels' int
+    # offsets wrap past 2^31 - 1 (a wrong picture or a kernel fault, seen at 1536^3)
+    vol, _ = ml
+    for model in ("trilinear", "cubic-c1"):
+        rc = RayCaster(vol, model=model)
+        with pytest.raises(RayCastError, match="more than one ray caster addresses"):
+            rc._check_device_memory((1300, 1300, 1300), (1300, 1300, 1300), itemsize=1)
+
+
 @pytest.mark.parametrize("model", ["cubic-c1", "super-quadratic"])
 def test_cube_program_is_determining_set_plus_rules(model):
     # the kernel's ordered program gives the cube coefficients of the core masks (and of

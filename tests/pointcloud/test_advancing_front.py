@@ -178,6 +178,18 @@ def test_laid_over_triangles_are_detected():
     assert not front._covered(np.array([[0.3, 0.1, 0.0]]), centre, 0.2)  # beside it
 
 
+def test_seeds_are_not_placed_on_the_mesh():
+    front = _plane_front()
+    pts = front.proj.points
+    here = int(np.argmin(np.linalg.norm(pts, axis=1)))  # the input point nearest the origin
+    up = np.array([0.0, 0.0, 1.0])
+    corners = [pts[here] + d for d in ([-0.4, -0.3, 0], [0.4, -0.3, 0], [0, 0.4, 0])]
+    front._add_triangle(*[front._add_vertex(np.asarray(x, dtype=float), up) for x in corners])
+    assert not front._seed(here)
+    far = int(np.argmax(np.linalg.norm(pts, axis=1)))  # a corner of the square, 2.8 away
+    assert front._seed(far)
+
+
 def test_given_up_edges_are_retried_and_holes_filled(monkeypatch):
     """Edges that fail are retried with shorter edges and what is left is filled: the sphere
     still comes out closed."""

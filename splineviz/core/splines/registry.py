@@ -76,6 +76,12 @@ class ModelSpec:
         return KERNEL_FAMILIES.get(self.family) if self.family else None
 
     @property
+    def centred_cells(self) -> bool:
+        """Whether the ray caster's cells are cubes centred at the samples (type-6, thesis
+        §4.4) rather than the unit cells between samples (trilinear, truncated octahedra)."""
+        return self.family == "type6"
+
+    @property
     def display_label(self) -> str:
         return self.label or self.name
 

@@ -86,8 +86,15 @@ class PlaneWidgets:
             widgets.remove(w)
 
     def close(self) -> None:
+        """Stop following the scene: the planes stay, their widgets go (a closed view's
+        widgets must not hear of later moves)."""
         self.scene.inserted.disconnect(self._inserted)
         self.scene.removed.disconnect(self._removed)
+        for node_id, w in list(self.widgets.items()):
+            if node_id in self.scene:
+                self.scene.get(node_id).events.disconnect(self._changed)
+            w.Off()
+        self.widgets.clear()
 
 
 class ClippingPanel(QWidget):

@@ -22,7 +22,7 @@ from superqt import QLabeledDoubleSlider
 
 from splineviz.core.splines import MODELS
 from splineviz.gui.widgets import ColorButton, HistogramSlider
-from splineviz.model import MATERIALS, IsosurfaceNode, Scene, VolumeNode
+from splineviz.model import MATERIALS, SIDES, IsosurfaceNode, Scene, VolumeNode
 from splineviz.model.summaries import cached_histogram
 
 #: volumes with at most this many samples get their histogram in the GUI thread
@@ -77,6 +77,12 @@ class IsosurfacePanel(QWidget):
         self.material = QComboBox()
         self.material.addItems(list(MATERIALS))
         self.material.setToolTip("Shading: ambient, diffuse, specular and shininess constants")
+        self.shown_in = QComboBox()
+        for side in SIDES:
+            self.shown_in.addItem({"both": "both views", "left": "left view",
+                                   "right": "right view"}[side], side)
+        self.shown_in.setToolTip("Which of the two linked views shows this isosurface while "
+                                 "the view is split (View > Split view)")
         self.add_button = QPushButton("Add isosurface")
         self.add_button.setToolTip("Another isosurface of the same volume, at another value")
         form = QFormLayout(self)
@@ -88,6 +94,7 @@ class IsosurfacePanel(QWidget):
         form.addRow("Colour", self.color)
         form.addRow("Opacity", self.opacity)
         form.addRow("Material", self.material)
+        form.addRow("Shown in", self.shown_in)
         form.addRow(self.add_button)
         self._syncing = False
         self.fill_models()
@@ -99,6 +106,9 @@ class IsosurfacePanel(QWidget):
         self.color.colorChanged.connect(lambda c: self._write("color", tuple(c)))
         self.opacity.valueChanged.connect(lambda v: self._write("opacity", float(v)))
         self.material.currentTextChanged.connect(lambda m: self._write("material", m))
+        self.shown_in.currentIndexChanged.connect(lambda _i: self._write(
+            "shown_in", self.shown_in.currentData()))
+        scene.view.events.split.connect(self._split_changed)
         self.add_button.clicked.connect(self.add_isosurface)
         scene.selection.connect(self._selection_changed)
         scene.removed.connect(self._removed)
@@ -138,6 +148,7 @@ class IsosurfacePanel(QWidget):
         for w in (self.histogram, self.spin, self.model, self.k, self.color, self.opacity,
                   self.material):
             w.setEnabled(node is not None)
+        self._split_changed(self.scene.view.split)
         self.add_button.setEnabled(self._volume is not None)
         if self._volume is not None:
             self._volume.events.connect(self._volume_changed)
@@ -189,6 +200,7 @@ class IsosurfacePanel(QWidget):
             self.color.setColor(n.color)
             self.opacity.setValue(n.opacity)
             self.material.setCurrentText(n.material)
+            self.shown_in.setCurrentIndex(self.shown_in.findData(n.shown_in))
         finally:
             self._syncing = False
 
@@ -197,6 +209,10 @@ class IsosurfacePanel(QWidget):
             if info.signal.name == "name":
                 self.title.setText(f"{self.node.name} of {self._volume.name}")
             self._sync_all()
+
+    def _split_changed(self, on: bool) -> None:
+        """The side only matters while the view is split."""
+        self.shown_in.setEnabled(self.node is not None and bool(on))
 
     def _volume_changed(self, info) -> None:
         if info.signal.name in ("smoothed", "sigma", "data") and self.node is not None:
@@ -228,6 +244,10 @@ class IsosurfacePanel(QWidget):
     def add_isosurface(self) -> IsosurfaceNode | None:
         if self._volume is None:
             return None
-        node = self.scene.add_isosurface(self._volume)
+        # while split, a new isosurface joins the side of the current one (a second
+        # isovalue in the right view stays in the right view)
+        side = self.node.shown_in if self.node is not None and self.scene.view.split \
+            else "both"
+        node = self.scene.add_isosurface(self._volume, shown_in=side)
         self.scene.select(node)
         return node
