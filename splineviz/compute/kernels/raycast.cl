@@ -406,8 +406,14 @@ inline int brick_entry(__global uint *slots, __global uint *pool, int pool_cap, 
                        int3 cell, int BY, int BZ, __global int *counts)
 {
     const int b = ((cell.x >> 1) * BY + (cell.y >> 1)) * BZ + (cell.z >> 1);
-    const uint e = slots[b];
-    if ((e >> 24) == epoch) return (int)(e & CODE_MASK);
+    // volatile loads of the cache: another work-group may have published the brick since,
+    // and a GPU's non-coherent L1 could still hold the line from before (seen on an H200:
+    // one ray in ~7000 read an entry's stale words and missed its first root)
+    const uint e = ((volatile __global const uint *)slots)[b];
+    if ((e >> 24) == epoch) {
+        read_mem_fence(CLK_GLOBAL_MEM_FENCE);  // the slot before its entry's words
+        return (int)(e & CODE_MASK);
+    }
     const int a = atomic_inc(&counts[2]);
     if (a >= pool_cap) return -1;
     for (int w = 0; w < 8 * CELL_WORDS; ++w) pool[a * 8 * CELL_WORDS + w] = 0u;
@@ -520,7 +526,7 @@ inline uint type6_cached_code(__global uint *slots, __global uint *pool, int poo
     const int a = brick_entry(slots, pool, pool_cap, epoch, cube, BY, BZ, counts);
     const int at = a >= 0 ? cell_word(a, cube) : 0;
     if (a >= 0) {
-        const uint v = pool[at];
+        const uint v = ((volatile __global const uint *)pool)[at];
         if (v & VALID) return v & CODE_MASK;
     }
     const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
@@ -642,8 +648,10 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
 {
     const int a = brick_entry(slots, pool, pool_cap, epoch, cell, BY, BZ, counts);
     const int at = a >= 0 ? cell_word(a, cell) : 0;
-    if (a >= 0 && pool[at + NWORDS] != 0u) {
-        for (int w = 0; w < NWORDS; ++w) words[w] = pool[at + w];
+    volatile __global const uint *vpool = pool;
+    if (a >= 0 && vpool[at + NWORDS] != 0u) {
+        read_mem_fence(CLK_GLOBAL_MEM_FENCE);  // the flag before the words it publishes
+        for (int w = 0; w < NWORDS; ++w) words[w] = vpool[at + w];
         return;
     }
     // level 1 of the octree is stored first (offset 0) with the node strides BY, BZ; the
