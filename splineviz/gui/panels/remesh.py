@@ -21,6 +21,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from splineviz.gui.jobs import call_named
 from splineviz.model import MeshNode, PointsNode, Scene
 from splineviz.model.summaries import cached_spacing, known_spacing
 
@@ -137,9 +138,9 @@ class RemeshPanel(QWidget):
                                        edge_length=edge, rho=rho, stats=out["quality"])
             self.scene.select(mesh)
 
-        from splineviz.pointcloud.remesh import remesh_with_quality
-
         # a process, not a thread: the front is Python that would hold the GIL for
-        # hundreds of milliseconds at a time, and Cancel can stop a process at once
-        return self.jobs.run(f"Remeshing {node.name}", remesh_with_quality, node.data,
+        # hundreds of milliseconds at a time, and Cancel can stop a process at once; the
+        # remesher is named, not imported here (its imports would freeze the window)
+        return self.jobs.run(f"Remeshing {node.name}", call_named,
+                             "splineviz.pointcloud.remesh:remesh_with_quality", node.data,
                              edge_length=edge, rho=rho, on_done=done, process=True)
