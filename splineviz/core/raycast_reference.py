@@ -96,6 +96,15 @@ class Frame:
     def normal(self, value) -> None:
         self._normal = value
 
+    def load(self) -> Frame:
+        """Read the deferred positions and normals now, in this thread; returns ``self``.
+
+        A viewer calls it in its render worker: read later in the GUI thread, the read-back
+        would wait behind the next frame's kernel on the device queue (slider previews were
+        ~30 ms later)."""
+        self.position, self.normal = self.position, self.normal
+        return self
+
 
 def normalize_clip_planes(clip_planes) -> np.ndarray:
     """Clip planes as a ``(P, 2, 3)`` float64 array of (origin, unit normal).

@@ -475,7 +475,7 @@ class IsosurfaceLayer:
             try:
                 frame = rc.render(view.camera, size=(sw, sh),
                                   clip_planes=tuple(view.clip_planes) + self.clip_planes,
-                                  **extra)
+                                  **extra).load()
             except SplinevizError as exc:
                 from splineviz.compute.bricked import RenderCancelled
 
