@@ -15,6 +15,7 @@ from pathlib import Path
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtGui import QAction, QGuiApplication
 from PySide6.QtWidgets import (
+    QApplication,
     QDockWidget,
     QLabel,
     QMainWindow,
@@ -363,8 +364,6 @@ class MainWindow(QMainWindow):
 
     def wait_idle(self, timeout_s: float = 120.0) -> None:
         """Process events until no job runs (tests and scripted use)."""
-        from PySide6.QtWidgets import QApplication
-
         end = time.perf_counter() + timeout_s
         while time.perf_counter() < end:
             QApplication.processEvents()
@@ -380,8 +379,12 @@ class MainWindow(QMainWindow):
         return self.linked_views.second
 
     def wait_for_refine(self, timeout_s: float = 120.0) -> None:
-        """Process events until every view shows exact frames."""
+        """Process events until every view shows exact frames (a second view still
+        opening is waited for first)."""
         end = time.perf_counter() + timeout_s
+        while self.linked_views.opening and time.perf_counter() < end:
+            QApplication.processEvents()
+            time.sleep(0.005)
         for view in self.linked_views.views:
             view.wait_for_refine(max(end - time.perf_counter(), 0.0))
 

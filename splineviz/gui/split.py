@@ -13,17 +13,37 @@ Both views draw the one camera of the model: a drag in either moves VTK's camera
 view writes it into the model after the frame and the other view follows (one preview frame
 later). While one view is dragged the other shows previews too, and both refine to exact
 frames in their own workers once the drag ends.
+
+The second view opens in steps, one per turn of the event loop (:data:`OPEN_STEPS`): made at
+once, its widget, its scene, the first paint of a new OpenGL context (the blit shader of
+software GL), the first frame of its props (their shaders) and the first view's repaint at
+half the width held the GUI thread 380-550 ms in one piece; each step alone stays well under
+the project's 100 ms. The view counts as open (:attr:`LinkedViews.second`) after the last.
 """
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
-from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QSplitter
+from PySide6.QtCore import Qt, QTimer
+from PySide6.QtGui import QColor, QPalette
+from PySide6.QtWidgets import QSplitter, QWidget
 
 from splineviz.gui.panels import PlaneWidgets
 from splineviz.gui.view import View3D
 from splineviz.model import IsosurfaceNode, VolumeNode
+
+#: the steps that open the second view, each in its own turn of the event loop (see the
+#: module docstring); methods of :class:`LinkedViews`
+OPEN_STEPS = ("_make_room", "_make_view", "_first_paint", "_attach_scene", "_first_frame",
+              "_add_grid", "_grid_frame", "_finish_opening")
+#: milliseconds between two steps of opening
+OPEN_STEP_GAP_MS = 16
+#: a step whose timer fired this much later than due (other work held the GUI thread just
+#: before: a render, a refined frame) waits another gap, at most :data:`OPEN_STEP_WAITS` times
+OPEN_STEP_LATE_MS = 8
+OPEN_STEP_WAITS = 4
 
 
 class LinkedViews:
@@ -49,6 +69,22 @@ class LinkedViews:
         #: closed second views whose workers may still be finishing a frame (joined on exit)
         self._retired: list[View3D] = []
         self._closed = False
+        #: while the second view opens: the steps still to run, the view being made and the
+        #: pane that holds its place in the splitter until its widget is shown
+        self._steps: list[str] | None = None
+        self._opening: View3D | None = None
+        self._placeholder: QWidget | None = None
+        self._first_dragging = False
+        #: hidden second views to close on the next turn, with their plane widgets
+        self._closing: list = []
+        self._step_timer = QTimer(self.splitter)
+        self._step_timer.setSingleShot(True)
+        # a frame's time between steps: the paints and renders a step asks for, and the
+        # user's input, run before the next step, not in one piece with it
+        self._step_timer.setInterval(OPEN_STEP_GAP_MS)
+        self._step_timer.timeout.connect(self._next_step)
+        self._step_due = 0.0
+        self._step_waits = 0
         window.view.interacting.connect(self._first_interacting)
         window.view.activated.connect(lambda: self._activated("left"))
         self.scene.view.events.split.connect(self._split_changed)
@@ -59,6 +95,11 @@ class LinkedViews:
     def views(self) -> list[View3D]:
         """The views shown now, left to right."""
         return [self.window.view] + ([self.second] if self.second is not None else [])
+
+    @property
+    def opening(self) -> bool:
+        """Whether the second view is being opened (steps still to run)."""
+        return self._steps is not None
 
     # -- the model's split ---------------------------------------------------------------
 
@@ -84,10 +125,11 @@ class LinkedViews:
         """Move the camera along its line of sight so that the first view, now of another
         aspect ratio, shows the scene as wide as before (a perspective view shows a width
         of ``2 d tan(angle / 2) aspect`` at distance ``d``)."""
-        sizes = self.splitter.sizes()
-        # the splitter lays out a removed view's room later: the first view gets it all
-        after = self._first_aspect(sizes[0] if self.second is not None
-                                   else self.splitter.width())
+        # the first view gets half the width once the second view opens (in steps: the
+        # splitter has not made room yet) and all of it when it closes (laid out later)
+        total = self.splitter.width()
+        split = self.second is not None or self.opening
+        after = self._first_aspect(total // 2 if split else total)
         if before <= 0.0 or after <= 0.0 or abs(after / before - 1.0) < 0.02:
             return
         cam = self.scene.camera
@@ -117,48 +159,151 @@ class LinkedViews:
         action = getattr(self.window, "actions_by_name", {}).get("split")
         if action is not None and action.isChecked() != on:
             action.setChecked(on)
-        if on and self.second is None:
+        if on and self.second is None and not self.opening:
             self._open_second()
-        elif not on and self.second is not None:
+        elif not on and (self.second is not None or self.opening):
             self._close_second()
 
+    # -- opening the second view in steps (OPEN_STEPS) -----------------------------------
+
     def _open_second(self) -> None:
-        w = self.window
-        view = View3D(self.scene, w, device=w.device, side="right")
-        self.second = view
-        self.splitter.addWidget(view.plotter)
+        self._steps = list(OPEN_STEPS)
+        self._arm_step()
+
+    def _arm_step(self) -> None:
+        self._step_due = time.perf_counter() + OPEN_STEP_GAP_MS / 1000.0
+        self._step_timer.start()
+
+    def _next_step(self) -> None:
+        if self._steps is None or self._closed:
+            return
+        # run after other work, not right behind it in one piece
+        late_ms = 1000.0 * (time.perf_counter() - self._step_due)
+        if late_ms > OPEN_STEP_LATE_MS and self._step_waits < OPEN_STEP_WAITS:
+            self._step_waits += 1
+            self._arm_step()
+            return
+        self._step_waits = 0
+        getattr(self, self._steps.pop(0))()
+        if self._steps:
+            self._arm_step()
+        else:
+            self._steps = None
+
+    def _make_room(self) -> None:
+        """A plain pane of the background colour takes the right half: the first view is
+        repainted at its new width now, not in the same turn as the new view's first paint."""
+        pane = QWidget()
+        palette = pane.palette()
+        palette.setColor(QPalette.ColorRole.Window, QColor.fromRgbF(
+            *self.window.view.plotter.renderer.GetBackground()))
+        pane.setPalette(palette)
+        pane.setAutoFillBackground(True)
+        self._placeholder = pane
+        # added hidden, then shown and laid out at once: the first view is resized (and
+        # repainted: a QOpenGLWidget paints in its resize event) once, not twice
+        pane.hide()
+        self.splitter.addWidget(pane)
         # half each: the two pictures are compared at one size
         total = sum(self.splitter.sizes()) or self.splitter.width()
         self.splitter.setSizes([total // 2, total - total // 2])
+        pane.show()
+        self.splitter.refresh()
+
+    def _make_view(self) -> None:
+        """The second view's widget, not shown yet and without the scene."""
+        w = self.window
+        self._opening = View3D(self.scene, w, device=w.device, side="right", attach=False)
+
+    def _first_paint(self) -> None:
+        """The widget replaces the pane: its OpenGL context is made and painted once with
+        the background only."""
+        pane, self._placeholder = self._placeholder, None
+        self.splitter.replaceWidget(self.splitter.indexOf(pane), self._opening.plotter)
+        pane.deleteLater()
+
+    def _attach_scene(self) -> None:
+        """The scene's objects become the view's props (drawn in the next step); the
+        view's signals and the clip planes' widgets are connected."""
+        w, view = self.window, self._opening
+        view.attach(grid=False)
         view.readout.connect(w.readout_label.setText)
         view.busy.connect(w._view_busy)
         view._refiner.error.connect(w.show_error)
         view.interacting.connect(self._second_interacting)
         view.activated.connect(lambda: self._activated("right"))
         self._second_planes = PlaneWidgets(self.scene, view.plotter, view.request_render)
+
+    def _first_frame(self) -> None:
+        """The first frame of the scene's props; the isosurfaces follow as exact frames
+        from the view's worker (their ray casters are made there)."""
+        self._opening._render_now()
+
+    def _add_grid(self) -> None:
+        """The axes grid, when the scene shows it (drawn in the next step)."""
+        self._opening.add_grid()
+
+    def _grid_frame(self) -> None:
+        """The grid's first frame (its labels' first frame in this context)."""
+        self._opening._render_now()
+
+    def _finish_opening(self) -> None:
+        """The orientation axes (their own first frame), and the view is open."""
+        view, self._opening = self._opening, None
+        view.add_axes()
+        self.second = view
         view.request_render()
+        # a drag that began in the first view while this one opened: follow it
+        if self._first_dragging:
+            view.follow_interaction(True)
+
+    def _abandon_opening(self) -> View3D | None:
+        """Stop opening; the view made so far (None if none) is returned to be closed."""
+        self._steps = None
+        self._step_timer.stop()
+        if self._placeholder is not None:
+            self._placeholder.hide()
+            self._placeholder.setParent(None)
+            self._placeholder.deleteLater()
+            self._placeholder = None
+        view, self._opening = self._opening, None
+        return view
 
     def _close_second(self) -> None:
-        view, self.second = self.second, None
-        if self._second_planes is not None:
-            self._second_planes.close()
-            self._second_planes = None
-        view.close()
+        opening = self._abandon_opening()
+        view, self.second = self.second or opening, None
+        if view is None:
+            self.window.view.request_render()
+            return
+        planes, self._second_planes = self._second_planes, None
+        # in two turns of the event loop: hidden now (the first view takes the width and is
+        # repainted), closed in the next (its scene, workers and OpenGL context): in one
+        # piece the two held the GUI thread 120-260 ms
         view.plotter.hide()
-        view.plotter.setParent(None)
-        # kept while a frame it was ray casting may still run (joined at exit: pocl aborts
-        # a process that exits while one of its threads is inside OpenCL); earlier ones
-        # whose workers ended are let go
-        for old in [v for v in self._retired if v.join(0.0)]:
-            self._retired.remove(old)
-            old.plotter.deleteLater()
-            old.deleteLater()
-        self._retired.append(view)
+        self._closing.append((view, planes))
+        QTimer.singleShot(OPEN_STEP_GAP_MS, self._finish_closing)
         self.window.view.request_render()
+
+    def _finish_closing(self) -> None:
+        while self._closing:
+            view, planes = self._closing.pop(0)
+            if planes is not None:
+                planes.close()
+            view.close()
+            view.plotter.setParent(None)
+            # kept while a frame it was ray casting may still run (joined at exit: pocl
+            # aborts a process that exits while one of its threads is inside OpenCL);
+            # earlier ones whose workers ended are let go
+            for old in [v for v in self._retired if v.join(0.0)]:
+                self._retired.remove(old)
+                old.plotter.deleteLater()
+                old.deleteLater()
+            self._retired.append(view)
 
     # -- linking -------------------------------------------------------------------------
 
     def _first_interacting(self, on: bool) -> None:
+        self._first_dragging = on
         if self.second is not None:
             self.second.follow_interaction(on)
 
@@ -190,8 +335,10 @@ class LinkedViews:
         """The window is closing: close the second view (the first is the window's)."""
         self._closed = True
         self.scene.view.events.split.disconnect(self._split_changed)
-        if self.second is not None:
-            view, self.second = self.second, None
+        self._finish_closing()
+        opening = self._abandon_opening()
+        if self.second is not None or opening is not None:
+            view, self.second = self.second or opening, None
             if self._second_planes is not None:
                 self._second_planes.close()
                 self._second_planes = None
@@ -200,8 +347,6 @@ class LinkedViews:
 
     def join(self, timeout_s: float) -> bool:
         """After :meth:`close`: wait for frames the second views were still casting."""
-        import time
-
         end = time.perf_counter() + timeout_s
         ok = True
         for view in self._retired:

@@ -51,6 +51,10 @@ class View3D(QObject):
     min_size : (width, height) or None
     side : {None, "left", "right"}
         The side of a split view this view is (see :class:`SceneView`).
+    attach : bool
+        Show the scene at once. False makes only the widget (cheap, nothing drawn yet);
+        :meth:`attach` shows the scene later — a split view opens in steps this way, so
+        that no step holds the GUI thread long (:class:`splineviz.gui.split.LinkedViews`).
     """
 
     frame_rendered = Signal(float)
@@ -60,23 +64,25 @@ class View3D(QObject):
     activated = Signal()
 
     def __init__(self, scene: Scene, parent_widget, device=None, min_size=None,
-                 side: str | None = None):
+                 side: str | None = None, attach: bool = True):
         super().__init__(parent_widget)
         from pyvistaqt import QtInteractor
 
         self.scene = scene
         self.side = side
+        self._device = device
         # no multisampling: on software GL (llvmpipe) 4x MSAA cost ~80 ms of a 1024x768
         # frame (113 -> 33 ms measured); the ray-cast image is one sample per pixel anyway
         self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0)
         self.plotter.enable_anti_aliasing = None
         if min_size is not None:
             self.plotter.setMinimumSize(*min_size)
-        self.scene_view = SceneView(scene, self.plotter, progressive=True, device=device,
-                                    side=side)
-        self.spline_scene = self.scene_view.spline_scene
-        self.spline_scene.request_refine = self._schedule_refine
-        self._axes = self.plotter.add_axes()
+        # the scene's background from the first paint on, also before :meth:`attach`
+        self.plotter.set_background(scene.view.background)
+        #: the scene shown (None until :meth:`attach`)
+        self.scene_view: SceneView | None = None
+        self.spline_scene = None
+        self._axes = None
         self._refiner = JobRunner(self)
         self._refiner.changed.connect(self._refine_ended)
         self._render_timer = QTimer(self)
@@ -110,7 +116,36 @@ class View3D(QObject):
         rw.AddObserver("EndEvent", self._frame_end)
         self.plotter.installEventFilter(self)
         self.plotter.setMouseTracking(True)
-        scene.changed.connect(self.request_render)
+        if attach:
+            self.attach()
+            self.add_axes()
+
+    def attach(self, grid: bool = True) -> None:
+        """Show the scene: its objects become VTK props of this view (nothing is rendered
+        here) and the view renders on every change of the scene. ``grid=False``: the axes
+        grid follows with :meth:`add_grid` (see :class:`SceneView`)."""
+        if self.scene_view is not None or self._closed:
+            return
+        self.scene_view = SceneView(self.scene, self.plotter, progressive=True,
+                                    device=self._device, side=self.side, grid=grid)
+        self.spline_scene = self.scene_view.spline_scene
+        self.spline_scene.request_refine = self._schedule_refine
+        self.scene.changed.connect(self.request_render)
+
+    def add_grid(self) -> None:
+        """The axes grid of a view attached without it."""
+        if self.scene_view is not None and not self._closed:
+            self.scene_view.enable_grid()
+
+    def add_axes(self) -> None:
+        """The orientation axes in the corner (their first frame compiles their shaders:
+        a split view adds them after its first picture)."""
+        if self._axes is None and not self._closed:
+            self._axes = self.plotter.add_axes()
+
+    @property
+    def attached(self) -> bool:
+        return self.scene_view is not None
 
     @property
     def widget(self):
@@ -131,7 +166,7 @@ class View3D(QObject):
             self.plotter.render()
 
     def _camera_to_model(self) -> None:
-        if self._closed:
+        if self._closed or self.scene_view is None:
             return
         self._syncing_camera = True
         try:
@@ -154,10 +189,14 @@ class View3D(QObject):
         self.frame_rendered.emit(dt)
 
     def _interaction_started(self, *_):
+        if self.spline_scene is None:
+            return
         self.spline_scene.set_interacting(True)
         self.interacting.emit(True)
 
     def _interaction_ended(self, *_):
+        if self.spline_scene is None:
+            return
         self.spline_scene.set_interacting(False)
         self._render_now()  # schedules the exact frames
         self.interacting.emit(False)
@@ -166,7 +205,7 @@ class View3D(QObject):
         """A linked view's drag began or ended: previews only meanwhile (an exact frame
         started here would compete for the device with the previews of both views), the
         exact frames once it ended — after the camera it last showed reached this view."""
-        if self._closed:
+        if self._closed or self.spline_scene is None:
             return
         self.spline_scene.set_interacting(on)
         if not on:
@@ -186,7 +225,7 @@ class View3D(QObject):
             self._refine_timer.start()
 
     def _start_refine(self) -> None:
-        if self._closed:
+        if self._closed or self.spline_scene is None:
             return
         if self._refine_job is not None:
             self._refine_again = True
@@ -230,6 +269,9 @@ class View3D(QObject):
         end = time.perf_counter() + timeout_s
         while time.perf_counter() < end:
             QApplication.processEvents()
+            if self.spline_scene is None:
+                time.sleep(0.005)
+                continue
             if not self.refining and not self.spline_scene.needs_refine():
                 return
             if not self.refining:
@@ -287,7 +329,7 @@ class View3D(QObject):
         """The nearest isosurface hit at widget pixel (x, y): ``{"name", "position",
         "isovalue", "value"}`` (``value``: the data interpolated there), or None."""
         w, h = self.plotter.width(), self.plotter.height()
-        if w < 1 or h < 1:
+        if w < 1 or h < 1 or self.scene_view is None:
             return None
         best = None
         for node_id, layer in self.scene_view.layers.items():
@@ -332,8 +374,9 @@ class View3D(QObject):
         self._camera_timer.stop()
         self._render_timer.stop()
         self._refiner.close()
-        self.scene.changed.disconnect(self.request_render)
-        self.scene_view.close()
+        if self.scene_view is not None:
+            self.scene.changed.disconnect(self.request_render)
+            self.scene_view.close()
         self.plotter.close()
 
     def join(self, timeout_s: float) -> bool:

@@ -34,7 +34,8 @@ from splineviz.render.colormaps import colorize, lut
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
 from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
 
-#: seconds a synchronous preview may take (keeps the window responsive while dragging)
+#: seconds a synchronous preview may take in the GUI thread, from the cast to its uploaded
+#: textures (keeps the window responsive while dragging)
 PREVIEW_BUDGET_S = 0.045
 #: smallest preview resolution factor
 MIN_PREVIEW_SCALE = 1.0 / 16.0
@@ -313,13 +314,19 @@ class SplineScene:
                 self._show(layer, layer.compute(view))
             else:
                 scale, fast = self._preview_scale(layer, lv, view)
+                t_preview = time.perf_counter()
                 rf = layer.compute(view, scale=scale, preview=fast, blocking=False)
                 if rf is not None:  # else a worker holds the caster: keep the old frame
                     size = rf.frame.hit.shape
-                    lv.preview_seconds = rf.seconds if size in lv.preview_sizes else None
-                    lv.preview_sizes.add(size)
                     lv.preview_scale = rf.scale  # the next step starts from the level cast
                     self._show(layer, rf)
+                    # the whole preview counts against the budget, not only the cast:
+                    # reading its positions and normals, the colour-by values and making and
+                    # uploading its textures here took as long again at the larger levels
+                    # (two previews per drag step in a split view: 120-180 ms steps)
+                    spent = time.perf_counter() - t_preview
+                    lv.preview_seconds = spent if size in lv.preview_sizes else None
+                    lv.preview_sizes.add(size)
                 stale.append(layer)
         self._order_quads()
         self._fit_scalar_bars()

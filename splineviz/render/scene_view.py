@@ -50,10 +50,15 @@ class SceneView:
     side : {None, "left", "right"}
         Which of the two views of a split scene this is (:attr:`splineviz.model.ViewNode.split`):
         it leaves out the objects shown only on the other side. None: every object.
+    grid : bool
+        Show the axes grid (the scene's ``show_scale``) from the start. False leaves it out
+        until :meth:`enable_grid`: the first frame of its labels in a new OpenGL context
+        takes 40-85 ms, and a view that opens while the window runs draws it one turn of
+        the event loop after its first picture.
     """
 
     def __init__(self, scene: Scene, plotter, progressive: bool = False, device=None,
-                 side: str | None = None):
+                 side: str | None = None, grid: bool = True):
         self.scene = scene
         self.plotter = plotter
         self.device = device
@@ -63,6 +68,7 @@ class SceneView:
         self._props: dict[str, str] = {}  # node id -> prop name in the SplineScene
         self._handlers: dict[str, object] = {}
         self._grid = None
+        self._grid_enabled = bool(grid)
         self._camera_lock = False
         scene.inserted.connect(self._inserted)
         scene.removed.connect(self._removed)
@@ -327,11 +333,18 @@ class SceneView:
         self.plotter.set_background(self.scene.view.background)
         self._update_grid()
 
+    def enable_grid(self) -> None:
+        """Show the axes grid from now on (see the ``grid`` parameter)."""
+        self._grid_enabled = True
+        self._update_grid()
+
     def _update_grid(self) -> None:
         """An axes grid with world-unit labels around all data (the scale of the scene).
 
         The grid actor is made once, with the view, and then only moved or hidden: building
         one takes pyvista ~40 ms, too long for the GUI thread whenever data is opened."""
+        if not self._grid_enabled:
+            return
         if self._grid is None:
             self._grid = self.plotter.show_bounds(
                 bounds=(0, 1, 0, 1, 0, 1), color=OUTLINE_COLOR, grid=False, location="outer",
