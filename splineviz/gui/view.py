@@ -23,6 +23,31 @@ from splineviz.render.scene_view import SceneView
 REFINE_DELAY_MS = 120
 #: delay before the value under the cursor is looked up after the mouse stops
 READOUT_DELAY_MS = 40
+#: OpenGL's GL_NEAREST (see :func:`_render_window`)
+_GL_NEAREST = 0x2600
+
+
+def _render_window():
+    """The VTK render window of a view: pyvistaqt's, whose copy of each frame to the Qt
+    widget is a plain copy.
+
+    pyvistaqt blits VTK's frame into the widget's framebuffer with linear filtering. The
+    two are always the same size, so nearest filtering gives the same pixels; but Mesa's
+    software GL (llvmpipe) copies a same-size nearest blit directly, while a linear one
+    goes through a shader it compiles for every new OpenGL context: the first paint of a
+    new view (a split view's second one) took 74-206 ms for that compile alone, 0.1 ms
+    with nearest filtering.
+    """
+    from vtkmodules.vtkRenderingOpenGL2 import vtkGenericOpenGLRenderWindow
+
+    class RenderWindow(vtkGenericOpenGLRenderWindow):
+        def BlitDisplayFramebuffer(self, *args):  # noqa: N802 (VTK naming)
+            # (read index, source x, y, w, h, destination x, y, w, h, mask, filter)
+            if len(args) == 11 and tuple(args[3:5]) == tuple(args[7:9]):
+                args = (*args[:10], _GL_NEAREST)
+            return super().BlitDisplayFramebuffer(*args)
+
+    return RenderWindow()
 
 
 class View3D(QObject):
@@ -73,7 +98,8 @@ class View3D(QObject):
         self._device = device
         # no multisampling: on software GL (llvmpipe) 4x MSAA cost ~80 ms of a 1024x768
         # frame (113 -> 33 ms measured); the ray-cast image is one sample per pixel anyway
-        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0)
+        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0,
+                                    rw=_render_window())
         self.plotter.enable_anti_aliasing = None
         if min_size is not None:
             self.plotter.setMinimumSize(*min_size)

@@ -389,8 +389,15 @@ class IsosurfaceLayer:
         exist yet and ``build`` is False (building uploads the data: not in the GUI thread)."""
         from splineviz.compute.raycast import RayCaster
 
-        if not build and self._caster is None:
-            return None, None
+        if not build:
+            # read without the lock: a worker holds it for a whole exact frame, and the GUI
+            # thread's preview waited for it (170 ms when a split view's first view was
+            # repainted at half width while its exact frame was being cast). The builder
+            # makes both casters under the lock; until it has, there is no preview.
+            exact, fast = self._caster, self._preview
+            if exact is None or (fast is None and exact.stats.get("path") != "opencl"):
+                return None, None
+            return exact, fast
         with self._lock:
             if self._caster is None:
                 self._caster = make_caster(self._volume, self._model, self._device,

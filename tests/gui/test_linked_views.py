@@ -63,8 +63,8 @@ def window(qapp, tmp_path_factory):
     pump(0.3)
     w.wait_for_refine(120)
     w.actions_by_name["split"].trigger()
-    pump(0.3)
-    assert w.view2 is not None
+    # the second view opens in steps (gui.split.OPEN_STEPS), one per turn of the event loop
+    assert pump(30, lambda: w.view2 is not None)
     w.view2.plotter.hide_axes()
     w.view.standard_view("isometric")  # the data framed for the narrower views
     w.wait_for_refine(120)
@@ -294,7 +294,7 @@ def test_session_round_trip_keeps_the_split_and_the_views_settings(window, tmp_p
     right.update(model="cubic-c1", shown_in="both")
     # loading the session splits the view again with the saved isosurfaces
     w.open_path(path, block=True)
-    pump(0.3)
+    pump(30, lambda: w.view2 is not None)
     assert w.scene.view.split and w.view2 is not None
     assert w.actions_by_name["split"].isChecked()
     got = {n.id: (n.shown_in, n.model, n.isovalue) for n in w.scene.isosurfaces}
