@@ -10,6 +10,7 @@ cursor the view reports the world position and data value of the first isosurfac
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -25,6 +26,47 @@ REFINE_DELAY_MS = 120
 READOUT_DELAY_MS = 40
 #: OpenGL's GL_NEAREST (see :func:`_render_window`)
 _GL_NEAREST = 0x2600
+
+
+@functools.cache
+def _interactor_class():
+    """pyvistaqt's ``QtInteractor`` that draws a frame VTK has just rendered without
+    rendering it again.
+
+    pyvistaqt renders the whole scene in every paint, also in the paint that a finished
+    render schedules to show itself (it cannot know whether pyvista changed the scene
+    since). This app renders only through :meth:`View3D.request_render` (and VTK's own
+    interactor and widgets, which render themselves), so that second render of each frame
+    is the same picture again: 10-25 ms of every drag step of each view. A paint that no
+    render scheduled (an expose, a resize) still renders.
+    """
+    from pyvistaqt import QtInteractor
+
+    class Interactor(QtInteractor):
+        _frame_ready = False
+
+        def _cb_frame(self, obj, evt):
+            # pyvistaqt schedules a paint unless the render ran inside one
+            if not self._in_paint:
+                self._frame_ready = True
+            super()._cb_frame(obj, evt)
+
+        def resizeGL(self, w, h):  # noqa: N802 (Qt naming)
+            self._frame_ready = False  # the frame is of the old size
+            super().resizeGL(w, h)
+
+        def paintGL(self):  # noqa: N802
+            ready, self._frame_ready = self._frame_ready, False
+            if not ready or self._in_paint:
+                super().paintGL()
+                return
+            self._in_paint = True  # pyvistaqt's paint then blits without rendering
+            try:
+                super().paintGL()
+            finally:
+                self._in_paint = False
+
+    return Interactor
 
 
 def _render_window():
@@ -91,15 +133,13 @@ class View3D(QObject):
     def __init__(self, scene: Scene, parent_widget, device=None, min_size=None,
                  side: str | None = None, attach: bool = True):
         super().__init__(parent_widget)
-        from pyvistaqt import QtInteractor
-
         self.scene = scene
         self.side = side
         self._device = device
         # no multisampling: on software GL (llvmpipe) 4x MSAA cost ~80 ms of a 1024x768
         # frame (113 -> 33 ms measured); the ray-cast image is one sample per pixel anyway
-        self.plotter = QtInteractor(parent_widget, auto_update=False, multi_samples=0,
-                                    rw=_render_window())
+        self.plotter = _interactor_class()(parent_widget, auto_update=False,
+                                           multi_samples=0, rw=_render_window())
         self.plotter.enable_anti_aliasing = None
         if min_size is not None:
             self.plotter.setMinimumSize(*min_size)

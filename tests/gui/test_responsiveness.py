@@ -1,6 +1,7 @@
 """The GUI thread never stalls: the longest gap between event-loop ticks while the user opens
-data, switches every spline model, smooths and reverts, adds an isosurface, remeshes and
-cancels — and a cancel acts within a second.
+data, splits the view (View > Split view) and drags in the new view, switches every spline
+model, smooths and reverts, adds an isosurface, remeshes and cancels — and a cancel acts
+within a second.
 
 The default run uses small data (the embedded default volume, the kitten scan); ``-m slow``
 runs the same script on bonsai (256^3) and the bunny (36k points), the issue's figures.
@@ -18,9 +19,12 @@ from interaction import (  # noqa: E402
     FRESH,
     StallMeter,
     close_window,
+    drag_steps,
     in_fresh_process,
+    line,
     open_window,
     pump,
+    run_steps,
 )
 
 from splineviz.core.splines import MODELS  # noqa: E402
@@ -70,6 +74,79 @@ def _idle_and_exact(w):
     return not w.jobs.jobs and not w.view.refining and not w.spline_scene.needs_refine()
 
 
+def _split_and_exact(w):
+    """Split, the second view open, and every view shows exact frames."""
+    return (w.view2 is not None and not w.linked_views.opening and not w.jobs.jobs
+            and all(not v.refining and not v.spline_scene.needs_refine()
+                    for v in w.linked_views.views))
+
+
+def _split_and_drag(w, stalls):
+    """View > Split view, then an orbit dragged in the new (right) view, then the split off.
+
+    Turning the split on makes a second VTK window (gui.split.OPEN_STEPS, one step per turn
+    of the event loop); the first drag in it casts previews of sizes not cast before in both
+    views. After them each view shows the exact frame of its own isosurface (the original's
+    model on the left, the comparison copy's on the right) at the one camera. The copy is
+    removed with the split, so the script goes on with the scene it had."""
+    node = w.scene.isosurfaces[0]
+    w.scene.select(node)
+    split = w.actions_by_name["split"]
+
+    def split_off():
+        split.trigger()
+        assert pump(60, lambda: w.view2 is None and w.linked_views.splitter.count() == 1
+                    and _idle_and_exact(w))
+
+    def split_on():
+        split.trigger()
+        assert pump(60, lambda: _split_and_exact(w))
+
+    def unsplit_and_uncompare():  # as before the split: it compares the copy anew
+        split_off()
+        w.scene.remove(w.scene.isosurfaces[1])
+        node.shown_in = "both"
+        w.scene.select(node)
+        assert pump(60, lambda: _idle_and_exact(w))
+
+    stalls["split on"] = _measure_again_if_slow(w, "split on", split.trigger,
+                                                lambda: _split_and_exact(w),
+                                                unsplit_and_uncompare)
+    assert split.isChecked() and w.linked_views.splitter.count() == 2
+    left, right = w.scene.isosurfaces
+
+    def drag_right():
+        p = w.view2.plotter
+        cx, cy = p.width() / 2.0, p.height() / 2.0
+        run_steps(drag_steps(p, line((cx - 60, cy), (cx + 60, cy + 20), 12)), interval_ms=16)
+
+    def split_on_again():  # a new second view: its first drag again
+        split_off()
+        split_on()
+
+    pose = np.array(w.scene.camera.position)
+    stalls["first drag after split"] = _measure_again_if_slow(
+        w, "first drag in the new view", drag_right, lambda: _split_and_exact(w),
+        split_on_again)
+    assert np.linalg.norm(np.subtract(w.scene.camera.position, pose)) > 1e-3, \
+        "the drag did not reach the interactor"
+    for view, iso in ((w.view, left), (w.view2, right)):
+        (layer,) = [la for la in view.spline_scene.layers if la.visible]
+        frame = view.spline_scene.shown_frame(layer)
+        assert (layer.model, layer.isovalue) == (iso.model, iso.isovalue)
+        assert frame is not None and frame.final and frame.frame.hit.mean() > 0.01
+        cam = view.plotter.renderer.GetActiveCamera()
+        np.testing.assert_allclose(cam.GetPosition(), w.scene.camera.position, atol=1e-9)
+    assert left.model != right.model
+    stalls["split off"] = _measure_again_if_slow(
+        w, "split off", split.trigger,
+        lambda: w.view2 is None and w.linked_views.splitter.count() == 1
+        and _idle_and_exact(w), split_on)
+    w.scene.remove(right)
+    left.shown_in = "both"
+    assert pump(60, lambda: _idle_and_exact(w))
+
+
 def _script(w, volume_path, cloud_path, iso):
     stalls = {}
     if volume_path is None:
@@ -80,6 +157,7 @@ def _script(w, volume_path, cloud_path, iso):
                                   lambda: w.open_path(volume_path, mode="replace",
                                                       isovalue=iso),
                                   lambda: bool(w.scene.isosurfaces) and _idle_and_exact(w))
+    _split_and_drag(w, stalls)
     node = w.scene.isosurfaces[0]
     w.scene.select(node)
     for model in [m for m in MODELS if MODELS[m].family is not None]:
