@@ -98,6 +98,16 @@ def image(view) -> np.ndarray:
     return np.asarray(view.plotter.screenshot(return_img=True))[..., :3]
 
 
+def widget_image(view) -> np.ndarray:
+    """What the Qt widget shows: its own framebuffer, into which each VTK frame is copied
+    (with nearest filtering, and without a second render: gui.view)."""
+    from PySide6.QtGui import QImage
+
+    q = view.plotter.grabFramebuffer().convertToFormat(QImage.Format.Format_RGB888)
+    rows = np.frombuffer(q.constBits(), np.uint8).reshape(q.height(), q.bytesPerLine())
+    return rows[:, :3 * q.width()].reshape(q.height(), q.width(), 3).copy()
+
+
 def reference(view, scene_of=None) -> np.ndarray:
     """An off-screen exact render at ``view``'s size and camera of the surfaces of
     ``scene_of`` (a view; default: ``view`` itself)."""
@@ -159,6 +169,10 @@ def test_split_shows_each_views_own_model(window):
     settle(w)
     for v in views(w):
         assert_exact(v, "split")
+        # the widget shows VTK's frame itself, pixel for pixel
+        shown, frame = widget_image(v), image(v)
+        assert shown.shape == frame.shape
+        assert (shown == frame).all(), f"{v.side} view: the widget differs from VTK's frame"
     # where the two models' exact pictures differ, each view shows its own
     own = reference(w.view)
     other = reference(w.view, scene_of=w.view2)  # the right surface at the left view's size
