@@ -214,6 +214,7 @@ class LinkedViews:
         """The second view's widget, not shown yet and without the scene."""
         w = self.window
         self._opening = View3D(self.scene, w, device=w.device, side="right", attach=False)
+        self._opening.hold_refine(True)  # its exact frames once it is open
 
     def _first_paint(self) -> None:
         """The widget replaces the pane: its OpenGL context is made and painted once with
@@ -253,6 +254,7 @@ class LinkedViews:
         view.add_axes()
         self.second = view
         view.request_render()
+        view.hold_refine(False)
         # a drag that began in the first view while this one opened: follow it
         if self._first_dragging:
             view.follow_interaction(True)

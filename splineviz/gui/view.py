@@ -162,6 +162,7 @@ class View3D(QObject):
         self._syncing_camera = False
         self._refine_job = None
         self._refine_again = False
+        self._refine_held = False
         self._closed = False
         self._t_frame = None
         self.frame_times: list[float] = []
@@ -286,12 +287,21 @@ class View3D(QObject):
         """The drag ended: the exact frames follow."""
         self._interaction_ended()
 
+    def hold_refine(self, on: bool) -> None:
+        """Hold the exact frames back (True) or let them be made (False). A view that opens
+        in steps holds them until its last step: the worker that makes them builds the ray
+        casters in Python, and its hold on the GIL lengthened the steps in the GUI thread."""
+        self._refine_held = bool(on)
+        if not on and not self._closed and self.spline_scene is not None \
+                and self.spline_scene.needs_refine():
+            self._refine_timer.start()
+
     def _schedule_refine(self) -> None:
-        if not self._closed:
+        if not self._closed and not self._refine_held:
             self._refine_timer.start()
 
     def _start_refine(self) -> None:
-        if self._closed or self.spline_scene is None:
+        if self._closed or self.spline_scene is None or self._refine_held:
             return
         if self._refine_job is not None:
             self._refine_again = True
