@@ -33,6 +33,7 @@ from interaction import (  # noqa: E402  (tests/gui helper, on sys.path via pyte
     surface_mask,
 )
 
+from splineviz.gui.split import OPEN_STEPS  # noqa: E402
 from splineviz.render.scene import offscreen_screenshot  # noqa: E402
 
 #: the exact frames must be on screen this long after an interaction ended
@@ -198,6 +199,30 @@ def test_split_shows_each_views_own_model(window):
         assert w.scene.selected is iso and w.iso_panel.node is iso
         assert w.iso_panel.model.currentData() == iso.model
         assert w.iso_panel.shown_in.currentData() == iso.shown_in
+
+
+def test_split_toggled_while_the_second_view_opens(window):
+    """F7 pressed again while the second view is still opening (gui.split.OPEN_STEPS) stops
+    the opening and closes what was made; on again, it opens to a working view."""
+    w = window
+    split = w.actions_by_name["split"]
+    split.trigger()  # off
+    assert pump(10, lambda: w.view2 is None and w.linked_views.splitter.count() == 1)
+    for steps_done in (1, 3, 5):
+        split.trigger()  # on: let a few steps run, then off in the middle of the opening
+        assert pump(10, lambda n=steps_done: w.linked_views.opening
+                    and len(w.linked_views._steps) <= len(OPEN_STEPS) - n)
+        assert w.view2 is None
+        split.trigger()
+        assert not w.linked_views.opening and w.view2 is None
+        assert pump(10, lambda: w.linked_views.splitter.count() == 1)
+    split.trigger()
+    assert pump(30, lambda: w.view2 is not None)
+    assert w.linked_views.splitter.count() == 2 and not w.linked_views.opening
+    w.view2.plotter.hide_axes()
+    settle(w)
+    for v in views(w):
+        assert_exact(v, "split again", compare_image=False)
 
 
 @pytest.mark.parametrize("dragged", [0, pytest.param(1, marks=pytest.mark.slow)])
