@@ -278,9 +278,10 @@ class LinkedViews:
             self.window.view.request_render()
             return
         planes, self._second_planes = self._second_planes, None
-        # in two turns of the event loop: hidden now (the first view takes the width and is
-        # repainted), closed in the next (its scene, workers and OpenGL context): in one
-        # piece the two held the GUI thread 120-260 ms
+        # in two turns of the event loop: it stops following the scene and is hidden now (the
+        # first view takes the width and is repainted), its widget and OpenGL context are
+        # closed in the next: in one piece the two held the GUI thread 120-260 ms
+        view.close(widget=False)
         view.plotter.hide()
         self._closing.append((view, planes))
         QTimer.singleShot(OPEN_STEP_GAP_MS, self._finish_closing)
@@ -291,7 +292,7 @@ class LinkedViews:
             view, planes = self._closing.pop(0)
             if planes is not None:
                 planes.close()
-            view.close()
+            view.close()  # the widget: the rest was closed with the split
             view.plotter.setParent(None)
             # kept while a frame it was ray casting may still run (joined at exit: pocl
             # aborts a process that exits while one of its threads is inside OpenCL);

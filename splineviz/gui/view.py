@@ -443,17 +443,21 @@ class View3D(QObject):
         self.readout.emit(f"{hit['name']}: ({x:.4g}, {y:.4g}, {z:.4g})  "
                           f"data {hit['value']:.5g}  (iso {hit['isovalue']:.5g}){colour}")
 
-    def close(self) -> None:
-        self._closed = True
-        self._refine_timer.stop()
-        self._readout_timer.stop()
-        self._camera_timer.stop()
-        self._render_timer.stop()
-        self._refiner.close()
-        if self.scene_view is not None:
-            self.scene.changed.disconnect(self.request_render)
-            self.scene_view.close()
-        self.plotter.close()
+    def close(self, widget: bool = True) -> None:
+        """Stop following the scene and rendering; ``widget=False`` leaves the VTK widget
+        open (its OpenGL resources are released when the caller closes it later)."""
+        if not self._closed:
+            self._closed = True
+            self._refine_timer.stop()
+            self._readout_timer.stop()
+            self._camera_timer.stop()
+            self._render_timer.stop()
+            self._refiner.close()
+            if self.scene_view is not None:
+                self.scene.changed.disconnect(self.request_render)
+                self.scene_view.close()
+        if widget:
+            self.plotter.close()
 
     def join(self, timeout_s: float) -> bool:
         """After :meth:`close`: wait for a frame still being ray cast (see
