@@ -86,8 +86,9 @@ SKIP_ACTIVE = 255
 #: epochs of the per-cell classification caches: 8 bits beside 24 bits of code or pool
 #: index, 0 = never valid
 MAX_EPOCH = 255
-#: largest pool of the classification cache (24-bit entry indices beside the epoch)
-MAX_POOL = 2**24 - 1
+#: largest pool of the classification cache (24-bit entry indices beside the epoch; the
+#: largest index marks a slot being allocated)
+MAX_POOL = 2**24 - 2
 #: largest pool of the TO stored points (raycast.cl): an entry (a level-1 node) is 1720
 #: bytes, so this holds ~156k nodes (a 512^2 view of bonsai 256^3 at five isovalues stores
 #: ~137k); nodes past it are classified from their sums at every isovalue

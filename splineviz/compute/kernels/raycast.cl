@@ -53,6 +53,8 @@
 #define BISECT_STEPS 40
 // low 24 bits of a cache entry (the top 8 bits hold the epoch of its isovalue)
 #define CODE_MASK 0xFFFFFFu
+// a cache slot claimed by a ray that is allocating its pool entry
+#define ENTRY_BUSY CODE_MASK
 
 // Monomial coefficients of the trilinear interpolant on [0,1]^3:
 // f = a + bx x + by y + bz z + bxy xy + bxz xz + byz yz + bxyz xyz
@@ -401,8 +403,11 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
 #define VALID 0x80000000u
 
 // Pool entry of the brick holding `cell` at this epoch, allocated (zeroed) and published by
-// the first ray that needs it; -1 when the pool is full (the caller then works uncached;
-// counts[2], the entries asked for, tells the host to grow the pool).
+// the first ray that needs it; -1 when the pool is full or another ray is allocating it (the
+// caller then works uncached; counts[2], the entries asked for, tells the host to grow the
+// pool). The slot is claimed (ENTRY_BUSY) before the entry is allocated: allocating first,
+// the rays that met a new brick at once took an entry each and all but one were lost (on an
+// H200, 8557 entries for 1421 cells).
 inline int brick_entry(__global uint *slots, __global uint *pool, int pool_cap, uint epoch,
                        int3 cell, int BY, int BZ, __global int *counts)
 {
@@ -412,18 +417,27 @@ inline int brick_entry(__global uint *slots, __global uint *pool, int pool_cap, 
     // one ray in ~7000 read an entry's stale words and missed its first root)
     const uint e = ((volatile __global const uint *)slots)[b];
     if ((e >> 24) == epoch) {
+        if ((e & CODE_MASK) == ENTRY_BUSY) return -1;
         read_mem_fence(CLK_GLOBAL_MEM_FENCE);  // the slot before its entry's words
         return (int)(e & CODE_MASK);
     }
+    const uint busy = (epoch << 24) | ENTRY_BUSY;
+    const uint old = atomic_cmpxchg((volatile __global uint *)&slots[b], e, busy);
+    if (old != e) {
+        // another ray claimed the brick first
+        if ((old >> 24) != epoch || (old & CODE_MASK) == ENTRY_BUSY) return -1;
+        read_mem_fence(CLK_GLOBAL_MEM_FENCE);
+        return (int)(old & CODE_MASK);
+    }
     const int a = atomic_inc(&counts[2]);
-    if (a >= pool_cap) return -1;
+    if (a >= pool_cap) {
+        atomic_xchg((volatile __global uint *)&slots[b], e);  // a later frame takes it
+        return -1;
+    }
     for (int w = 0; w < 8 * CELL_WORDS; ++w) pool[a * 8 * CELL_WORDS + w] = 0u;
     mem_fence(CLK_GLOBAL_MEM_FENCE);  // the zeroed entry before its slot
-    const uint old = atomic_cmpxchg((volatile __global uint *)&slots[b], e,
-                                    (epoch << 24) | (uint)a);
-    if (old == e) return a;
-    // another ray published the brick first: its entry holds the brick (ours is unused)
-    return (old >> 24) == epoch ? (int)(old & CODE_MASK) : -1;
+    atomic_xchg((volatile __global uint *)&slots[b], (epoch << 24) | (uint)a);
+    return a;
 }
 
 // First word of `cell`'s part of pool entry a.
