@@ -21,7 +21,12 @@ from scipy import sparse
 
 from splineviz.core.errors import SplinevizError
 from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity, knn_connectivity
-from splineviz.pointcloud.local_fits import project_on_polynomials, smoothing_fits
+from splineviz.pointcloud.local_fits import (
+    project_on_polynomials,
+    sheet_mask,
+    smoothing_fits,
+    variable_degree_fits,
+)
 
 #: highest polynomial degree tried (thesis: "around 5")
 Q_MAX = 5
@@ -52,8 +57,6 @@ HINT_CANDIDATES = 8
 PROJECTION_ITERATIONS = 3
 #: nearest points of the variable-degree fit of clean points in the adaptive mode (3 spacings)
 CLEAN_NEIGHBOURS = 40
-#: points fitted at once (bounds the memory of the (chunk, K, m) basis arrays)
-CHUNK = 2048
 #: adaptive mode: nearest points gathered per neighbourhood (the widest scale's support)
 ADAPTIVE_NEIGHBOURS = 80
 #: adaptive mode: Gaussian widths h (in local spacings) and polynomial degrees of the smoothing
@@ -501,8 +504,7 @@ class Projector:
         index[:, 0] = np.arange(n)  # points are distinct: the nearest is the point itself
         normals = self.conn.normals
         # the other side of a thin part is near but faces the other way (oriented normals)
-        valid = np.einsum("nkc,nc->nk", normals[index], normals) > SHEET_COS
-        valid[:, 0] = True
+        valid = sheet_mask(normals, index, SHEET_COS)
         self.neighbourhoods = Neighbourhoods(index, np.zeros(index.shape, dtype=int), valid)
         frames = frames_from_normals(normals)
         coeffs = np.zeros((n, basis_size(self.q_max)))
@@ -510,8 +512,9 @@ class Projector:
         cond = np.zeros(n)
         reach = np.full(n, CUTOFF)
         width = np.ones(n)
-        # all widths at once: the first pass serves both the noise and the choice
-        fits = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES,
+        # the narrowest width everywhere: it measures the noise and is the first candidate of
+        # the noisy points (the wider ones are fitted for those alone)
+        fits = smoothing_fits(pts, index, valid, frames, self.scale, np.arange(n), SCALES[:1],
                               cond_max, noise=True)
         raw = fits[5]
         # residuals also hold the fit's bias where the surface bends sharply (creases, thin
@@ -553,7 +556,10 @@ class Projector:
                 fits = smoothing_fits(self.points, index, valid, frames, self.scale, noisy,
                                       SCALES, cond_max)
             else:
-                fits = tuple(f[:, ~clean] for f in fits[:5])  # axis 1: the points ``ids``
+                # ``fits`` holds the narrowest width of all points ``ids`` (axis 1)
+                wider = smoothing_fits(self.points, index, valid, frames, self.scale, noisy,
+                                       SCALES[1:], cond_max)
+                fits = tuple(np.concatenate([f[:, ~clean], w]) for f, w in zip(fits[:5], wider[:5]))
             c, q, kc, spread, balance = fits[:5]
             # near a border of the cloud a wide fit leans on one side only and extrapolates
             # across the border: the widening stops there as it does at curvature detail
@@ -569,15 +575,10 @@ class Projector:
             reach[noisy] = CUTOFF
         sel = ids[clean]
         if len(sel):
-            k = min(CLEAN_NEIGHBOURS, index.shape[1])
-            for lo in range(0, len(sel), CHUNK):
-                part = sel[lo:lo + CHUNK]
-                rel = self.points[index[part, :k]] - self.points[part, None, :]
-                loc = np.einsum("pij,pkj->pki", frames[part], rel) / self.scale[part, None, None]
-                w = np.where(valid[part, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
-                c, q, kc = fit_polynomials(loc, w, self.q_max, cond_max)
-                coeffs[part] = c
-                degree[part], cond[part], reach[part], width[part] = q, kc, CUTOFF, 1.0
+            c, q, kc = variable_degree_fits(self.points, index, valid, frames, self.scale, sel,
+                                            CLEAN_NEIGHBOURS, self.q_max, cond_max)
+            coeffs[sel] = c
+            degree[sel], cond[sel], reach[sel], width[sel] = q, kc, CUTOFF, 1.0
 
     def _median_sets(self):
         """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""
