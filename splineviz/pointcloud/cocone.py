@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
@@ -59,6 +60,9 @@ class Connectivity:
         k-d tree over ``points``.
     triangles : (F, 3) int
         The Cocone triangles (a rough surface triangulation; unoriented).
+    nearest : (N, k) int or None
+        The ``k`` nearest points of each point, nearest first (column 0 the point itself),
+        where the builder was asked for them (:func:`knn_connectivity`).
     """
 
     points: np.ndarray
@@ -68,6 +72,7 @@ class Connectivity:
     spacing: np.ndarray
     tree: cKDTree
     triangles: np.ndarray
+    nearest: np.ndarray | None = None
 
     def void_ratio(self, quantile: float = 0.99) -> float:
         """How irregular the sampling is: a high quantile of the Cocone triangles' circumradii
@@ -265,11 +270,22 @@ def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.nda
         if out[root, 0] < 0:
             out[root] *= -1
         order, pred = csgraph.breadth_first_order(mst, root, directed=False)
-        # flip in breadth-first order: each parent is final before its children
-        for v in order[1:]:
-            if out[v] @ out[pred[v]] < 0:
-                out[v] *= -1
+        _flip_in_order(out, order, pred)
     return out
+
+
+@numba.njit(cache=True)
+def _flip_in_order(normals, order, pred):
+    """Flip ``normals (N, 3)`` in place where they oppose their predecessor's, in breadth-first
+    ``order`` (each parent is final before its children)."""
+    for t in range(1, len(order)):
+        v = order[t]
+        u = pred[v]
+        if normals[v, 0] * normals[u, 0] + normals[v, 1] * normals[u, 1] \
+                + normals[v, 2] * normals[u, 2] < 0:
+            normals[v, 0] = -normals[v, 0]
+            normals[v, 1] = -normals[v, 1]
+            normals[v, 2] = -normals[v, 2]
 
 
 def _planar_connectivity(points: np.ndarray):
@@ -379,7 +395,7 @@ NORMAL_NEIGHBOURS = 12
 GRAPH_SECTORS = 6
 
 
-def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
+def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Connectivity:
     """Nearest-neighbour graph and oriented PCA normals: a fast stand-in for Cocone.
 
     For projecting a cloud (not meshing it) no Delaunay tetrahedralisation is needed: the
@@ -396,6 +412,9 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     Parameters
     ----------
     cloud : PointCloud or (N0, 3) array_like
+    neighbours : int
+        Also keep this many nearest points of each point (itself included) as
+        ``Connectivity.nearest``: one k-d tree query serves the normals and the caller.
 
     Returns
     -------
@@ -411,7 +430,8 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     n = len(points)
     tree = cKDTree(points)
     k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
-    dist, idx = tree.query(points, k=k + 1)
+    dist, nearest = tree.query(points, k=min(max(k + 1, int(neighbours)), n))
+    dist, idx = dist[:, :k + 1], nearest[:, :k + 1]
     nb = points[idx]
     d = nb - nb.mean(axis=1, keepdims=True)
     _, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))
@@ -435,5 +455,6 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     graph = graph.maximum(graph.T).tocsr()
     normals = orient_normals(normals, graph, points)
     spacing = dist[:, 1:min(SPACING_NEIGHBOURS, n - 1) + 1].mean(axis=1)
+    nearest = nearest[:, :neighbours] if neighbours > 0 else None
     return Connectivity(points, inverse, graph, normals, spacing, tree,
-                        np.empty((0, 3), dtype=np.int64))
+                        np.empty((0, 3), dtype=np.int64), nearest)

@@ -454,7 +454,8 @@ def variable_degree_fits(points, index, valid, frames, scale, ids, n_neighbours,
     normal matrix (eq. 7.4) exceeds ``cond_max`` (Fig. 7.7); degree 1 is always taken.  The
     same choice as :func:`~splineviz.pointcloud.projection.fit_polynomials`, with the normal
     matrices read from the moments ``sum w x^a y^b`` (``a + b <= 2 q_max``) of one pass over
-    the neighbourhood and the condition decided by shifted Cholesky factorisations (:func:`_condition_ok`).
+    the neighbourhood and the condition decided by shifted Cholesky factorisations
+    (:func:`_condition_ok`).
 
     Parameters
     ----------
@@ -593,6 +594,9 @@ def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r,
 def compile_kernels() -> None:
     """Compile the kernels into numba's on-disk cache (install.sh runs this once: the first
     compilation takes 10-20 s, a cached load well under one)."""
+    from splineviz.pointcloud.cocone import _flip_in_order
+
+    _flip_in_order(np.ones((2, 3)), np.arange(2), np.zeros(2, dtype=np.int32))
     rng = np.random.default_rng(0)
     points = rng.normal(size=(12, 3))
     index = np.argsort(np.linalg.norm(points[:, None] - points[None], axis=-1), axis=1)

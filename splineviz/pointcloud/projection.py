@@ -432,7 +432,8 @@ class Projector:
         if connectivity is not None:
             self.conn = connectivity
         else:
-            self.conn = knn_connectivity(cloud) if adaptive else cocone_connectivity(cloud)
+            self.conn = (knn_connectivity(cloud, ADAPTIVE_NEIGHBOURS) if adaptive
+                         else cocone_connectivity(cloud))
         self.points = self.conn.points
         self.scale = self.conn.spacing.copy()
         if adaptive:
@@ -500,7 +501,11 @@ class Projector:
         """
         pts, n = self.points, len(self.points)
         k = min(ADAPTIVE_NEIGHBOURS, n)
-        _, index = self.conn.tree.query(pts, k=k)
+        near = self.conn.nearest
+        if near is not None and near.shape[1] >= k:
+            index = near[:, :k].copy()
+        else:
+            _, index = self.conn.tree.query(pts, k=k)
         index[:, 0] = np.arange(n)  # points are distinct: the nearest is the point itself
         normals = self.conn.normals
         # the other side of a thin part is near but faces the other way (oriented normals)
@@ -559,7 +564,8 @@ class Projector:
                 # ``fits`` holds the narrowest width of all points ``ids`` (axis 1)
                 wider = smoothing_fits(self.points, index, valid, frames, self.scale, noisy,
                                        SCALES[1:], cond_max)
-                fits = tuple(np.concatenate([f[:, ~clean], w]) for f, w in zip(fits[:5], wider[:5]))
+                fits = tuple(np.concatenate([f[:, ~clean], w])
+                             for f, w in zip(fits[:5], wider[:5], strict=True))
             c, q, kc, spread, balance = fits[:5]
             # near a border of the cloud a wide fit leans on one side only and extrapolates
             # across the border: the widening stops there as it does at curvature detail
