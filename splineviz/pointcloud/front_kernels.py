@@ -418,10 +418,15 @@ def knn(points, cells, start, order, cell, xs, k, max_shell, dist, idx):
                             idx[q, pos] = p
                             if count < k:
                                 count += 1
-            # points of cells beyond shell r lie farther than r cells from the query
-            if count == k and dist[q, k - 1] <= r * cell:
-                ok[q] = True
-                break
+            # points of cells beyond shell r lie outside the searched block of cells: farther
+            # than the query's distance to the block's nearest face (at least r cells)
+            if count == k:
+                exit_ = min(x0 - (ci - r) * cell, (ci + r + 1) * cell - x0,
+                            x1 - (cj - r) * cell, (cj + r + 1) * cell - x1,
+                            x2 - (ck - r) * cell, (ck + r + 1) * cell - x2)
+                if dist[q, k - 1] <= exit_:
+                    ok[q] = True
+                    break
     return ok
 
 
