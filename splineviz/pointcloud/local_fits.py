@@ -513,6 +513,48 @@ def _evaluate(c, q, u, v, pu, pv):
 
 
 @numba.njit(cache=True)
+def _project_one(points, frames, scale, coeffs, degree, reach, i, x, iterations, pu, pv, loc,
+                 pos, nrm):
+    """Project ``x (3,)`` onto the polynomial of point ``i``: foot into ``pos (3,)``, unit
+    normal into ``nrm (3,)`` (see :func:`project_on_polynomials`)."""
+    s = scale[i]
+    for a in range(3):
+        loc[a] = (frames[i, a, 0] * (x[0] - points[i, 0])
+                  + frames[i, a, 1] * (x[1] - points[i, 1])
+                  + frames[i, a, 2] * (x[2] - points[i, 2])) / s
+    u, v = loc[0], loc[1]
+    rad = np.hypot(u, v)
+    if rad > reach[i]:
+        u *= reach[i] / rad
+        v *= reach[i] / rad
+    q = degree[i]
+    for _ in range(iterations):
+        z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
+        # J = [[1, 0], [0, 1], [zu, zv]];  solve (J^T J) d = J^T res
+        g0 = (loc[0] - u) + zu * (loc[2] - z)
+        g1 = (loc[1] - v) + zv * (loc[2] - z)
+        a00, a01, a11 = 1 + zu * zu, zu * zv, 1 + zv * zv
+        det = a00 * a11 - a01 * a01
+        du = (a11 * g0 - a01 * g1) / det
+        dv = (a00 * g1 - a01 * g0) / det
+        step = np.hypot(du, dv)
+        factor = 1.0 / step if step > 1.0 else 1.0  # at most one spacing per step
+        u += du * factor
+        v += dv * factor
+        # the polynomial is only valid where its points were: keep the foot inside
+        rad = np.hypot(u, v)
+        if rad > reach[i]:
+            u *= reach[i] / rad
+            v *= reach[i] / rad
+    z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
+    length = np.sqrt(zu * zu + zv * zv + 1.0)
+    for a in range(3):
+        pos[a] = points[i, a] + s * (frames[i, 0, a] * u + frames[i, 1, a] * v
+                                     + frames[i, 2, a] * z)
+        nrm[a] = (-frames[i, 0, a] * zu - frames[i, 1, a] * zv + frames[i, 2, a]) / length
+
+
+@numba.njit(cache=True)
 def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
     n_q = len(ids)
     pos = np.empty((n_q, 3))
@@ -521,43 +563,73 @@ def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
     pv = np.empty(coeffs.shape[1])
     loc = np.empty(3)
     for p in range(n_q):
-        i = ids[p]
-        s = scale[i]
-        for a in range(3):
-            loc[a] = (frames[i, a, 0] * (r[p, 0] - points[i, 0])
-                      + frames[i, a, 1] * (r[p, 1] - points[i, 1])
-                      + frames[i, a, 2] * (r[p, 2] - points[i, 2])) / s
-        u, v = loc[0], loc[1]
-        rad = np.hypot(u, v)
-        if rad > reach[i]:
-            u *= reach[i] / rad
-            v *= reach[i] / rad
-        q = degree[i]
-        for _ in range(iterations):
-            z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
-            # J = [[1, 0], [0, 1], [zu, zv]];  solve (J^T J) d = J^T res
-            g0 = (loc[0] - u) + zu * (loc[2] - z)
-            g1 = (loc[1] - v) + zv * (loc[2] - z)
-            a00, a01, a11 = 1 + zu * zu, zu * zv, 1 + zv * zv
-            det = a00 * a11 - a01 * a01
-            du = (a11 * g0 - a01 * g1) / det
-            dv = (a00 * g1 - a01 * g0) / det
-            step = np.hypot(du, dv)
-            factor = 1.0 / step if step > 1.0 else 1.0  # at most one spacing per step
-            u += du * factor
-            v += dv * factor
-            # the polynomial is only valid where its points were: keep the foot inside
-            rad = np.hypot(u, v)
-            if rad > reach[i]:
-                u *= reach[i] / rad
-                v *= reach[i] / rad
-        z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
-        length = np.sqrt(zu * zu + zv * zv + 1.0)
-        for a in range(3):
-            pos[p, a] = points[i, a] + s * (frames[i, 0, a] * u + frames[i, 1, a] * v
-                                            + frames[i, 2, a] * z)
-            nrm[p, a] = (-frames[i, 0, a] * zu - frames[i, 1, a] * zv + frames[i, 2, a]) / length
+        _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p], iterations,
+                     pu, pv, loc, pos[p], nrm[p])
     return pos, nrm
+
+
+@numba.njit(cache=True)
+def _median_of(values, k):
+    """Median of ``values[:k]``: the middle value, or the mean of the two middle ones for
+    even ``k`` (``values`` is sorted in place)."""
+    for t in range(1, k):
+        v = values[t]
+        j = t - 1
+        while j >= 0 and values[j] > v:
+            values[j + 1] = values[j]
+            j -= 1
+        values[j + 1] = v
+    return values[k // 2] if k % 2 else 0.5 * (values[k // 2 - 1] + values[k // 2])
+
+
+@numba.njit(cache=True)
+def _project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterations):
+    m, k = sets.shape
+    pos = np.empty((m, 3))
+    nrm = np.empty((m, 3))
+    each_pos = np.empty((k, 3))
+    each_nrm = np.empty((k, 3))
+    column = np.empty(k)
+    pu = np.empty(coeffs.shape[1])
+    pv = np.empty(coeffs.shape[1])
+    loc = np.empty(3)
+    for p in range(m):
+        for c in range(k):
+            _project_one(points, frames, scale, coeffs, degree, reach, sets[p, c], r[p],
+                         iterations, pu, pv, loc, each_pos[c], each_nrm[c])
+        for a in range(3):
+            for c in range(k):
+                column[c] = each_pos[c, a]
+            pos[p, a] = _median_of(column, k)
+            for c in range(k):
+                column[c] = each_nrm[c, a]
+            nrm[p, a] = _median_of(column, k)
+    return pos, nrm
+
+
+def project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterations):
+    """Component-wise medians of the projections of each query onto several polynomials
+    (thesis §7.2): query ``r[p]`` is projected (:func:`project_on_polynomials`) onto the
+    polynomials of points ``sets[p]``.
+
+    Parameters
+    ----------
+    points, frames, scale, coeffs, degree, reach : as for :func:`project_on_polynomials`
+    sets : (M, k) int, the polynomials of each query
+    r : (M, 3) query points
+    iterations : int
+
+    Returns
+    -------
+    positions (M, 3), normals (M, 3): the medians (the normals not renormalised).
+    """
+    f64 = np.float64
+    return _project_median(np.ascontiguousarray(points, f64), np.ascontiguousarray(frames, f64),
+                           np.ascontiguousarray(scale, f64), np.ascontiguousarray(coeffs, f64),
+                           np.ascontiguousarray(degree, np.int64),
+                           np.ascontiguousarray(reach, f64),
+                           np.ascontiguousarray(sets, np.int64), np.ascontiguousarray(r, f64),
+                           int(iterations))
 
 
 def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
@@ -609,3 +681,5 @@ def compile_kernels() -> None:
                          8, 5, 1e4)
     project_on_polynomials(points, frames, scale, np.zeros((12, 21)), np.full(12, 5),
                            np.full(12, 3.0), ids, points, 3)
+    project_median(points, frames, scale, np.zeros((12, 21)), np.full(12, 5), np.full(12, 3.0),
+                   index[:, :7], points, 3)

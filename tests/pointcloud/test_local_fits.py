@@ -6,6 +6,7 @@ import pc_surfaces as S
 
 from splineviz.pointcloud.cocone import knn_connectivity
 from splineviz.pointcloud.local_fits import (
+    project_median,
     project_on_polynomials,
     sheet_mask,
     smoothing_fits,
@@ -155,3 +156,24 @@ def test_compiled_variable_degree_fits_choose_the_eigenvalue_degrees():
         _, d, _ = variable_degree_fits(conn.points, index, valid, frames, conn.spacing,
                                        ids[:1], 40, 5, cut)
         assert (d[0] == 5) == want, (cut, cond, d)
+
+
+def test_median_projection_is_the_median_of_the_projections():
+    """The compiled medians equal NumPy's medians of the single projections, for odd and even
+    numbers of polynomials (random graphs of degree 2 around scattered origins)."""
+    rng = np.random.default_rng(3)
+    n = 30
+    points = rng.normal(size=(n, 3))
+    frames = np.stack([np.linalg.qr(rng.normal(size=(3, 3)))[0].T for _ in range(n)])
+    scale = rng.uniform(0.5, 1.5, n)
+    coeffs = np.zeros((n, 21))
+    coeffs[:, :6] = 0.2 * rng.normal(size=(n, 6))
+    degree, reach = np.full(n, 2), np.full(n, 3.0)
+    r = rng.normal(size=(50, 3))
+    for k in (7, 4):
+        sets = rng.integers(0, n, size=(50, k))
+        pos, nrm = project_median(points, frames, scale, coeffs, degree, reach, sets, r, 3)
+        each = project_on_polynomials(points, frames, scale, coeffs, degree, reach,
+                                      sets.ravel(), np.repeat(r, k, axis=0), 3)
+        assert np.array_equal(pos, np.median(each[0].reshape(50, k, 3), axis=1))
+        assert np.array_equal(nrm, np.median(each[1].reshape(50, k, 3), axis=1))
