@@ -23,7 +23,6 @@ from splineviz.core.errors import SplinevizError
 from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity, knn_connectivity
 from splineviz.pointcloud.local_fits import (
     project_median,
-    project_on_polynomials,
     sheet_mask,
     smoothing_fits,
     variable_degree_fits,
@@ -603,25 +602,6 @@ class Projector:
         k_mean = ((1 + zx**2) * zyy - 2 * zx * zy * zxy + (1 + zy**2) * zxx) / (2 * g**1.5)
         disc = np.sqrt(np.maximum(k_mean**2 - k_gauss, 0.0))
         return np.stack([k_mean + disc, k_mean - disc], axis=1) / s[:, None]
-
-    def _project_on(self, ids: np.ndarray, r: np.ndarray):
-        """Orthogonal projection of ``r`` onto the polynomial graphs of points ``ids``.
-
-        Gauss-Newton on the foot parameters, started at the vertical projection; the step is
-        damped (one spacing per step) and the foot point kept inside the fitted disc, so that
-        far queries cannot diverge.
-
-        Parameters
-        ----------
-        ids : (P,) int
-        r : (P, 3)
-
-        Returns
-        -------
-        positions (P, 3), normals (P, 3) in world coordinates.
-        """
-        return project_on_polynomials(self.points, self.frames, self.scale, self.coeffs,
-                                      self.degree, self.reach, ids, r, PROJECTION_ITERATIONS)
 
     def project_with_normals(self, points, normal_hint=None):
         """Project points and return the surface normals there.
