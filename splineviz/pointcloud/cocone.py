@@ -78,12 +78,13 @@ class Connectivity:
         """How irregular the sampling is: a high quantile of the Cocone triangles' circumradii
         (the radii of the empty circles between samples) over the local spacing.
 
-        About 0.7-1.0 for laser scans, about 1.8 for uniformly random samples; holes of the
-        scan are too rare to move the quantile.
+        About 0.7-1.0 for laser scans, about 1.4 for uniformly random samples; holes of the
+        scan are too rare to move the quantile.  Without Cocone triangles (the k-nearest
+        connectivity) the empty circles come from :func:`tangent_void_ratio`.
         """
         f, p = self.triangles, self.points
         if len(f) == 0:
-            return 1.0
+            return tangent_void_ratio(p, self.normals, self.spacing, self.tree, quantile)
         a = np.linalg.norm(p[f[:, 1]] - p[f[:, 2]], axis=1)
         b = np.linalg.norm(p[f[:, 2]] - p[f[:, 0]], axis=1)
         c = np.linalg.norm(p[f[:, 0]] - p[f[:, 1]], axis=1)
@@ -239,6 +240,58 @@ def cocone_triangles(dt: Delaunay, points: np.ndarray, pole: np.ndarray, centers
         # or the ends lie in opposite halves of the double cone around the pole
         ok &= (np.abs(c0) <= s) | (np.abs(c1) <= s) | (c0 * c1 < 0)
     return faces[ok]
+
+
+#: nearest points whose empty circles in the tangent plane :func:`tangent_void_ratio` finds
+VOID_NEIGHBOURS = 16
+
+
+def tangent_void_ratio(points: np.ndarray, normals: np.ndarray, spacing: np.ndarray,
+                       tree: cKDTree, quantile: float = 0.99) -> float:
+    """:meth:`Connectivity.void_ratio` without a tetrahedralisation: empty circles of the
+    Delaunay triangles at each point in its tangent plane.
+
+    The ``VOID_NEIGHBOURS`` nearest points of a point, seen in its tangent plane and sorted by
+    angle, form a fan of triangles with it; a fan triangle whose circumcircle holds none of
+    them (and lies within them: its diameter at most the farthest one's distance) is a
+    Delaunay triangle of the local sampling, and its circumradius over the point's spacing is
+    one empty-circle ratio.
+
+    Parameters
+    ----------
+    points, normals : (N, 3); spacing : (N,); tree : k-d tree of ``points``
+
+    Returns
+    -------
+    float: the ``quantile`` of the ratios (1.0 when there are none).
+    """
+    k = min(VOID_NEIGHBOURS, len(points) - 1)
+    _, idx = tree.query(points, k=k + 1)
+    idx = idx[:, 1:]
+    helper = np.zeros_like(normals)
+    helper[np.arange(len(points)), np.argmin(np.abs(normals), axis=1)] = 1.0
+    t1 = np.cross(helper, normals)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(normals, t1)
+    rel = points[idx] - points[:, None, :]
+    u = np.einsum("nkc,nc->nk", rel, t1)
+    v = np.einsum("nkc,nc->nk", rel, t2)
+    order = np.argsort(np.arctan2(v, u), axis=1)
+    u, v = np.take_along_axis(u, order, 1), np.take_along_axis(v, order, 1)
+    bu, bv = np.roll(u, -1, axis=1), np.roll(v, -1, axis=1)
+    cross = u * bv - v * bu
+    na, nb = u * u + v * v, bu * bu + bv * bv
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cx = (bv * na - v * nb) / (2 * cross)
+        cy = (u * nb - bu * na) / (2 * cross)
+    radius = np.hypot(cx, cy)  # the point itself is at the origin
+    gap = radius.copy()
+    for j in range(k):
+        gap = np.minimum(gap, np.hypot(cx - u[:, j:j + 1], cy - v[:, j:j + 1]))
+    reach = np.sqrt(np.max(na, axis=1, keepdims=True))
+    empty = (cross > 0) & (gap >= radius * (1 - 1e-9)) & (2 * radius <= reach)
+    ratios = (radius / spacing[:, None])[empty]
+    return float(np.quantile(ratios, quantile)) if len(ratios) else 1.0
 
 
 def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.ndarray) -> np.ndarray:
