@@ -235,7 +235,10 @@ class AdvancingFront:
         levels = 1 + max(0, math.ceil(math.log2(longest / fine)))
         self.face_cell = fine * 2.0 ** np.arange(levels)
         self.face_radius = np.full(levels, -1.0)
-        self.fgrid = (np.full((levels, slots), -1, dtype=np.int64),
+        # a class of twice the size covers a quarter of the cells: a quarter of the slots
+        sizes = [max(1024, slots >> (2 * lev)) for lev in range(levels)]
+        self.face_start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self.fgrid = (np.full(int(self.face_start[-1]), -1, dtype=np.int64),
                       np.full(cap, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
                       np.zeros((cap, 3), dtype=np.int64))
         self.P: list[tuple[float, float, float]] = []  # positions as tuples for scalar math
@@ -373,7 +376,8 @@ class AdvancingFront:
             lev += 1
         size = cells[lev]
         head, nxt, prv, fcells = self.fgrid
-        fk.grid_insert(head[lev], nxt, prv, fcells, nf, int(math.floor(centroid[0] / size)),
+        fk.grid_insert(head[self.face_start[lev]:self.face_start[lev + 1]], nxt, prv, fcells, nf,
+                       int(math.floor(centroid[0] / size)),
                        int(math.floor(centroid[1] / size)), int(math.floor(centroid[2] / size)))
         self.face_radius[lev] = max(self.face_radius[lev], radius)
         self.face_geometry[nf] = (*pa, *e1, *e2, normal[0] / length, normal[1] / length,
@@ -487,7 +491,7 @@ class AdvancingFront:
         advance over the already meshed surface, which no front element marks.
         """
         head, nxt, _prv, cells = self.fgrid
-        return fk.covered(head, self.face_cell, self.face_radius, nxt, cells,
+        return fk.covered(head, self.face_start, self.face_cell, self.face_radius, nxt, cells,
                           self.face_geometry, np.asarray(probes, dtype=np.float64),
                           np.asarray(centre, dtype=np.float64), float(length), COVER_MARGIN,
                           COVER_HEIGHT)

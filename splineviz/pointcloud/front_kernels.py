@@ -109,14 +109,15 @@ def vertices_near(head, nxt, cells, cell, V, N, x, radius, n, use_normal):
 
 
 @numba.njit(cache=True)
-def covered(heads, level_cell, level_radius, nxt, cells, geometry, probes, centre, length,
-            margin, height):
+def covered(heads, level_start, level_cell, level_radius, nxt, cells, geometry, probes, centre,
+            length, margin, height):
     """Whether any of ``probes (K, 3)`` projects strictly inside (barycentric coordinates above
     ``margin``) an existing triangle, closer than ``height * length`` to its plane.
 
-    Triangles are filed by centroid in a grid per size class (``heads (L, S)``, cells
-    ``level_cell (L,)`` wide; ``level_radius (L,)`` the largest centroid-to-corner distance
-    filed in each, negative while empty): a probe over a triangle lies within that distance
+    Triangles are filed by centroid in a grid per size class (level ``l``'s hash slots are
+    ``heads[level_start[l]:level_start[l + 1]]``, a power of two; its cells ``level_cell[l]``
+    wide; ``level_radius[l]`` the largest centroid-to-corner distance filed in it, negative
+    while empty): a probe over a triangle lies within that distance
     plus the height limit of its centroid, so each level is searched out to the cells that
     bound can reach.  One grid of cells as wide as the longest triangles gathered hundreds of
     small ones per question on strongly graded meshes.  ``geometry (F, 19)``: per triangle its
@@ -133,7 +134,8 @@ def covered(heads, level_cell, level_radius, nxt, cells, geometry, probes, centr
             continue
         cell = level_cell[lev]
         reach = int(math.ceil((level_radius[lev] + limit + spread) / cell))
-        ids = _gather(heads[lev], nxt, cells, cell, centre, reach, np.empty(64, dtype=np.int64))
+        ids = _gather(heads[level_start[lev]:level_start[lev + 1]], nxt, cells, cell, centre,
+                      reach, np.empty(64, dtype=np.int64))
         for t in ids:
             g = geometry[t]
             d00, d01, d11 = g[12], g[13], g[14]
@@ -474,8 +476,8 @@ def compile_kernels() -> None:
     front_clear(head, nxt, cells, 1.0, V, N, adj, cnt, radj, cnt, 0, 1, -1,
                 np.array([0.5, -0.8, 0.0]), n, 2.0)
     geometry = np.zeros((cap, 19))
-    covered(head[None], np.ones(1), np.zeros(1), nxt, cells, geometry, V[:2], V[0], 1.0, 0.02,
-            0.3)
+    covered(head, np.array([0, slots]), np.ones(1), np.zeros(1), nxt, cells, geometry, V[:2],
+            V[0], 1.0, 0.02, 0.3)
     idx = np.tile(np.arange(4, dtype=np.int64), (2, 1))
     outside_flags(V[:2], N[:2], np.ones((2, 4)), idx, V[:4], N[:4], np.ones(4), 0.75, 1.5,
                   False, math.pi)

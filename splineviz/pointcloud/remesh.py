@@ -2,7 +2,8 @@
 
 Pipeline: k-nearest (or, for fixed-width fits, Cocone) connectivity -> local polynomials
 (:class:`Projector`) -> curvature-adapted guidance field -> advancing front -> valence flips
-and tangential relaxation on the surface.  Returns a ``pyvista.PolyData`` (the mesh boundary type of DESIGN.md).
+and tangential relaxation on the surface.  Returns a ``pyvista.PolyData`` (the mesh boundary
+type of DESIGN.md).
 """
 
 from __future__ import annotations
