@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
@@ -59,6 +60,9 @@ class Connectivity:
         k-d tree over ``points``.
     triangles : (F, 3) int
         The Cocone triangles (a rough surface triangulation; unoriented).
+    nearest : (N, k) int or None
+        The ``k`` nearest points of each point, nearest first (column 0 the point itself),
+        where the builder was asked for them (:func:`knn_connectivity`).
     """
 
     points: np.ndarray
@@ -68,17 +72,19 @@ class Connectivity:
     spacing: np.ndarray
     tree: cKDTree
     triangles: np.ndarray
+    nearest: np.ndarray | None = None
 
     def void_ratio(self, quantile: float = 0.99) -> float:
         """How irregular the sampling is: a high quantile of the Cocone triangles' circumradii
         (the radii of the empty circles between samples) over the local spacing.
 
-        About 0.7-1.0 for laser scans, about 1.8 for uniformly random samples; holes of the
-        scan are too rare to move the quantile.
+        About 0.7-1.0 for laser scans, about 1.4 for uniformly random samples; holes of the
+        scan are too rare to move the quantile.  Without Cocone triangles (the k-nearest
+        connectivity) the empty circles come from :func:`tangent_void_ratio`.
         """
         f, p = self.triangles, self.points
         if len(f) == 0:
-            return 1.0
+            return tangent_void_ratio(p, self.normals, self.spacing, self.tree, quantile)
         a = np.linalg.norm(p[f[:, 1]] - p[f[:, 2]], axis=1)
         b = np.linalg.norm(p[f[:, 2]] - p[f[:, 0]], axis=1)
         c = np.linalg.norm(p[f[:, 0]] - p[f[:, 1]], axis=1)
@@ -236,6 +242,58 @@ def cocone_triangles(dt: Delaunay, points: np.ndarray, pole: np.ndarray, centers
     return faces[ok]
 
 
+#: nearest points whose empty circles in the tangent plane :func:`tangent_void_ratio` finds
+VOID_NEIGHBOURS = 16
+
+
+def tangent_void_ratio(points: np.ndarray, normals: np.ndarray, spacing: np.ndarray,
+                       tree: cKDTree, quantile: float = 0.99) -> float:
+    """:meth:`Connectivity.void_ratio` without a tetrahedralisation: empty circles of the
+    Delaunay triangles at each point in its tangent plane.
+
+    The ``VOID_NEIGHBOURS`` nearest points of a point, seen in its tangent plane and sorted by
+    angle, form a fan of triangles with it; a fan triangle whose circumcircle holds none of
+    them (and lies within them: its diameter at most the farthest one's distance) is a
+    Delaunay triangle of the local sampling, and its circumradius over the point's spacing is
+    one empty-circle ratio.
+
+    Parameters
+    ----------
+    points, normals : (N, 3); spacing : (N,); tree : k-d tree of ``points``
+
+    Returns
+    -------
+    float: the ``quantile`` of the ratios (1.0 when there are none).
+    """
+    k = min(VOID_NEIGHBOURS, len(points) - 1)
+    _, idx = tree.query(points, k=k + 1)
+    idx = idx[:, 1:]
+    helper = np.zeros_like(normals)
+    helper[np.arange(len(points)), np.argmin(np.abs(normals), axis=1)] = 1.0
+    t1 = np.cross(helper, normals)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(normals, t1)
+    rel = points[idx] - points[:, None, :]
+    u = np.einsum("nkc,nc->nk", rel, t1)
+    v = np.einsum("nkc,nc->nk", rel, t2)
+    order = np.argsort(np.arctan2(v, u), axis=1)
+    u, v = np.take_along_axis(u, order, 1), np.take_along_axis(v, order, 1)
+    bu, bv = np.roll(u, -1, axis=1), np.roll(v, -1, axis=1)
+    cross = u * bv - v * bu
+    na, nb = u * u + v * v, bu * bu + bv * bv
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cx = (bv * na - v * nb) / (2 * cross)
+        cy = (u * nb - bu * na) / (2 * cross)
+    radius = np.hypot(cx, cy)  # the point itself is at the origin
+    gap = radius.copy()
+    for j in range(k):
+        gap = np.minimum(gap, np.hypot(cx - u[:, j:j + 1], cy - v[:, j:j + 1]))
+    reach = np.sqrt(np.max(na, axis=1, keepdims=True))
+    empty = (cross > 0) & (gap >= radius * (1 - 1e-9)) & (2 * radius <= reach)
+    ratios = (radius / spacing[:, None])[empty]
+    return float(np.quantile(ratios, quantile)) if len(ratios) else 1.0
+
+
 def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.ndarray) -> np.ndarray:
     """Orient normals consistently by propagation along a minimum spanning tree [HDD*92].
 
@@ -265,11 +323,22 @@ def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.nda
         if out[root, 0] < 0:
             out[root] *= -1
         order, pred = csgraph.breadth_first_order(mst, root, directed=False)
-        # flip in breadth-first order: each parent is final before its children
-        for v in order[1:]:
-            if out[v] @ out[pred[v]] < 0:
-                out[v] *= -1
+        _flip_in_order(out, order, pred)
     return out
+
+
+@numba.njit(cache=True)
+def _flip_in_order(normals, order, pred):
+    """Flip ``normals (N, 3)`` in place where they oppose their predecessor's, in breadth-first
+    ``order`` (each parent is final before its children)."""
+    for t in range(1, len(order)):
+        v = order[t]
+        u = pred[v]
+        if normals[v, 0] * normals[u, 0] + normals[v, 1] * normals[u, 1] \
+                + normals[v, 2] * normals[u, 2] < 0:
+            normals[v, 0] = -normals[v, 0]
+            normals[v, 1] = -normals[v, 1]
+            normals[v, 2] = -normals[v, 2]
 
 
 def _planar_connectivity(points: np.ndarray):
@@ -379,7 +448,7 @@ NORMAL_NEIGHBOURS = 12
 GRAPH_SECTORS = 6
 
 
-def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
+def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Connectivity:
     """Nearest-neighbour graph and oriented PCA normals: a fast stand-in for Cocone.
 
     For projecting a cloud (not meshing it) no Delaunay tetrahedralisation is needed: the
@@ -396,6 +465,9 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     Parameters
     ----------
     cloud : PointCloud or (N0, 3) array_like
+    neighbours : int
+        Also keep this many nearest points of each point (itself included) as
+        ``Connectivity.nearest``: one k-d tree query serves the normals and the caller.
 
     Returns
     -------
@@ -411,7 +483,8 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     n = len(points)
     tree = cKDTree(points)
     k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
-    dist, idx = tree.query(points, k=k + 1)
+    dist, nearest = tree.query(points, k=min(max(k + 1, int(neighbours)), n))
+    dist, idx = dist[:, :k + 1], nearest[:, :k + 1]
     nb = points[idx]
     d = nb - nb.mean(axis=1, keepdims=True)
     _, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))
@@ -435,5 +508,6 @@ def knn_connectivity(cloud: PointCloud | np.ndarray) -> Connectivity:
     graph = graph.maximum(graph.T).tocsr()
     normals = orient_normals(normals, graph, points)
     spacing = dist[:, 1:min(SPACING_NEIGHBOURS, n - 1) + 1].mean(axis=1)
+    nearest = nearest[:, :neighbours] if neighbours > 0 else None
     return Connectivity(points, inverse, graph, normals, spacing, tree,
-                        np.empty((0, 3), dtype=np.int64))
+                        np.empty((0, 3), dtype=np.int64), nearest)

@@ -252,6 +252,243 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
 
 
 @numba.njit(cache=True)
+def _sheet_mask(normals, index, cos_min):
+    n, k = index.shape
+    out = np.empty((n, k), dtype=np.bool_)
+    for i in range(n):
+        out[i, 0] = True
+        for c in range(1, k):
+            j = index[i, c]
+            out[i, c] = (normals[j, 0] * normals[i, 0] + normals[j, 1] * normals[i, 1]
+                         + normals[j, 2] * normals[i, 2]) > cos_min
+    return out
+
+
+def sheet_mask(normals, index, cos_min):
+    """Neighbours on the point's own sheet: ``(N, K)`` bool, True where the oriented normals
+    of neighbour ``index[i, c]`` and point ``i`` have a dot product above ``cos_min`` (column 0,
+    the point itself, always).
+
+    Parameters
+    ----------
+    normals : (N, 3) unit normals, consistently oriented
+    index : (N, K) int neighbour ids
+    cos_min : float
+    """
+    return _sheet_mask(np.ascontiguousarray(normals, dtype=np.float64),
+                       np.ascontiguousarray(index, dtype=np.int64), float(cos_min))
+
+
+def moment_pairs(q: int) -> np.ndarray:
+    """Positions ``(m, m)`` of the products ``b_i b_j`` of the degree-``q`` basis in the list of
+    monomials of degree ``2 q`` (both ordered by total degree), ``m = (q + 1)(q + 2) / 2``."""
+    e = np.array([(t - b, b) for t in range(q + 1) for b in range(t + 1)])
+    s = e[:, None, :] + e[None, :, :]
+    t = s.sum(axis=-1)
+    return (t * (t + 1) // 2 + s[..., 1]).astype(np.int64)
+
+
+@numba.njit(cache=True)
+def _condition_ok(a, m, cond_max, f, g):
+    """Whether the 2-norm condition number of the SPD block ``a[:m, :m]`` is at most
+    ``cond_max``, and the Cholesky factor of the block in ``f`` (lower triangle).
+
+    The same decision as from the extreme eigenvalues, at a fraction of their cost: for a
+    shift ``s``, ``s I - A`` is positive definite exactly when ``s > lambda_max`` and
+    ``A - (s / cond_max) I`` exactly when ``lambda_min > s / cond_max``.  Both at once prove
+    ``cond <= cond_max``, neither proves ``cond >= cond_max``, and one alone tells on which
+    side of ``lambda_max`` the shift lies: ``s`` is bisected (geometrically) between bounds of
+    ``lambda_max`` until one of the two proofs holds, a few Cholesky factorisations (1 us at
+    degree 5, an eigenvalue solve 16 us) except within a hair of ``cond_max``, where the
+    eigenvalues decide.
+
+    Parameters
+    ----------
+    a : (M, M) float, the block in its leading ``m x m`` part
+    m : int
+    cond_max : float
+    f, g : (M, M) float work arrays; ``f`` receives the factor
+
+    Returns
+    -------
+    ok : bool
+    cond : float, a lower bound of the condition number (largest diagonal entry over the
+        smallest pivot; inf when the block is not positive definite).
+    """
+    for r in range(m):
+        for c in range(r + 1):
+            f[r, c] = a[r, c]
+    lb = _cholesky(f, m, 0)
+    if not lb <= cond_max:
+        return False, lb
+    # lambda_max lies between the Rayleigh quotient of the square roots of the diagonal
+    # (at least the largest diagonal entry) and the row-sum and Frobenius bounds
+    gers = 0.0
+    fro = 0.0
+    num = 0.0
+    den = 0.0
+    big = 0.0
+    for r in range(m):
+        row = 0.0
+        acc = 0.0
+        for c in range(m):
+            row += abs(a[r, c])
+            fro += a[r, c] * a[r, c]
+            acc += a[r, c] * np.sqrt(a[c, c])
+        gers = max(gers, row)
+        num += acc * np.sqrt(a[r, r])
+        den += a[r, r]
+        big = max(big, a[r, r])
+    lo = max(big, num / den)
+    hi = min(gers, np.sqrt(fro))
+    for _ in range(60):
+        s = np.sqrt(lo * hi)
+        for r in range(m):
+            for c in range(r + 1):
+                g[r, c] = -a[r, c]
+            g[r, r] += s
+        above = _cholesky(g, m, 0) < np.inf  # s > lambda_max
+        for r in range(m):
+            for c in range(r + 1):
+                g[r, c] = a[r, c]
+            g[r, r] -= s / cond_max
+        inside = _cholesky(g, m, 0) < np.inf  # lambda_min > s / cond_max
+        if above and inside:
+            return True, lb
+        if not above and not inside:
+            return False, lb
+        if above:
+            hi = s
+        else:
+            lo = s
+        if hi <= lo * (1.0 + 1e-12):
+            break
+    ev = np.linalg.eigvalsh(np.ascontiguousarray(a[:m, :m]))
+    return ev[0] > 0.0 and ev[m - 1] <= cond_max * ev[0], lb
+
+
+@numba.njit(cache=True)
+def _variable_fits(points, index, valid, frames, scale, ids, n_nb, q_max, cond_max, pair):
+    m_max = (q_max + 1) * (q_max + 2) // 2
+    m2 = (2 * q_max + 1) * (2 * q_max + 2) // 2
+    n_ids = len(ids)
+    coeffs = np.zeros((n_ids, m_max))
+    degree = np.ones(n_ids, dtype=np.int64)
+    cond = np.zeros(n_ids)
+    mom = np.empty(m2)
+    rhs = np.empty(m_max)
+    px = np.empty(2 * q_max + 1)
+    py = np.empty(2 * q_max + 1)
+    a = np.empty((m_max, m_max))
+    f = np.empty((m_max, m_max))
+    g = np.empty((m_max, m_max))
+    v = np.empty(m_max)
+    for p in range(n_ids):
+        i = ids[p]
+        inv = 1.0 / scale[i]
+        mom[:] = 0.0
+        rhs[:] = 0.0
+        for k in range(n_nb):
+            if not valid[i, k]:
+                continue
+            j = index[i, k]
+            rx = points[j, 0] - points[i, 0]
+            ry = points[j, 1] - points[i, 1]
+            rz = points[j, 2] - points[i, 2]
+            x = (frames[i, 0, 0] * rx + frames[i, 0, 1] * ry + frames[i, 0, 2] * rz) * inv
+            y = (frames[i, 1, 0] * rx + frames[i, 1, 1] * ry + frames[i, 1, 2] * rz) * inv
+            z = (frames[i, 2, 0] * rx + frames[i, 2, 1] * ry + frames[i, 2, 2] * rz) * inv
+            w = np.exp(-(x * x + y * y + z * z))  # eq. (7.2), h = one spacing
+            px[0] = w
+            py[0] = 1.0
+            for e in range(1, 2 * q_max + 1):
+                px[e] = px[e - 1] * x
+                py[e] = py[e - 1] * y
+            c = 0
+            for t in range(2 * q_max + 1):
+                for b in range(t + 1):
+                    val = px[t - b] * py[b]
+                    mom[c] += val
+                    if c < m_max:
+                        rhs[c] += val * z
+                    c += 1
+        q = q_max
+        while True:
+            m = (q + 1) * (q + 2) // 2
+            for r in range(m):
+                for c in range(m):
+                    a[r, c] = mom[pair[r, c]]
+                a[r, r] += 1e-12  # guards exactly singular plane fits (points on a line)
+            ok, cnd = _condition_ok(a, m, cond_max, f, g)
+            if ok or q == 1:
+                break
+            q -= 1
+        degree[p] = q
+        cond[p] = cnd
+        if not cnd < np.inf:
+            # the plane of points on a line: the factor of a matrix regularised a little more
+            big = 0.0
+            for r in range(3):
+                big = max(big, a[r, r])
+            for r in range(3):
+                for c in range(3):
+                    f[r, c] = a[r, c]
+                f[r, r] += 1e-9 * big
+            if not _cholesky(f, 3, 0) < np.inf:
+                continue  # no neighbours at all: the plane z = 0 through the point
+        for c in range(m):
+            v[c] = rhs[c]
+        _solve_factored(f, m, v)
+        for c in range(m):
+            coeffs[p, c] = v[c]
+    return coeffs, degree, cond
+
+
+def variable_degree_fits(points, index, valid, frames, scale, ids, n_neighbours, q_max,
+                         cond_max):
+    """Interpolating local polynomials of the highest well-conditioned degree (thesis §7.2).
+
+    Per point: the weighted least-squares polynomial of eq. (7.1) over its first
+    ``n_neighbours`` neighbours, weights ``exp(-|x|^2)`` in local coordinates of unit spacing
+    (eq. 7.2), the degree lowered from ``q_max`` while the 2-norm condition number of the
+    normal matrix (eq. 7.4) exceeds ``cond_max`` (Fig. 7.7); degree 1 is always taken.  The
+    same choice as :func:`~splineviz.pointcloud.projection.fit_polynomials`, with the normal
+    matrices read from the moments ``sum w x^a y^b`` (``a + b <= 2 q_max``) of one pass over
+    the neighbourhood and the condition decided by shifted Cholesky factorisations
+    (:func:`_condition_ok`).
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+    index : (N, K) int, neighbour ids per point, nearest first (column 0 the point itself)
+    valid : (N, K) bool, False for neighbours left out (other sheets)
+    frames : (N, 3, 3) orthonormal rows x, y, z per point
+    scale : (N,) local spacing
+    ids : (P,) int, the points to fit
+    n_neighbours : int, columns of ``index`` used (at most K)
+    q_max : int, highest degree (1 ... 6)
+    cond_max : float
+
+    Returns
+    -------
+    coeffs : (P, m) coefficients in spacing units for the degree-``q_max`` basis
+        (``m = (q_max + 1)(q_max + 2) / 2``), zero beyond each chosen degree
+    degree : (P,) int
+    cond : (P,) a lower bound of the chosen normal matrix's condition number (largest
+        diagonal entry over the smallest Cholesky pivot)
+    """
+    q_max = int(q_max)
+    return _variable_fits(np.ascontiguousarray(points, dtype=np.float64),
+                          np.ascontiguousarray(index, dtype=np.int64),
+                          np.ascontiguousarray(valid, dtype=np.bool_),
+                          np.ascontiguousarray(frames, dtype=np.float64),
+                          np.ascontiguousarray(scale, dtype=np.float64),
+                          np.ascontiguousarray(ids, dtype=np.int64),
+                          min(int(n_neighbours), index.shape[1]), q_max, float(cond_max),
+                          moment_pairs(q_max))
+
+
+@numba.njit(cache=True)
 def _evaluate(c, q, u, v, pu, pv):
     """Value and first derivatives at ``(u, v)`` of the polynomial ``c`` of degree ``q``."""
     pu[0] = 1.0
@@ -276,6 +513,48 @@ def _evaluate(c, q, u, v, pu, pv):
 
 
 @numba.njit(cache=True)
+def _project_one(points, frames, scale, coeffs, degree, reach, i, x, iterations, pu, pv, loc,
+                 pos, nrm):
+    """Project ``x (3,)`` onto the polynomial of point ``i``: foot into ``pos (3,)``, unit
+    normal into ``nrm (3,)`` (see :func:`project_on_polynomials`)."""
+    s = scale[i]
+    for a in range(3):
+        loc[a] = (frames[i, a, 0] * (x[0] - points[i, 0])
+                  + frames[i, a, 1] * (x[1] - points[i, 1])
+                  + frames[i, a, 2] * (x[2] - points[i, 2])) / s
+    u, v = loc[0], loc[1]
+    rad = np.hypot(u, v)
+    if rad > reach[i]:
+        u *= reach[i] / rad
+        v *= reach[i] / rad
+    q = degree[i]
+    for _ in range(iterations):
+        z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
+        # J = [[1, 0], [0, 1], [zu, zv]];  solve (J^T J) d = J^T res
+        g0 = (loc[0] - u) + zu * (loc[2] - z)
+        g1 = (loc[1] - v) + zv * (loc[2] - z)
+        a00, a01, a11 = 1 + zu * zu, zu * zv, 1 + zv * zv
+        det = a00 * a11 - a01 * a01
+        du = (a11 * g0 - a01 * g1) / det
+        dv = (a00 * g1 - a01 * g0) / det
+        step = np.hypot(du, dv)
+        factor = 1.0 / step if step > 1.0 else 1.0  # at most one spacing per step
+        u += du * factor
+        v += dv * factor
+        # the polynomial is only valid where its points were: keep the foot inside
+        rad = np.hypot(u, v)
+        if rad > reach[i]:
+            u *= reach[i] / rad
+            v *= reach[i] / rad
+    z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
+    length = np.sqrt(zu * zu + zv * zv + 1.0)
+    for a in range(3):
+        pos[a] = points[i, a] + s * (frames[i, 0, a] * u + frames[i, 1, a] * v
+                                     + frames[i, 2, a] * z)
+        nrm[a] = (-frames[i, 0, a] * zu - frames[i, 1, a] * zv + frames[i, 2, a]) / length
+
+
+@numba.njit(cache=True)
 def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
     n_q = len(ids)
     pos = np.empty((n_q, 3))
@@ -284,43 +563,73 @@ def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
     pv = np.empty(coeffs.shape[1])
     loc = np.empty(3)
     for p in range(n_q):
-        i = ids[p]
-        s = scale[i]
-        for a in range(3):
-            loc[a] = (frames[i, a, 0] * (r[p, 0] - points[i, 0])
-                      + frames[i, a, 1] * (r[p, 1] - points[i, 1])
-                      + frames[i, a, 2] * (r[p, 2] - points[i, 2])) / s
-        u, v = loc[0], loc[1]
-        rad = np.hypot(u, v)
-        if rad > reach[i]:
-            u *= reach[i] / rad
-            v *= reach[i] / rad
-        q = degree[i]
-        for _ in range(iterations):
-            z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
-            # J = [[1, 0], [0, 1], [zu, zv]];  solve (J^T J) d = J^T res
-            g0 = (loc[0] - u) + zu * (loc[2] - z)
-            g1 = (loc[1] - v) + zv * (loc[2] - z)
-            a00, a01, a11 = 1 + zu * zu, zu * zv, 1 + zv * zv
-            det = a00 * a11 - a01 * a01
-            du = (a11 * g0 - a01 * g1) / det
-            dv = (a00 * g1 - a01 * g0) / det
-            step = np.hypot(du, dv)
-            factor = 1.0 / step if step > 1.0 else 1.0  # at most one spacing per step
-            u += du * factor
-            v += dv * factor
-            # the polynomial is only valid where its points were: keep the foot inside
-            rad = np.hypot(u, v)
-            if rad > reach[i]:
-                u *= reach[i] / rad
-                v *= reach[i] / rad
-        z, zu, zv = _evaluate(coeffs[i], q, u, v, pu, pv)
-        length = np.sqrt(zu * zu + zv * zv + 1.0)
-        for a in range(3):
-            pos[p, a] = points[i, a] + s * (frames[i, 0, a] * u + frames[i, 1, a] * v
-                                            + frames[i, 2, a] * z)
-            nrm[p, a] = (-frames[i, 0, a] * zu - frames[i, 1, a] * zv + frames[i, 2, a]) / length
+        _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p], iterations,
+                     pu, pv, loc, pos[p], nrm[p])
     return pos, nrm
+
+
+@numba.njit(cache=True)
+def _median_of(values, k):
+    """Median of ``values[:k]``: the middle value, or the mean of the two middle ones for
+    even ``k`` (``values`` is sorted in place)."""
+    for t in range(1, k):
+        v = values[t]
+        j = t - 1
+        while j >= 0 and values[j] > v:
+            values[j + 1] = values[j]
+            j -= 1
+        values[j + 1] = v
+    return values[k // 2] if k % 2 else 0.5 * (values[k // 2 - 1] + values[k // 2])
+
+
+@numba.njit(cache=True)
+def _project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterations):
+    m, k = sets.shape
+    pos = np.empty((m, 3))
+    nrm = np.empty((m, 3))
+    each_pos = np.empty((k, 3))
+    each_nrm = np.empty((k, 3))
+    column = np.empty(k)
+    pu = np.empty(coeffs.shape[1])
+    pv = np.empty(coeffs.shape[1])
+    loc = np.empty(3)
+    for p in range(m):
+        for c in range(k):
+            _project_one(points, frames, scale, coeffs, degree, reach, sets[p, c], r[p],
+                         iterations, pu, pv, loc, each_pos[c], each_nrm[c])
+        for a in range(3):
+            for c in range(k):
+                column[c] = each_pos[c, a]
+            pos[p, a] = _median_of(column, k)
+            for c in range(k):
+                column[c] = each_nrm[c, a]
+            nrm[p, a] = _median_of(column, k)
+    return pos, nrm
+
+
+def project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterations):
+    """Component-wise medians of the projections of each query onto several polynomials
+    (thesis §7.2): query ``r[p]`` is projected (:func:`project_on_polynomials`) onto the
+    polynomials of points ``sets[p]``.
+
+    Parameters
+    ----------
+    points, frames, scale, coeffs, degree, reach : as for :func:`project_on_polynomials`
+    sets : (M, k) int, the polynomials of each query
+    r : (M, 3) query points
+    iterations : int
+
+    Returns
+    -------
+    positions (M, 3), normals (M, 3): the medians (the normals not renormalised).
+    """
+    f64 = np.float64
+    return _project_median(np.ascontiguousarray(points, f64), np.ascontiguousarray(frames, f64),
+                           np.ascontiguousarray(scale, f64), np.ascontiguousarray(coeffs, f64),
+                           np.ascontiguousarray(degree, np.int64),
+                           np.ascontiguousarray(reach, f64),
+                           np.ascontiguousarray(sets, np.int64), np.ascontiguousarray(r, f64),
+                           int(iterations))
 
 
 def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
@@ -357,6 +666,9 @@ def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r,
 def compile_kernels() -> None:
     """Compile the kernels into numba's on-disk cache (install.sh runs this once: the first
     compilation takes 10-20 s, a cached load well under one)."""
+    from splineviz.pointcloud.cocone import _flip_in_order
+
+    _flip_in_order(np.ones((2, 3)), np.arange(2), np.zeros(2, dtype=np.int32))
     rng = np.random.default_rng(0)
     points = rng.normal(size=(12, 3))
     index = np.argsort(np.linalg.norm(points[:, None] - points[None], axis=-1), axis=1)
@@ -365,5 +677,9 @@ def compile_kernels() -> None:
     ids = np.arange(12)
     smoothing_fits(points, index, np.ones(index.shape, dtype=bool), frames, scale, ids,
                    ((1.6, 3), (2.6, 2)), 1e4, noise=True)
+    variable_degree_fits(points, index, sheet_mask(points, index, -2.0), frames, scale, ids,
+                         8, 5, 1e4)
     project_on_polynomials(points, frames, scale, np.zeros((12, 21)), np.full(12, 5),
                            np.full(12, 3.0), ids, points, 3)
+    project_median(points, frames, scale, np.zeros((12, 21)), np.full(12, 5), np.full(12, 3.0),
+                   index[:, :7], points, 3)

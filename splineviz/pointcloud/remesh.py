@@ -1,8 +1,9 @@
 """``sv.remesh``: point cloud to a high-quality triangle mesh (thesis chapter 7).
 
-Pipeline: Cocone connectivity -> variable-degree local polynomials (:class:`Projector`) ->
-curvature-adapted guidance field -> advancing front -> valence flips and tangential relaxation
-on the surface.  Returns a ``pyvista.PolyData`` (the mesh boundary type of DESIGN.md).
+Pipeline: k-nearest (or, for fixed-width fits, Cocone) connectivity -> local polynomials
+(:class:`Projector`) -> curvature-adapted guidance field -> advancing front -> valence flips
+and tangential relaxation on the surface.  Returns a ``pyvista.PolyData`` (the mesh boundary
+type of DESIGN.md).
 """
 
 from __future__ import annotations
@@ -137,9 +138,16 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
 
     t0 = time.perf_counter()
     stage(0.0, "connectivity and local surfaces")
-    if projector is None:
-        # Cocone's graph keeps the two sides of thin parts apart and its triangles measure
-        # the sampling's gaps for the front (Connectivity.void_ratio)
+    if projector is None and smoothing is None and fixed_degree is None:
+        # the noise-aware projection's own k-nearest connectivity: no Delaunay
+        # tetrahedralisation (Cocone's was a fifth of Lucy's CPU time and, memory-bound, most
+        # of its wall time on a loaded machine); its sheet masks keep the two sides of thin
+        # parts apart in the fits, and on the five bench clouds the meshes' 99th-percentile
+        # distances to the points are as good or better (Lucy 0.451 -> 0.410 %)
+        projector = Projector(cloud)
+    elif projector is None:
+        # the thesis' fixed-width and fixed-degree fits collect their neighbourhoods along
+        # Cocone's graph, which keeps the two sides of thin parts apart
         projector = Projector(cloud, smoothing=smoothing, fixed_degree=fixed_degree,
                               connectivity=cocone_connectivity(cloud))
     t1 = time.perf_counter()

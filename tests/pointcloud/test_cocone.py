@@ -10,6 +10,7 @@ from splineviz.pointcloud.cocone import (
     circumcenters,
     cocone_connectivity,
     deduplicate,
+    knn_connectivity,
 )
 
 
@@ -96,3 +97,15 @@ def test_planar_and_degenerate_input():
         cocone_connectivity(np.zeros((0, 3)))
     with pytest.raises(PointCloudError):
         cocone_connectivity(np.array([[np.nan, 0, 0]] * 5))
+
+
+def test_void_ratio_without_cocone_triangles():
+    """The k-nearest connectivity's tangent-plane empty circles give about Cocone's void
+    ratio: ~1.4 on a random sampling, below 1 on a jittered grid (a scan)."""
+    pts = S.sphere(3000, seed=5)
+    knn, cocone = knn_connectivity(pts).void_ratio(), cocone_connectivity(pts).void_ratio()
+    assert abs(knn / cocone - 1.0) < 0.15 and knn > 1.2
+    rng = np.random.default_rng(2)
+    g = np.stack(np.meshgrid(np.arange(40.0), np.arange(40.0)), -1).reshape(-1, 2)
+    grid = np.c_[g + 0.1 * rng.uniform(-1, 1, g.shape), 0.01 * rng.normal(size=len(g))]
+    assert knn_connectivity(grid).void_ratio() < 0.9

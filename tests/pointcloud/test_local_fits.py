@@ -5,7 +5,14 @@ import numpy as np
 import pc_surfaces as S
 
 from splineviz.pointcloud.cocone import knn_connectivity
-from splineviz.pointcloud.local_fits import project_on_polynomials, smoothing_fits
+from splineviz.pointcloud.local_fits import (
+    project_median,
+    project_on_polynomials,
+    sheet_mask,
+    smoothing_fits,
+    variable_degree_fits,
+)
+from splineviz.pointcloud.projection import fit_polynomials, frames_from_normals
 
 SCALES = ((1.6, 3), (2.6, 2), (4.2, 2))
 
@@ -105,3 +112,68 @@ def test_knn_connectivity_normals_and_ring_graph():
     pull = np.add.reduceat(d, g.indptr[:-1], axis=0) / counts[:, None]
     assert np.percentile(np.linalg.norm(pull, axis=1), 99) < 0.5
     assert len(conn.triangles) == 0
+
+
+def _eigen_fits(pts, index, valid, frames, scale, k, q_max, cond_max):
+    """The NumPy reference: :func:`fit_polynomials` (eigenvalue condition numbers)."""
+    rel = pts[index[:, :k]] - pts[:, None, :]
+    loc = np.einsum("pij,pkj->pki", frames, rel) / scale[:, None, None]
+    w = np.where(valid[:, :k], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
+    return fit_polynomials(loc, w, q_max, cond_max)
+
+
+def test_compiled_variable_degree_fits_choose_the_eigenvalue_degrees():
+    """The shifted-Cholesky condition test picks the degrees the extreme eigenvalues pick
+    (scattered points on a sphere give degrees 3-5, points near a scan-line circle force
+    lower ones) with the same coefficients; at each cut ``cond_max`` is moved to just
+    below and just above the eigenvalue condition number of one point's degree-5 matrix, so a
+    test that decided on the wrong side of it fails."""
+    rng = np.random.default_rng(5)
+    pts = S.sphere(4000, seed=8)
+    pts[:400] = np.c_[np.cos(t := rng.uniform(0, 2 * np.pi, 400)), np.sin(t),
+                      0.01 * rng.normal(size=400)]  # a ring: near a curve in the LCS
+    pts /= np.linalg.norm(pts, axis=1, keepdims=True)
+    conn = knn_connectivity(pts, 40)
+    index = conn.nearest
+    valid = sheet_mask(conn.normals, index, 0.0)
+    frames = frames_from_normals(conn.normals)
+    ids = np.arange(len(pts))
+    c0, d0, _ = _eigen_fits(conn.points, index, valid, frames, conn.spacing, 40, 5, 1e4)
+    c1, d1, _ = variable_degree_fits(conn.points, index, valid, frames, conn.spacing, ids, 40,
+                                     5, 1e4)
+    assert set(np.unique(d0)) >= {3, 4, 5}
+    assert np.array_equal(d0, d1)
+    assert np.allclose(c0, c1, rtol=0, atol=1e-9)
+    # the eigenvalue condition number of one point's degree-5 matrix, then cuts around it
+    rel = conn.points[index[:1, :40]] - conn.points[:1, None, :]
+    loc = np.einsum("pij,pkj->pki", frames[:1], rel) / conn.spacing[:1, None, None]
+    w = np.where(valid[:1, :40], np.exp(-np.einsum("pkc,pkc->pk", loc, loc)), 0.0)
+    b = np.stack([loc[..., 0] ** (t - j) * loc[..., 1] ** j for t in range(6)
+                  for j in range(t + 1)], -1)
+    ev = np.linalg.eigvalsh(np.einsum("pk,pki,pkj->pij", w, b, b))[0]
+    cond = ev[-1] / ev[0]
+    for cut, want in ((cond * (1 - 1e-6), False), (cond * (1 + 1e-6), True)):
+        _, d, _ = variable_degree_fits(conn.points, index, valid, frames, conn.spacing,
+                                       ids[:1], 40, 5, cut)
+        assert (d[0] == 5) == want, (cut, cond, d)
+
+
+def test_median_projection_is_the_median_of_the_projections():
+    """The compiled medians equal NumPy's medians of the single projections, for odd and even
+    numbers of polynomials (random graphs of degree 2 around scattered origins)."""
+    rng = np.random.default_rng(3)
+    n = 30
+    points = rng.normal(size=(n, 3))
+    frames = np.stack([np.linalg.qr(rng.normal(size=(3, 3)))[0].T for _ in range(n)])
+    scale = rng.uniform(0.5, 1.5, n)
+    coeffs = np.zeros((n, 21))
+    coeffs[:, :6] = 0.2 * rng.normal(size=(n, 6))
+    degree, reach = np.full(n, 2), np.full(n, 3.0)
+    r = rng.normal(size=(50, 3))
+    for k in (7, 4):
+        sets = rng.integers(0, n, size=(50, k))
+        pos, nrm = project_median(points, frames, scale, coeffs, degree, reach, sets, r, 3)
+        each = project_on_polynomials(points, frames, scale, coeffs, degree, reach,
+                                      sets.ravel(), np.repeat(r, k, axis=0), 3)
+        assert np.array_equal(pos, np.median(each[0].reshape(50, k, 3), axis=1))
+        assert np.array_equal(nrm, np.median(each[1].reshape(50, k, 3), axis=1))
