@@ -44,6 +44,7 @@ from splineviz.core.isosurface import project_to_isosurface
 from splineviz.pointcloud.advancing_front import VERTEX_BUDGET, AdvancingFront, simple_loops
 from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
+from splineviz.pointcloud.spline_kernels import compiled
 
 #: default angle (radians) one edge subtends on the osculating circle: at 0.5 the bonsai crop
 #: and the tooth have 39 % and 45 % of flying edges' triangles, Hausdorff distances 0.39 and
@@ -150,11 +151,28 @@ class SplineProjector:
         ``normal_hint`` is not needed (the spline's normals are consistent everywhere)."""
         # most points converge in one or two steps; a guess far off the surface needs more
         # of the half-voxel-limited steps
-        return project_to_isosurface(self.spline, points, self.iso, steps=30, tol=self.tol)
+        return _project(self.spline, points, self.iso, 30, self.tol)
 
     def project(self, points):
         """Newton projection onto ``s = iso`` of ``(M, 3)`` points."""
         return self.project_with_normals(points)[0]
+
+
+def _project(spline, points, iso, steps, tol=None):
+    """:func:`~splineviz.core.isosurface.project_to_isosurface` of ``(M, 3)`` points, by the
+    compiled kernels where they cover the model (each point then stops once within ``tol``,
+    not when all are)"""
+    fast = compiled(spline)
+    if fast is None:
+        return project_to_isosurface(spline, points, iso, steps=steps, tol=tol)
+    return fast.project(points, iso, steps, tol)
+
+
+def _values(spline, points):
+    """Spline values ``(M,)`` at ``(M, 3)`` points (compiled where the kernels cover the
+    model)."""
+    fast = compiled(spline)
+    return spline.evaluate(points) if fast is None else fast.value_gradient(points)[0]
 
 
 def surface_samples(spline, iso: float, cell: float | None = None):
@@ -202,9 +220,9 @@ def surface_samples(spline, iso: float, cell: float | None = None):
         if len(first) <= MAX_SAMPLES:
             break
         cell *= 1.5
-    pts, normals = project_to_isosurface(spline, world[np.sort(first)], iso, steps=10)
+    pts, normals = _project(spline, world[np.sort(first)], iso, 10)
     lo, hi = vol.finite_range
-    ok = (np.abs(spline.evaluate(pts) - iso) <= VALUE_TOL * (hi - lo)) & \
+    ok = (np.abs(_values(spline, pts) - iso) <= VALUE_TOL * (hi - lo)) & \
         (np.linalg.norm(normals, axis=1) > 0.5)
     return pts[ok], normals[ok], cell
 
@@ -236,6 +254,9 @@ def sheet_gaps(spline, iso: float, points: np.ndarray, normals: np.ndarray,
     gaps = np.full(len(points), float(reach))
     if len(ts) == 0 or len(points) == 0:
         return gaps
+    fast = compiled(spline)
+    if fast is not None:
+        return fast.gaps(points, normals, iso, ts, reach)
     lo = np.array([b[0] for b in spline.bounds])
     hi = np.array([b[1] for b in spline.bounds])
     chunk = max(1, 400_000 // len(ts))
@@ -293,6 +314,10 @@ def triangles_on_surface(spline, iso: float, triangles: np.ndarray,
     ok = np.ones(len(tri), dtype=bool)
     if len(tri) == 0:
         return ok
+    fast = compiled(spline)
+    if fast is not None:
+        return fast.on_surface(tri, iso, slack, PROBE_SPACING, MAX_PROBE_DIVISIONS,
+                               SURFACE_DEVIATION, SURFACE_CROSSING, PROBE_FLOOR, MAX_CORNER_TURN)
     step = float(np.min(spline.volume.spacing))
     longest = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
     divisions = np.clip(np.ceil(longest / (PROBE_SPACING * step)), 2,
@@ -465,7 +490,7 @@ def fill_holes(spline, iso, vertices, faces, keep_open):
         # a hole whose rings do not lie on the surface, or whose triangles leave it (it spans
         # a gap between sheets, e.g. leaves), stays open rather than be closed off the surface
         ring = np.array(loop_v).reshape(-1, 3)
-        if len(ring) and np.abs(spline.evaluate(ring) - iso).max() > tol:
+        if len(ring) and np.abs(_values(spline, ring) - iso).max() > tol:
             continue
         allv = np.concatenate([vertices, np.array(new_v).reshape(-1, 3), ring])
         if not triangles_on_surface(spline, iso, allv[np.array(loop_f)], HOLE_SLACK).all():
@@ -494,13 +519,12 @@ def _rings(spline, iso, vertices, rev, first):
         m = max(3, int(round(k * frac)))
         # the ring's vertices sample the loop evenly, pulled towards the centre
         src = p[np.floor(np.arange(m) * k / m).astype(int)]
-        ring, _ = project_to_isosurface(spline, centre + frac * (src - centre), iso,
-                                        steps=10)
+        ring, _ = _project(spline, centre + frac * (src - centre), iso, 10)
         ids = list(range(first + len(new_v), first + len(new_v) + m))
         new_v += list(ring)
         new_f += _zip(outer, ids)
         outer = ids
-    c, _ = project_to_isosurface(spline, centre[None], iso, steps=10)
+    c, _ = _project(spline, centre[None], iso, 10)
     ci = first + len(new_v)
     new_v.append(c[0])
     new_f += [[outer[i], outer[(i + 1) % len(outer)], ci] for i in range(len(outer))]
@@ -643,10 +667,9 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
             raise SplineMeshError("the clip planes leave no part of the isosurface")
     # vertices the relaxation or the front left short of the surface (a step limit reached):
     # more Newton steps for those alone
-    off = np.abs(spline.evaluate(vertices) - iso) > proj.tol
+    off = np.abs(_values(spline, vertices) - iso) > proj.tol
     if off.any():
-        vertices[off], _ = project_to_isosurface(spline, vertices[off], iso, steps=60,
-                                                 tol=proj.tol)
+        vertices[off], _ = _project(spline, vertices[off], iso, 60, proj.tol)
     g = spline.gradient(vertices)
     norm = np.linalg.norm(g, axis=1)
     normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)
