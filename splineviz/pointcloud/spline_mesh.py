@@ -31,6 +31,8 @@ normals, ``normals (V, 3)`` unit.
 from __future__ import annotations
 
 import functools
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -151,17 +153,31 @@ class SplineProjector:
         ``normal_hint`` is not needed (the spline's normals are consistent everywhere)."""
         # most points converge in one or two steps; a guess far off the surface needs more
         # of the half-voxel-limited steps
-        return _project(self.spline, points, self.iso, 30, self.tol)
+        return project_onto(self.spline, points, self.iso, 30, self.tol)
 
     def project(self, points):
         """Newton projection onto ``s = iso`` of ``(M, 3)`` points."""
         return self.project_with_normals(points)[0]
 
 
-def _project(spline, points, iso, steps, tol=None):
-    """:func:`~splineviz.core.isosurface.project_to_isosurface` of ``(M, 3)`` points, by the
-    compiled kernels where they cover the model (each point then stops once within ``tol``,
-    not when all are)"""
+def project_onto(spline, points, iso: float, steps: int, tol: float | None = None):
+    """Newton projection onto ``s = iso``
+    (:func:`~splineviz.core.isosurface.project_to_isosurface`), by the compiled kernels
+    (:mod:`.spline_kernels`) where they cover the model; each point then stops once within
+    ``tol``, not when all are.
+
+    Parameters
+    ----------
+    spline : Spline
+    points : (M, 3)
+    iso : float
+    steps : int, most Newton steps
+    tol : float, optional
+
+    Returns
+    -------
+    points : (M, 3), normals : (M, 3) unit ``-grad s / |grad s|`` (zero where it vanishes)
+    """
     fast = compiled(spline)
     if fast is None:
         return project_to_isosurface(spline, points, iso, steps=steps, tol=tol)
@@ -220,7 +236,7 @@ def surface_samples(spline, iso: float, cell: float | None = None):
         if len(first) <= MAX_SAMPLES:
             break
         cell *= 1.5
-    pts, normals = _project(spline, world[np.sort(first)], iso, 10)
+    pts, normals = project_onto(spline, world[np.sort(first)], iso, 10)
     lo, hi = vol.finite_range
     ok = (np.abs(_values(spline, pts) - iso) <= VALUE_TOL * (hi - lo)) & \
         (np.linalg.norm(normals, axis=1) > 0.5)
@@ -519,12 +535,12 @@ def _rings(spline, iso, vertices, rev, first):
         m = max(3, int(round(k * frac)))
         # the ring's vertices sample the loop evenly, pulled towards the centre
         src = p[np.floor(np.arange(m) * k / m).astype(int)]
-        ring, _ = _project(spline, centre + frac * (src - centre), iso, 10)
+        ring, _ = project_onto(spline, centre + frac * (src - centre), iso, 10)
         ids = list(range(first + len(new_v), first + len(new_v) + m))
         new_v += list(ring)
         new_f += _zip(outer, ids)
         outer = ids
-    c, _ = _project(spline, centre[None], iso, 10)
+    c, _ = project_onto(spline, centre[None], iso, 10)
     ci = first + len(new_v)
     new_v.append(c[0])
     new_f += [[outer[i], outer[(i + 1) % len(outer)], ci] for i in range(len(outer))]
@@ -596,9 +612,18 @@ def clip_mesh(spline, iso, vertices, faces, origin, normal, snap_length):
     return v[used], remap[f]
 
 
+@contextmanager
+def _stage(timings, name):
+    """Add the seconds of the enclosed block to ``timings[name]`` (if ``timings`` is a dict)."""
+    t0 = time.perf_counter()
+    yield
+    if timings is not None:
+        timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+
+
 def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
                       min_length: float | None = None, max_length: float | None = None,
-                      progress=None):
+                      progress=None, timings: dict | None = None):
     """Triangulate ``s = iso`` with the advancing front on the spline.
 
     Parameters
@@ -615,6 +640,10 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         are shorter: ``GAP_FACTOR`` times that distance.
     progress : callable, optional
         ``progress(fraction, message)``; returning False cancels.
+    timings : dict, optional
+        Receives the seconds of each stage: ``samples``, ``guidance`` (curvatures, sheet gaps,
+        gradation), ``front``, ``holes``, ``optimize``, ``finish`` (the last one-sheet test,
+        clip planes, normals).
 
     Returns
     -------
@@ -627,7 +656,8 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
     hi_len = DEFAULT_MAX_LENGTH * step if max_length is None else float(max_length)
     if not 0 < lo_len <= hi_len:
         raise SplineMeshError(f"need 0 < min_length <= max_length, got {lo_len} and {hi_len}")
-    pts, nrm, cell = surface_samples(spline, iso)
+    with _stage(timings, "samples"):
+        pts, nrm, cell = surface_samples(spline, iso)
     planes = [(np.asarray(o, dtype=np.float64), np.asarray(n, dtype=np.float64) /
                np.linalg.norm(n)) for o, n in planes]
     # the front runs two longest edges past each plane so that the cut finds whole triangles
@@ -636,10 +666,12 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         pts, nrm = pts[keep], nrm[keep]
     if len(pts) < 3:
         raise SplineMeshError("the clip planes leave no part of the isosurface")
-    proj = SplineProjector(spline, iso, pts, nrm, cell)
-    guide = _guidance(proj, rho, lo_len, hi_len)
-    front = SplineFront(proj, guide, progress)
-    vertices, faces = front.run()
+    with _stage(timings, "guidance"):
+        proj = SplineProjector(spline, iso, pts, nrm, cell)
+        guide = _guidance(proj, rho, lo_len, hi_len)
+    with _stage(timings, "front"):
+        front = SplineFront(proj, guide, progress)
+        vertices, faces = front.run()
     # the front gives up a few edges where its point-cloud tests misjudge the surface (sharp
     # folds); those holes are closed, borders at the data box and past clip planes are not
     box_lo = np.array([b[0] for b in spline.bounds]) + 1.5 * cell
@@ -650,9 +682,19 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
             return True
         return any(np.any((p - o) @ n < 0) for o, n in planes)
 
-    vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
+    with _stage(timings, "holes"):
+        vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
     # valence flips and tangential relaxation, every moved vertex put back onto the spline
-    vertices, faces, _flips = optimize(vertices, faces, proj)
+    with _stage(timings, "optimize"):
+        vertices, faces, _flips = optimize(vertices, faces, proj)
+    with _stage(timings, "finish"):
+        return _finish(spline, iso, vertices, faces, planes, proj.tol,
+                       SNAP * float(np.median(guide.lengths)))
+
+
+def _finish(spline, iso, vertices, faces, planes, tol, snap):
+    """The last steps of :func:`spline_front_mesh`: drop triangles off the surface, cut by the
+    clip planes, vertices onto the surface, normals."""
     # a flip or a relaxed vertex may still join two sheets: such triangles leave a hole (the
     # closed holes' slack: their triangles passed with it)
     faces = faces[triangles_on_surface(spline, iso, vertices[faces], HOLE_SLACK)]
@@ -661,15 +703,14 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
     remap[used] = np.arange(len(used))
     vertices, faces = vertices[used], remap[faces]
     for origin, normal in planes:
-        snap = SNAP * float(np.median(guide.lengths))
         vertices, faces = clip_mesh(spline, iso, vertices, faces, origin, normal, snap)
         if len(faces) == 0:
             raise SplineMeshError("the clip planes leave no part of the isosurface")
     # vertices the relaxation or the front left short of the surface (a step limit reached):
     # more Newton steps for those alone
-    off = np.abs(_values(spline, vertices) - iso) > proj.tol
+    off = np.abs(_values(spline, vertices) - iso) > tol
     if off.any():
-        vertices[off], _ = _project(spline, vertices[off], iso, 60, proj.tol)
+        vertices[off], _ = project_onto(spline, vertices[off], iso, 60, tol)
     g = spline.gradient(vertices)
     norm = np.linalg.norm(g, axis=1)
     normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)
