@@ -164,6 +164,23 @@ def _corner_angles(pa, pb, pc):
     return out
 
 
+def heap_smallest(heap: list, k: int) -> list:
+    """The ``k`` smallest items of the binary heap ``heap`` in ascending order, as
+    ``heapq.nsmallest(k, heap)`` gives them, in O(k log k): an item's children are no smaller
+    than it, so the next smallest is always a child of one already taken (``nsmallest`` looks
+    at every item, and the front's heap holds thousands on a large surface)."""
+    if not heap or k <= 0:
+        return []
+    out, cand = [], [(heap[0], 0)]
+    while cand and len(out) < k:
+        item, i = heapq.heappop(cand)
+        out.append(item)
+        for c in (2 * i + 1, 2 * i + 2):
+            if c < len(heap):
+                heapq.heappush(cand, (heap[c], c))
+    return out
+
+
 def simple_loops(loop):
     """Split a closed vertex loop at its repeated vertices into loops without repeats.
 
@@ -635,7 +652,7 @@ class AdvancingFront:
         edge's vertices, so the batch gives what one edge at a time would.
         """
         edges = {(a, b): None}
-        for _delay, _c, u, w in heapq.nsmallest(PREDICT_BATCH, self.heap):
+        for _delay, _c, u, w in heap_smallest(self.heap, PREDICT_BATCH):
             if (u, w) in self.front and (u, w) not in self.border and \
                     (u, w) not in self.predictions:
                 edges[(u, w)] = None
