@@ -245,16 +245,8 @@ class AdvancingFront:
         slots = 1 << max(10, (2 * len(projector.points)).bit_length())
         self.vgrid = (np.full(slots, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
                       np.full(cap, -1, dtype=np.int64), np.zeros((cap, 3), dtype=np.int64))
-        # triangles by size class (front_kernels.covered): cells of twice the median target
-        # length, doubling up to the longest
-        longest = float(np.max(guidance.lengths))
-        fine = min(longest, 2.0 * float(np.median(guidance.lengths)))
-        levels = 1 + max(0, math.ceil(math.log2(longest / fine)))
-        self.face_cell = fine * 2.0 ** np.arange(levels)
-        self.face_radius = np.full(levels, -1.0)
-        self.fgrid = (np.full((levels, slots), -1, dtype=np.int64),
-                      np.full(cap, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
-                      np.zeros((cap, 3), dtype=np.int64))
+        self.fgrid = (np.full(slots, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
+                      np.full(cap, -1, dtype=np.int64), np.zeros((cap, 3), dtype=np.int64))
         self.P: list[tuple[float, float, float]] = []  # positions as tuples for scalar math
         self.faces: list[tuple[int, int, int]] = []
         self.front: dict[tuple[int, int], int] = {}  # edge -> number of failed attempts
@@ -274,9 +266,7 @@ class AdvancingFront:
         # cloud, the guidance length there), computed ahead in batches (see _predict)
         self.predictions: dict[tuple[int, int], tuple] = {}
         self.counter = 0
-        # front vertices are found within radii of about a target length: cells of twice
-        # the median length (one cell of the longest gathered hundreds on graded meshes)
-        self.cell = fine
+        self.cell = float(np.max(guidance.lengths))
         # the cloud's points in a grid for the border test's neighbour queries (cells of
         # three spacings: the BORDER_NEIGHBOURS nearest lie within one or two cells)
         self.pgrid = fk.PointGrid(projector.points, 3.0 * float(np.median(projector.scale)))
@@ -378,21 +368,12 @@ class AdvancingFront:
             self.fgrid = (head, np.concatenate([nxt, np.full_like(nxt, -1)]),
                           np.concatenate([prv, np.full_like(prv, -1)]),
                           np.concatenate([cells, np.zeros_like(cells)]))
+        fk.grid_insert(*self.fgrid, nf, *self._cell(centroid))
         e1, e2 = _sub(pb, pa), _sub(pc, pa)
         normal = _cross(e1, e2)
         length = _norm(normal) or 1.0
         radius = math.sqrt(max(_dot(d, d) for d in (_sub(pa, centroid), _sub(pb, centroid),
                                                       _sub(pc, centroid))))
-        # the smallest size class whose cells are at least twice the corner radius
-        cells = self.face_cell
-        lev = 0
-        while lev < len(cells) - 1 and radius > 0.5 * cells[lev]:
-            lev += 1
-        size = cells[lev]
-        head, nxt, prv, fcells = self.fgrid
-        fk.grid_insert(head[lev], nxt, prv, fcells, nf, int(math.floor(centroid[0] / size)),
-                       int(math.floor(centroid[1] / size)), int(math.floor(centroid[2] / size)))
-        self.face_radius[lev] = max(self.face_radius[lev], radius)
         self.face_geometry[nf] = (*pa, *e1, *e2, normal[0] / length, normal[1] / length,
                                   normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2),
                                   *centroid, radius)
@@ -504,10 +485,8 @@ class AdvancingFront:
         advance over the already meshed surface, which no front element marks.
         """
         head, nxt, _prv, cells = self.fgrid
-        return fk.covered(head, self.face_cell, self.face_radius, nxt, cells,
-                          self.face_geometry, np.asarray(probes, dtype=np.float64),
-                          np.asarray(centre, dtype=np.float64), float(length), COVER_MARGIN,
-                          COVER_HEIGHT)
+        return fk.covered(head, nxt, cells, self.cell, self.face_geometry, probes, centre,
+                          float(length), COVER_MARGIN, COVER_HEIGHT)
 
     def _outside(self, x, n, strict=False):
         """Whether surface point ``x`` (normal ``n``) lies beyond a border of the cloud;
@@ -733,22 +712,31 @@ class AdvancingFront:
         proj = self.proj
         kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
         tried = 0
+        checked = 0  # the vertices the points in kappa_order are known to be far from
+        reach = SEED_DISTANCE * float(np.max(self.guide.lengths))
         for _ in range(MAX_SEEDS if self.max_seeds is None else self.max_seeds):
             if self.stats.truncated:
                 break
-            if self.nv:
-                from scipy.spatial import cKDTree
+            if self.nv > checked:
+                # vertices are never removed nor moved: a point near the mesh stays near it,
+                # so each round asks only about the points that were far in the previous one,
+                # only about the vertices added since, and of those points only the ones in
+                # reach of their bounding box (a surface of many pieces, such as the bonsai's
+                # leaves, takes thousands of rounds, each meshing a small piece)
+                new = self.V[checked: self.nv]
+                checked = self.nv
+                pts = proj.points[kappa_order]
+                cand = np.flatnonzero(np.all((pts >= new.min(axis=0) - reach) &
+                                             (pts <= new.max(axis=0) + reach), axis=1))
+                if len(cand):
+                    from scipy.spatial import cKDTree
 
-                tree = cKDTree(self.V[: self.nv])
-                dist, _ = tree.query(proj.points[kappa_order])
-                # vertices are never removed: a point near the mesh stays near it, so each
-                # round asks only about the points that were far in the previous one
-                kappa_order = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
-                if len(kappa_order) < SEED_MIN_POINTS:
-                    break
-                start = kappa_order[0]
-            else:
-                start = kappa_order[0]
+                    dist, _ = cKDTree(new).query(pts[cand])
+                    near = dist <= SEED_DISTANCE * self.guide.lengths[kappa_order[cand]]
+                    kappa_order = np.delete(kappa_order, cand[near])
+            if self.nv and len(kappa_order) < SEED_MIN_POINTS:
+                break
+            start = kappa_order[0]
             tried += 1
             if not self._seed(start):
                 if self.nv == 0 and tried > 10:

@@ -109,57 +109,40 @@ def vertices_near(head, nxt, cells, cell, V, N, x, radius, n, use_normal):
 
 
 @numba.njit(cache=True)
-def covered(heads, level_cell, level_radius, nxt, cells, geometry, probes, centre, length,
-            margin, height):
+def covered(head, nxt, cells, cell, geometry, probes, centre, length, margin, height):
     """Whether any of ``probes (K, 3)`` projects strictly inside (barycentric coordinates above
-    ``margin``) an existing triangle, closer than ``height * length`` to its plane.
-
-    Triangles are filed by centroid in a grid per size class (``heads (L, S)``, cells
-    ``level_cell (L,)`` wide; ``level_radius (L,)`` the largest centroid-to-corner distance
-    filed in each, negative while empty): a probe over a triangle lies within that distance
-    plus the height limit of its centroid, so each level is searched out to the cells that
-    bound can reach.  One grid of cells as wide as the longest triangles gathered hundreds of
-    small ones per question on strongly graded meshes.  ``geometry (F, 19)``: per triangle its
-    first corner, two edge vectors, unit normal, the Gram entries ``e1.e1, e1.e2, e2.e2``, its
-    centroid and the largest distance of a corner from the centroid."""
+    ``margin``) a triangle filed within one cell of ``centre``, closer than ``height *
+    length`` to its plane.  ``geometry (F, 19)``: per triangle its first corner, two edge
+    vectors, unit normal, the Gram entries ``e1.e1, e1.e2, e2.e2``, its centroid and the
+    largest distance of a corner from the centroid."""
+    ids = _gather(head, nxt, cells, cell, centre, 1, np.empty(64, dtype=np.int64))
     limit = height * length
-    spread = 0.0
-    for p in range(probes.shape[0]):
-        spread = max(spread, math.sqrt((probes[p, 0] - centre[0]) ** 2
-                                       + (probes[p, 1] - centre[1]) ** 2
-                                       + (probes[p, 2] - centre[2]) ** 2))
-    for lev in range(len(level_cell)):
-        if level_radius[lev] < 0:
+    for t in ids:
+        g = geometry[t]
+        d00, d01, d11 = g[12], g[13], g[14]
+        denom = d00 * d11 - d01 * d01
+        if denom <= 0:  # a degenerate triangle covers nothing
             continue
-        cell = level_cell[lev]
-        reach = int(math.ceil((level_radius[lev] + limit + spread) / cell))
-        ids = _gather(heads[lev], nxt, cells, cell, centre, reach, np.empty(64, dtype=np.int64))
-        for t in ids:
-            g = geometry[t]
-            d00, d01, d11 = g[12], g[13], g[14]
-            denom = d00 * d11 - d01 * d01
-            if denom <= 0:  # a degenerate triangle covers nothing
+        # a probe over the triangle lies within its corner radius plus the height limit of
+        # its centroid: most triangles of the neighbourhood are rejected by that alone
+        reach = (g[18] + limit) * (g[18] + limit)
+        for p in range(probes.shape[0]):
+            c0 = probes[p, 0] - g[15]
+            c1 = probes[p, 1] - g[16]
+            c2 = probes[p, 2] - g[17]
+            if c0 * c0 + c1 * c1 + c2 * c2 > reach:
                 continue
-            # a probe over the triangle lies within its corner radius plus the height limit
-            # of its centroid: most triangles of the neighbourhood are rejected by that alone
-            r = (g[18] + limit) * (g[18] + limit)
-            for p in range(probes.shape[0]):
-                c0 = probes[p, 0] - g[15]
-                c1 = probes[p, 1] - g[16]
-                c2 = probes[p, 2] - g[17]
-                if c0 * c0 + c1 * c1 + c2 * c2 > r:
-                    continue
-                r0 = probes[p, 0] - g[0]
-                r1 = probes[p, 1] - g[1]
-                r2 = probes[p, 2] - g[2]
-                if abs(r0 * g[9] + r1 * g[10] + r2 * g[11]) >= limit:
-                    continue
-                d20 = r0 * g[3] + r1 * g[4] + r2 * g[5]
-                d21 = r0 * g[6] + r1 * g[7] + r2 * g[8]
-                s = (d11 * d20 - d01 * d21) / denom
-                u = (d00 * d21 - d01 * d20) / denom
-                if s > margin and u > margin and 1.0 - s - u > margin:
-                    return True
+            r0 = probes[p, 0] - g[0]
+            r1 = probes[p, 1] - g[1]
+            r2 = probes[p, 2] - g[2]
+            if abs(r0 * g[9] + r1 * g[10] + r2 * g[11]) >= limit:
+                continue
+            d20 = r0 * g[3] + r1 * g[4] + r2 * g[5]
+            d21 = r0 * g[6] + r1 * g[7] + r2 * g[8]
+            s = (d11 * d20 - d01 * d21) / denom
+            u = (d00 * d21 - d01 * d20) / denom
+            if s > margin and u > margin and 1.0 - s - u > margin:
+                return True
     return False
 
 
@@ -469,8 +452,7 @@ def compile_kernels() -> None:
     front_clear(head, nxt, cells, 1.0, V, N, adj, cnt, radj, cnt, 0, 1, -1,
                 np.array([0.5, -0.8, 0.0]), n, 2.0)
     geometry = np.zeros((cap, 19))
-    covered(head[None], np.ones(1), np.zeros(1), nxt, cells, geometry, V[:2], V[0], 1.0, 0.02,
-            0.3)
+    covered(head, nxt, cells, 1.0, geometry, V[:2], V[0], 1.0, 0.02, 0.3)
     idx = np.tile(np.arange(4, dtype=np.int64), (2, 1))
     outside_flags(V[:2], N[:2], np.ones((2, 4)), idx, V[:4], N[:4], np.ones(4), 0.75, 1.5,
                   False, math.pi)
