@@ -733,6 +733,16 @@ def _finish(spline, iso, vertices, faces, planes, tol, snap):
     off = np.abs(_values(spline, vertices) - iso) > tol
     if off.any():
         vertices[off], _ = project_onto(spline, vertices[off], iso, 60, tol)
+        # a vertex clamped onto an edge of the data box slides along that edge alone, and
+        # the surface need not cross it nearby (2 of 800,000 vertices of the whole bonsai):
+        # it goes with its triangles, the border at the box stays open there
+        stuck = np.abs(_values(spline, vertices) - iso) > tol
+        if stuck.any():
+            faces = faces[~stuck[faces].any(axis=1)]
+            used = np.unique(faces)
+            remap = np.full(len(vertices), -1, dtype=np.int64)
+            remap[used] = np.arange(len(used))
+            vertices, faces = vertices[used], remap[faces]
     g = spline.gradient(vertices)
     norm = np.linalg.norm(g, axis=1)
     normals = np.divide(-g, norm[:, None], out=np.zeros_like(g), where=norm[:, None] > 0)
