@@ -202,12 +202,16 @@ def test_data_meshes_against_flying_edges(name):
                                                   root / "benchmarks" / "bench_spline_mesh.py")
     bench = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(bench)
-    (_, _, fe), (_, _, front) = bench.run(data, name, "cubic-c1", [DEFAULT_RHO])
+    # flying edges as exported (refined once only past its sample cap, as for the tooth),
+    # then twice refined where that differs, then the front
+    rows = bench.run(data, name, "cubic-c1", [DEFAULT_RHO])
+    front = rows[-1][2]
     assert front["on_surface"] < 1e-6
     assert front["radius_ratio"] >= 0.9 and front["valence6"] >= 0.7
     assert front["off_surface"] == 0
-    assert front["triangles"] <= 0.5 * fe["triangles"]
-    assert front["hausdorff"] <= fe["hausdorff"]
+    for _label, _seconds, fe in rows[:-1]:
+        assert front["triangles"] <= 0.5 * fe["triangles"]
+        assert front["hausdorff"] <= fe["hausdorff"]
 
 
 def test_samples_of_crossings_along_every_axis():
