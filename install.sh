@@ -46,7 +46,8 @@ done
 # the point projection's numba kernels into numba's cache (10-20 s once, not at first use)
 .venv/bin/python -c "from splineviz.pointcloud.local_fits import compile_kernels; compile_kernels()" \
   || echo "install.sh: could not compile the projection kernels (they compile on first use)" >&2
-# ... and the mesher's (the advancing front's geometry tests, the valence flips)
-.venv/bin/python -c "from splineviz.pointcloud import front_kernels, relaxation; front_kernels.compile_kernels(); relaxation.compile_kernels()" \
+# ... and the mesher's (the advancing front's geometry tests, the valence flips, the spline
+# front's evaluation of type-6 splines)
+.venv/bin/python -c "from splineviz.pointcloud import front_kernels, relaxation, spline_kernels; front_kernels.compile_kernels(); relaxation.compile_kernels(); spline_kernels.compile_kernels()" \
   || echo "install.sh: could not compile the mesher kernels (they compile on first use)" >&2
 echo "install.sh: splineviz installed in .venv"

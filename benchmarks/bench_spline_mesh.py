@@ -2,12 +2,14 @@
 
 For each data set (a 40^3 crop of the bonsai's crown and the whole bonsai at 40.5, tooth at
 100.5; cubic-c1 by default) it builds "Export mesh"'s flying-edges mesh (spline samples on the
-grid refined twice, vertices moved onto the spline) and advancing-front meshes on the spline
-for a few ``rho``, and prints per mesh: triangles (and their share of flying edges'), time,
-largest |s - iso| at the vertices over the data range, mean radius ratio, valence-6 share of
-interior vertices, the Hausdorff distance to the exact surface (in grid steps), and the
-triangles that leave the surface by the spline mesher's own test
-(:func:`splineviz.pointcloud.spline_mesh.triangles_on_surface`: bridges between sheets).
+grid refined twice, vertices moved onto the spline; once only past the export's sample cap,
+as for the whole bonsai, which then also gets the twice-refined mesh, sampled slab by slab)
+and advancing-front meshes on the spline for a few ``rho``, and prints per mesh: triangles
+(and their share of twice-refined flying edges'), time, largest |s - iso| at the vertices over
+the data range, mean radius ratio, valence-6 share of interior vertices, the Hausdorff
+distance to the exact surface (in grid steps), and the triangles that leave the surface by the
+spline mesher's own test (:func:`splineviz.pointcloud.spline_mesh.triangles_on_surface`:
+bridges between sheets).
 
 Hausdorff: mesh -> surface from 7 samples per triangle projected onto s = iso by Newton steps,
 surface -> mesh from the other mesh's vertices (which lie on the surface). Both leave out
@@ -16,7 +18,8 @@ box faces (flying edges reaches them), and Newton steps keep a point on a box fa
 face, so its distance there is not the distance to the surface.
 
 Run: ``.venv/bin/python benchmarks/bench_spline_mesh.py [--data DIR] [--rho 0.3 0.45]
-[--sets bonsai-crop bonsai tooth] [--model cubic-c1]``
+[--sets bonsai-crop bonsai tooth] [--model cubic-c1] [--save DIR]`` (the whole bonsai: ~20 min
+of one core and ~8 GB of memory for the three meshes and their measures)
 """
 
 from __future__ import annotations
@@ -47,15 +50,50 @@ def load(data_dir: Path, name: str):
     return vol, iso
 
 
+def flying_edges_refined(spline, iso: float, refine: int = 2):
+    """:func:`splineviz.render.extract.spline_isosurface` on the grid refined ``refine`` times
+    whatever its size: the spline is sampled one z slab at a time (the export's sample cap
+    keeps the whole bonsai at one refinement; all points at once would take ~4 GB there).
+
+    Returns
+    -------
+    vertices : (V, 3) on s = iso, faces : (F, 3)
+    """
+    import pyvista as pv
+
+    from splineviz.core.isosurface import project_to_isosurface
+
+    vol = spline.volume
+    dims = (np.asarray(vol.shape) - 1) * refine + 1
+    spacing = np.asarray(vol.spacing, dtype=np.float64) / refine
+    origin = np.asarray(vol.origin, dtype=np.float64)
+    x = origin[0] + spacing[0] * np.arange(dims[0])
+    y = origin[1] + spacing[1] * np.arange(dims[1])
+    xx, yy = np.meshgrid(x, y)  # (ny, nx): VTK's point order, x fastest
+    plane = np.stack([xx.ravel(), yy.ravel(), np.zeros(xx.size)], axis=1)
+    values = np.empty((dims[2], dims[1] * dims[0]))
+    for k in range(dims[2]):
+        plane[:, 2] = origin[2] + spacing[2] * k
+        values[k] = spline.evaluate(plane)
+    grid = pv.ImageData(dimensions=dims, spacing=spacing, origin=origin)
+    grid.point_data["values"] = values.ravel()
+    mesh = grid.contour([iso], scalars="values", method="flying_edges")
+    pts, _normals = project_to_isosurface(spline, np.asarray(mesh.points), iso)
+    return pts, mesh.faces.reshape(-1, 4)[:, 1:]
+
+
 def _interior(spline, points, margin):
     lo = np.array([b[0] for b in spline.bounds]) + margin
     hi = np.array([b[1] for b in spline.bounds]) - margin
     return np.all((points > lo) & (points < hi), axis=1)
 
 
+#: points per chunk of the Hausdorff measurement (the whole bonsai's meshes have millions)
+CHUNK = 1_000_000
+
+
 def measure(spline, iso, vertices, faces, other_vertices):
     """Quality and accuracy of one mesh of ``s = iso`` (see the module notes)."""
-    from splineviz.core.isosurface import project_to_isosurface
     from splineviz.pointcloud.quality import (
         distance_to_mesh,
         edge_face_counts,
@@ -63,7 +101,7 @@ def measure(spline, iso, vertices, faces, other_vertices):
         surface_samples,
         valences,
     )
-    from splineviz.pointcloud.spline_mesh import triangles_on_surface
+    from splineviz.pointcloud.spline_mesh import project_onto, triangles_on_surface
 
     step = float(np.min(spline.volume.spacing))
     lo, hi = spline.volume.finite_range
@@ -75,10 +113,12 @@ def measure(spline, iso, vertices, faces, other_vertices):
     # a point on a face of the data box is projected within that face: its distance is not
     # the distance to the surface
     samples = samples[_interior(spline, samples, 1.5 * step)]
-    proj, _ = project_to_isosurface(spline, samples, iso, steps=10)
-    forward = np.linalg.norm(samples - proj, axis=1)
-    keep = _interior(spline, other_vertices, 1.5 * step)
-    backward = distance_to_mesh(other_vertices[keep], vertices, faces)
+    forward = np.concatenate([np.linalg.norm(part - project_onto(spline, part, iso, 10)[0],
+                                             axis=1)
+                              for part in np.array_split(samples, len(samples) // CHUNK + 1)])
+    other = other_vertices[_interior(spline, other_vertices, 1.5 * step)]
+    backward = np.concatenate([distance_to_mesh(part, vertices, faces)
+                               for part in np.array_split(other, len(other) // CHUNK + 1)])
     return {"triangles": len(faces),
             "on_surface": float(np.abs(spline.evaluate(vertices) - iso).max() / (hi - lo)),
             "radius_ratio": float(radius_ratios(vertices, faces).mean()),
@@ -89,41 +129,71 @@ def measure(spline, iso, vertices, faces, other_vertices):
             "off_surface": int(np.sum(~triangles_on_surface(spline, iso, vertices[faces])))}
 
 
-def run(data_dir: Path, name: str, model: str, rhos):
-    """Mesh one set with flying edges and the front (one per ``rho``), print the table and
-    return its rows ``[(label, seconds, measures)]``, flying edges first."""
+def run(data_dir: Path, name: str, model: str, rhos, save: Path | None = None):
+    """Mesh one set with flying edges and the front (one per ``rho``), print the table (and
+    the front's stage times) and return its rows ``[(label, seconds, measures)]``, flying
+    edges first; ``save``: a folder for the meshes (``.npz``)."""
     import splineviz as sv
     from splineviz.pointcloud.spline_mesh import spline_front_mesh
-    from splineviz.render.extract import spline_isosurface
+    from splineviz.render.extract import MAX_SAMPLES, spline_isosurface
 
     vol, iso = load(data_dir, name)
     spline = sv.build_spline(vol, model)
     spline.evaluate(np.zeros((1, 3)))  # build the padded data before timing
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     fe = spline_isosurface(spline, iso)
-    t_fe = time.perf_counter() - t0
+    t_fe, c_fe = time.perf_counter() - t0, time.process_time() - c0
     fe_v = np.asarray(fe.points, dtype=np.float64)
     fe_f = fe.faces.reshape(-1, 4)[:, 1:]
-    fronts = []
+    # past the export's sample cap (the whole bonsai) its mesh is refined once only: the
+    # twice-refined one too, the reference of the smaller sets
+    refined = np.prod((np.asarray(spline.volume.shape) - 1) * 2 + 1) > MAX_SAMPLES
+    if refined:
+        t0, c0 = time.perf_counter(), time.process_time()
+        fe2_v, fe2_f = flying_edges_refined(spline, iso, 2)
+        t_fe2, c_fe2 = time.perf_counter() - t0, time.process_time() - c0
+    fronts, stages = [], []
     for rho in rhos:
-        t0 = time.perf_counter()
-        v, f, _n = spline_front_mesh(spline, iso, rho=rho)
-        fronts.append((rho, v, f, time.perf_counter() - t0))
-    rows = [("flying edges x2", t_fe, measure(spline, iso, fe_v, fe_f, fronts[0][1]))]
-    rows += [(f"front rho={rho:g}", t, measure(spline, iso, v, f, fe_v))
-             for rho, v, f, t in fronts]
+        t0, c0 = time.perf_counter(), time.process_time()
+        stages.append({})
+        v, f, _n = spline_front_mesh(spline, iso, rho=rho, timings=stages[-1])
+        fronts.append((rho, v, f, time.perf_counter() - t0, time.process_time() - c0))
+        print(f"{name} front rho={rho:g}: {len(f)} triangles in {fronts[-1][3]:.1f} s "
+              f"(CPU {fronts[-1][4]:.1f} s; flying edges {len(fe_f)} in {t_fe:.1f} s, "
+              f"CPU {c_fe:.1f} s)", flush=True)
+        if save is not None:
+            np.savez(save / f"{name}-front-{rho:g}.npz", vertices=v, faces=f)
+    if save is not None:
+        np.savez(save / f"{name}-fe.npz", vertices=fe_v, faces=fe_f)
+        if refined:
+            np.savez(save / f"{name}-fe2.npz", vertices=fe2_v, faces=fe2_f)
+    # the surface -> mesh samples of the fronts: the vertices of the finest flying edges
+    reference = fe2_v if refined else fe_v
+    rows = [("flying edges x1 (export)" if refined else "flying edges x2", t_fe, c_fe,
+             measure(spline, iso, fe_v, fe_f, fronts[0][1]))]
+    if refined:
+        rows.append(("flying edges x2", t_fe2, c_fe2,
+                     measure(spline, iso, fe2_v, fe2_f, fronts[0][1])))
+    rows += [(f"front rho={rho:g}", t, c, measure(spline, iso, v, f, reference))
+             for rho, v, f, t, c in fronts]
     print(f"\n{name} {spline.volume.shape} ({model}, iso {iso:g})")
-    print("| mesh | triangles | of FE | time s | max abs(s-iso)/range | mean radius ratio "
-          "| valence-6 | Hausdorff (grid steps) | mesh->surface | surface->mesh "
-          "| off-surface triangles |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    n_fe = rows[0][2]["triangles"]
-    for label, t, m in rows:
-        print(f"| {label} | {m['triangles']} | {m['triangles'] / n_fe:.1%} | {t:.1f} | "
+    # wall and CPU seconds: on a loaded machine the CPU time is the one-core figure
+    print("| mesh | triangles | of FE x2 | time s | CPU s | max abs(s-iso)/range "
+          "| mean radius ratio | valence-6 | Hausdorff (grid steps) | mesh->surface "
+          "| surface->mesh | off-surface triangles |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    n_fe = rows[1 if refined else 0][3]["triangles"]  # shares of flying edges x2
+    for label, t, c, m in rows:
+        print(f"| {label} | {m['triangles']} | {m['triangles'] / n_fe:.1%} | {t:.1f} | {c:.1f} | "
               f"{m['on_surface']:.1e} | {m['radius_ratio']:.3f} | {m['valence6']:.1%} | "
               f"{m['hausdorff']:.4f} | {m['to_surface_max']:.4f} | "
               f"{m['from_surface_max']:.4f} | {m['off_surface']} |")
-    return rows
+    names = list(stages[0])
+    print("\n| front stage times s | " + " | ".join(names) + " |")
+    print("|---" * (len(names) + 1) + "|")
+    for (rho, *_), times in zip(fronts, stages, strict=True):
+        print(f"| rho={rho:g} | " + " | ".join(f"{times[k]:.1f}" for k in names) + " |")
+    return [(label, t, m) for label, t, _c, m in rows]
 
 
 def main(argv=None):
@@ -132,10 +202,13 @@ def main(argv=None):
                     default=Path(__file__).resolve().parents[2] / "shared" / "data" / "volumes")
     ap.add_argument("--sets", nargs="+", default=["bonsai-crop", "tooth"], choices=list(SETS))
     ap.add_argument("--model", default="cubic-c1")
-    ap.add_argument("--rho", nargs="+", type=float, default=[0.3])
+    from splineviz.pointcloud.spline_mesh import DEFAULT_RHO
+
+    ap.add_argument("--rho", nargs="+", type=float, default=[DEFAULT_RHO])
+    ap.add_argument("--save", type=Path, help="folder for the meshes (.npz)")
     args = ap.parse_args(argv)
     for name in args.sets:
-        run(args.data, name, args.model, args.rho)
+        run(args.data, name, args.model, args.rho, args.save)
 
 
 if __name__ == "__main__":

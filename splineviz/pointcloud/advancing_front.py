@@ -164,6 +164,23 @@ def _corner_angles(pa, pb, pc):
     return out
 
 
+def heap_smallest(heap: list, k: int) -> list:
+    """The ``k`` smallest items of the binary heap ``heap`` in ascending order, as
+    ``heapq.nsmallest(k, heap)`` gives them, in O(k log k): an item's children are no smaller
+    than it, so the next smallest is always a child of one already taken (``nsmallest`` looks
+    at every item, and the front's heap holds thousands on a large surface)."""
+    if not heap or k <= 0:
+        return []
+    out, cand = [], [(heap[0], 0)]
+    while cand and len(out) < k:
+        item, i = heapq.heappop(cand)
+        out.append(item)
+        for c in (2 * i + 1, 2 * i + 2):
+            if c < len(heap):
+                heapq.heappush(cand, (heap[c], c))
+    return out
+
+
 def simple_loops(loop):
     """Split a closed vertex loop at its repeated vertices into loops without repeats.
 
@@ -639,7 +656,7 @@ class AdvancingFront:
         edge's vertices, so the batch gives what one edge at a time would.
         """
         edges = {(a, b): None}
-        for _delay, _c, u, w in heapq.nsmallest(PREDICT_BATCH, self.heap):
+        for _delay, _c, u, w in heap_smallest(self.heap, PREDICT_BATCH):
             if (u, w) in self.front and (u, w) not in self.border and \
                     (u, w) not in self.predictions:
                 edges[(u, w)] = None
@@ -720,22 +737,31 @@ class AdvancingFront:
         proj = self.proj
         kappa_order = np.argsort(self.guide.lengths)[::-1]  # flattest (longest edges) first
         tried = 0
+        checked = 0  # the vertices the points in kappa_order are known to be far from
+        reach = SEED_DISTANCE * float(np.max(self.guide.lengths))
         for _ in range(MAX_SEEDS if self.max_seeds is None else self.max_seeds):
             if self.stats.truncated:
                 break
-            if self.nv:
-                from scipy.spatial import cKDTree
+            if self.nv > checked:
+                # vertices are never removed nor moved: a point near the mesh stays near it,
+                # so each round asks only about the points that were far in the previous one,
+                # only about the vertices added since, and of those points only the ones in
+                # reach of their bounding box (a surface of many pieces, such as the bonsai's
+                # leaves, takes thousands of rounds, each meshing a small piece)
+                new = self.V[checked: self.nv]
+                checked = self.nv
+                pts = proj.points[kappa_order]
+                cand = np.flatnonzero(np.all((pts >= new.min(axis=0) - reach) &
+                                             (pts <= new.max(axis=0) + reach), axis=1))
+                if len(cand):
+                    from scipy.spatial import cKDTree
 
-                tree = cKDTree(self.V[: self.nv])
-                dist, _ = tree.query(proj.points[kappa_order])
-                # vertices are never removed: a point near the mesh stays near it, so each
-                # round asks only about the points that were far in the previous one
-                kappa_order = kappa_order[dist > SEED_DISTANCE * self.guide.lengths[kappa_order]]
-                if len(kappa_order) < SEED_MIN_POINTS:
-                    break
-                start = kappa_order[0]
-            else:
-                start = kappa_order[0]
+                    dist, _ = cKDTree(new).query(pts[cand])
+                    near = dist <= SEED_DISTANCE * self.guide.lengths[kappa_order[cand]]
+                    kappa_order = np.delete(kappa_order, cand[near])
+            if self.nv and len(kappa_order) < SEED_MIN_POINTS:
+                break
+            start = kappa_order[0]
             tried += 1
             if not self._seed(start):
                 if self.nv == 0 and tried > 10:

@@ -142,13 +142,14 @@ def _flip_pass(p, faces, target, cos_max, keep):
     return flips
 
 
-def flip_edges(vertices: np.ndarray, faces: np.ndarray, passes: int = 3) -> tuple[np.ndarray, int]:
+def flip_edges(vertices: np.ndarray, faces: np.ndarray, passes: int = 3,
+               keep: float = FLIP_QUALITY_KEEP) -> tuple[np.ndarray, int]:
     """Flip interior edges where that brings the four vertices' valences closer to 6
     (4 on borders), the ideal of a regular triangulation (thesis §7.3: "most vertices have
     degree six").
 
     A flip must keep both new triangle normals within ``FLIP_MAX_TURN`` of the pair's old
-    normal and the pair's smallest radius ratio above ``FLIP_QUALITY_KEEP`` of the old one;
+    normal and the pair's smallest radius ratio above ``keep`` of the old one;
     edges are visited in the order of the faces, each pass on the valences at its start
     updated by its own flips (compiled: a Python loop over the half edges took seconds on
     10,000 vertices).
@@ -157,6 +158,9 @@ def flip_edges(vertices: np.ndarray, faces: np.ndarray, passes: int = 3) -> tupl
     ----------
     vertices : (V, 3)
     faces : (F, 3) int
+    passes : int, most passes over the edges
+    keep : float, smallest accepted ratio of the pair's smallest radius ratio after a flip
+        to before (``FLIP_QUALITY_KEEP`` by default)
 
     Returns
     -------
@@ -168,7 +172,7 @@ def flip_edges(vertices: np.ndarray, faces: np.ndarray, passes: int = 3) -> tupl
     target = np.where(border_vertices(len(p), out), 4, 6).astype(np.int64)
     total = 0
     for _ in range(passes):
-        flips = _flip_pass(p, out, target, float(np.cos(FLIP_MAX_TURN)), FLIP_QUALITY_KEEP)
+        flips = _flip_pass(p, out, target, float(np.cos(FLIP_MAX_TURN)), float(keep))
         total += flips
         if flips == 0:
             break
@@ -222,14 +226,16 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
     return v
 
 
-def optimize(vertices: np.ndarray, faces: np.ndarray, projector, rounds: int = 2):
-    """Alternate :func:`flip_edges` and :func:`relax`; returns ``(vertices, faces, flips)``."""
+def optimize(vertices: np.ndarray, faces: np.ndarray, projector, rounds: int = 2,
+             flip_keep: float = FLIP_QUALITY_KEEP):
+    """Alternate :func:`flip_edges` (``keep=flip_keep``) and :func:`relax`; returns
+    ``(vertices, faces, flips)``."""
     flips = 0
     for _ in range(rounds):
-        faces, k = flip_edges(vertices, faces)
+        faces, k = flip_edges(vertices, faces, keep=flip_keep)
         flips += k
         vertices = relax(vertices, faces, projector)
-    faces, k = flip_edges(vertices, faces)
+    faces, k = flip_edges(vertices, faces, keep=flip_keep)
     return vertices, faces, flips + k
 
 

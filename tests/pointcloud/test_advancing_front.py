@@ -216,3 +216,20 @@ def test_pinched_loops_are_split_into_simple_ones():
         edges = set(zip(part, part[1:] + part[:1], strict=True))
         assert edges <= {(1, 2), (2, 3), (3, 4), (4, 2), (2, 5), (5, 6), (6, 1)}
     assert simple_loops([7, 8, 9]) == [[7, 8, 9]]
+
+
+def test_heap_smallest_is_nsmallest():
+    import heapq
+
+    from splineviz.pointcloud.advancing_front import heap_smallest
+
+    rng = np.random.default_rng(3)
+    heap: list = []
+    for counter in range(3000):
+        # the front's entries: (delay, counter, a, b), many equal delays
+        heapq.heappush(heap, (int(rng.integers(0, 4)), counter, 0, 0))
+        if counter % 7 == 0:
+            heapq.heappop(heap)
+    for k in (0, 1, 5, 64, len(heap), len(heap) + 3):
+        assert heap_smallest(heap, k) == heapq.nsmallest(k, heap)
+    assert heap_smallest([], 4) == []
