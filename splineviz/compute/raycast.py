@@ -33,10 +33,8 @@ Models with an OpenCL kernel:
   tables of the (TO, tet) pieces meeting a cell; a cell's relevance bit set computes each
   distinct B-net point of its pieces once, and the ray tests only the relevant pieces of the
   subcells (5^3 per cell) its segment crosses. Each classified cell's range (the min/max of
-  its points, 2 bytes) and its points themselves (a byte each, quantised to its range) are
-  kept while the data stay, so a later isovalue skips the cell if outside its range and
-  otherwise marks its pieces from the stored bytes without its sums (isovalue-independent
-  work once per data change, thesis §6.1.1).
+  its points, 2 bytes) is kept while the data stay, so a later isovalue outside it skips the
+  cell without its sums (isovalue-independent work once per data change, thesis §6.1.1).
 
 A brick of a bigger volume (:mod:`splineviz.compute.bricked`) is cast by the same kernel,
 compiled with ``BRICKS``, in the whole volume's coordinates and over a window of the frame
@@ -89,10 +87,6 @@ MAX_EPOCH = 255
 #: largest pool of the classification cache (24-bit entry indices beside the epoch; the
 #: largest index marks a slot being allocated)
 MAX_POOL = 2**24 - 2
-#: largest pool of the TO stored points (raycast.cl): an entry (a level-1 node) is 1720
-#: bytes, so this holds ~156k nodes (a 512^2 view of bonsai 256^3 at five isovalues stores
-#: ~137k); nodes past it are classified from their sums at every isovalue
-MAX_STORED_POINT_BYTES = 256 * 2**20
 #: families whose per-cell classification the rays cache
 CACHED = ("MODEL_TYPE6", "MODEL_TO")
 
@@ -368,19 +362,8 @@ class RayCaster:
             out["classification cache"] = 4 * (bricks + self._entry_words()
                                                * _initial_pool(bricks))
         if self._family == "MODEL_TO":
-            bricks = int(np.prod(levels[0][1:]))
-            out["cell ranges"] = 2 * 8 * bricks
-            out["stored points"] = 4 * (bricks + 1 + self._sp_words() * _initial_pool(bricks))
+            out["cell ranges"] = 2 * 8 * int(np.prod(levels[0][1:]))
         return out
-
-    def _sp_words(self) -> int:
-        """32-bit words of an entry of the TO stored points (raycast.cl): 8 flags, 8 cell
-        ranges, a byte per B-net point of a level-1 node's 8 cells (one of each parity
-        class)."""
-        from splineviz.compute.to_tables import class_points
-
-        points = int(class_points(_to_k(self._model_kwargs), TO_WORDS)["pt_start"][-1])
-        return 24 + (points + 3) // 4
 
     def _entry_words(self) -> int:
         """32-bit words of a pool entry of the classification cache (8 cells of a brick):
@@ -432,8 +415,6 @@ class RayCaster:
 
     def _defines(self) -> dict:
         """-D options of this model's programs."""
-        import pyopencl as cl
-
         d = {self._family: 1, "DATA_T": self._sample_type[1], **_shading_defines()}
         if self._family == "MODEL_TYPE6":
             d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK,
@@ -441,8 +422,6 @@ class RayCaster:
         elif self._family == "MODEL_TO":
             d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS,
                      NUNION=self._nunion)
-            if self._device.device.type & cl.device_type.CPU:
-                d["CACHE_COHERENT"] = 1
         return d
 
     def _ray_kernel(self, kernel: str, bricks: bool = False):
@@ -494,12 +473,6 @@ class RayCaster:
             # isovalue-independent cell ranges (raycast.cl), all (0, 255): "not known yet"
             self._ranges = cla.empty(q, 8 * int(np.prod(levels[0][1:])), np.uint16)
             self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
-            # isovalue-independent stored points: a slot per level-1 node (0: none), a pool
-            # that grows on demand, the entries asked for
-            self._sp_slots = cla.zeros(q, bricks, np.uint32)
-            self._sp_count = cla.zeros(q, 1, np.int32)
-            self._sp_cap = _initial_pool(bricks)
-            self._sp_pool = cla.empty(q, self._sp_cap * self._sp_words(), np.uint32)
         q.finish()
 
     def _cell_args(self) -> list:
@@ -877,29 +850,21 @@ class RayCaster:
     def _grow_pool(self, asked: int) -> None:
         """Make the pool hold ``asked`` entries, its cached entries kept (their indices stay
         valid); the bricks a full pool could not take are cached by the next frames."""
+        import pyopencl as cl
+        import pyopencl.array as cla
+
+        q = self._device.queue
         old = self._pool_cap
         if asked <= old:
             return
-        self._pool, self._pool_cap = _grown(self._device.queue, self._pool, old, asked,
-                                            self._entry_words(), MAX_POOL)
+        cap = min(MAX_POOL, max(2 * old, asked * 5 // 4))
+        if cap > old:
+            pool = cla.empty(q, cap * self._entry_words(), np.uint32)
+            cl.enqueue_copy(q, pool.data, self._pool.data, byte_count=self._pool.nbytes)
+            self._pool, self._pool_cap = pool, cap
         # entries asked for past the old end were never written: hand them out again
-        q = self._device.queue
         used = int(self._counts[2:3].get(queue=q)[0])
         self._counts[2:3].set(np.array([min(used, old)], np.int32), queue=q)
-
-    def _grow_stored_points(self, asked: int) -> None:
-        """Make the TO stored-point pool hold ``asked`` entries (up to
-        :data:`MAX_STORED_POINT_BYTES`), its entries kept; nodes a full pool could not take
-        are stored by the next frames."""
-        old = self._sp_cap
-        if asked <= old:
-            return
-        words = self._sp_words()
-        most = min(len(self._sp_slots), MAX_STORED_POINT_BYTES // (4 * words))
-        self._sp_pool, self._sp_cap = _grown(self._device.queue, self._sp_pool, old, asked,
-                                             words, most)
-        # claims past the old end released their slots: hand those entries out again
-        self._sp_count.set(np.array([old], np.int32), queue=self._device.queue)
 
     def _render_cl(self, camera, w, h, planes, hessian: bool = False, window=None,
                    placement: Placement | None = None) -> ref.Frame:
@@ -963,9 +928,7 @@ class RayCaster:
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
             e = self._ent
-            model_args = [*self._cache_args(), self._ranges.data, self._sp_slots.data,
-                          self._sp_pool.data, np.int32(self._sp_cap), self._sp_count.data,
-                          self._cls_start.data,
+            model_args = [*self._cache_args(), self._ranges.data, self._cls_start.data,
                           self._cls_offsets.data, e["start"].data, e["centre"].data,
                           e["base"].data, e["tet"].data,
                           *(a.data for a in self._to_csr), self._bary.data, self._red.data]
@@ -990,8 +953,6 @@ class RayCaster:
             if self.stats.get("classified") == "visible":
                 self.stats.update(active_cells=cells, active_tets=tets)
             self._grow_pool(asked)
-        if self._family == "MODEL_TO":
-            self._grow_stored_points(int(self._sp_count.get(queue=q)[0]))
         hit_h = hit.get(queue=q).astype(bool).reshape(wh, ww)
 
         def position():
@@ -1052,20 +1013,6 @@ def _to_k(model_kwargs: dict) -> float:
     if not k >= 1:
         raise RayCastError(f"Q_k needs k >= 1, got {k}")
     return k
-
-
-def _grown(queue, pool, cap: int, asked: int, words: int, most: int):
-    """``(pool, cap)`` of a cache pool of ``words`` words per entry grown towards ``asked``
-    entries (at most ``most``), the old entries copied."""
-    import pyopencl as cl
-    import pyopencl.array as cla
-
-    new = min(most, max(2 * cap, asked * 5 // 4))
-    if new <= cap:
-        return pool, cap
-    grown = cla.empty(queue, new * words, np.uint32)
-    cl.enqueue_copy(queue, grown.data, pool.data, byte_count=pool.nbytes)
-    return grown, new
 
 
 def _initial_pool(bricks: int) -> int:

@@ -101,16 +101,14 @@ def test_isovalue_changes_leave_no_stale_cubes(ml):
 
 @needs_cl
 def test_full_to_pool_grows_and_frames_stay_exact(ml):
-    # pools too small for one frame: rays that find them full work uncached, the pools grow
-    # after the frame keeping their entries, and later frames fill them
+    # a pool too small for one frame: rays that find it full work uncached, the pool grows
+    # after the frame keeping its entries, and later frames fill it
     import pyopencl.array as cla
 
     vol, iso = ml
     rc = RayCaster(vol, model="to-quadratic")
     rc._pool_cap = 16
     rc._pool = cla.empty(rc._device.queue, 16 * rc._entry_words(), np.uint32)
-    rc._sp_cap = 4  # and the stored points': rays past it classify from the sums
-    rc._sp_pool = cla.empty(rc._device.queue, 4 * rc._sp_words(), np.uint32)
     full = RayCaster(vol, model="to-quadratic")
     for cam, value in _path(vol, iso)[3:6]:
         rc.set_isovalue(value)
@@ -118,10 +116,9 @@ def test_full_to_pool_grows_and_frames_stay_exact(ml):
         full.classify_all()
         _assert_same(rc.render(cam, SIZE), full.render(cam, SIZE))
         _assert_same(rc.render(cam, SIZE), full.render(cam, SIZE))  # from the cache
-    assert rc._pool_cap > 200 and rc._sp_cap > 100
+    assert rc._pool_cap > 200
     cells, _, used = rc._counts.get(queue=rc._device.queue)
     assert 0 < used <= rc._pool_cap and cells > used  # 8 cells per brick entry
-    assert 0 < rc._sp_count.get(queue=rc._device.queue)[0] <= rc._sp_cap
 
 
 @needs_cl
@@ -181,8 +178,7 @@ def test_cube_program_is_determining_set_plus_rules(model):
 @needs_cl
 def test_to_cell_ranges_from_other_isovalues_give_the_same_frames(ml):
     # the isovalue-independent cell ranges, filled at other isovalues, skip cells whose range
-    # excludes the new isovalue, and the stored points of the others mark their pieces
-    # without the sums: the frames are those of a caster that never saw another isovalue
+    # excludes the new isovalue: the frames are those of a caster that never saw another
     vol, iso = ml
     path = _path(vol, iso)
     seasoned = RayCaster(vol, model="to-quadratic")
@@ -199,15 +195,7 @@ def test_to_cell_ranges_from_other_isovalues_give_the_same_frames(ml):
         fresh.set_isovalue(value)
         for cam, _ in path[3:6]:
             _assert_same(seasoned.render(cam, SIZE), fresh.render(cam, SIZE))
-        # quantised points mark a few more pieces (those within 3/255 of their cell's range
-        # of the isovalue), never fewer: the same pictures, the extra pieces have no root
-        assert fresh.stats["active_cells"] <= seasoned.stats["active_cells"]
-        assert fresh.stats["active_tets"] <= seasoned.stats["active_tets"] \
-            <= 1.1 * fresh.stats["active_tets"]
-    q = seasoned._device.queue
-    stored = seasoned._sp_count.get(queue=q)[0]
-    assert 0 < stored <= seasoned._sp_cap
-    # new data forget the ranges and the stored points
+        assert seasoned.stats["active_tets"] == fresh.stats["active_tets"]
+    # new data forget the ranges
     seasoned.set_volume(vol)
-    assert np.all(seasoned._ranges.get(queue=q) == 0xFF00)
-    assert not seasoned._sp_slots.get(queue=q).any() and seasoned._sp_count.get(queue=q)[0] == 0
+    assert np.all(seasoned._ranges.get(queue=seasoned._device.queue) == 0xFF00)

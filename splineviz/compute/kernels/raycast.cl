@@ -3,8 +3,7 @@
 //   MODEL_TRILINEAR      the trilinear model: exact cubic along the ray in each cell
 //   MODEL_TO, GHOST      the truncated-octahedral spline Q_k (DEGREE 2): unit cells of the
 //   NUNION, NWORDS       grid with per-parity-class (TO, tet) tables and per-cell bit sets of
-//                        the relevant pieces; CACHE_COHERENT: the device's caches are
-//                        coherent (CPUs), plain loads of published cache words suffice
+//                        the relevant pieces
 //   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
 //   NPOINTS              the relevant tets from the 27-point data stencil, blossoms of the
 //                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2); tet
@@ -580,6 +579,38 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
 #endif
 
 #ifdef MODEL_TO
+// Relevance bit set of the (TO, tet) pieces of a cell (bit e - ent_start[cls]: the piece's
+// B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO);
+// returns the number of relevant pieces. The data a cell's pieces read (the class union, at
+// most NUNION values) are gathered once. First the cheap cell bounds of classify.cl (their
+// range widened by the negative weight mass): most cells the rays reach end there. Then each
+// distinct B-net point of the class's pieces is computed once: min <= iso <= max over a
+// piece's coefficients iff one is <= iso and one is >= iso, so each point marks the pieces
+// whose B-net holds it in two masks (to_class_points, generated from the class tables by
+// splineviz/compute/to_program.py and prepended to this file). *range receives a bound of
+// the spline on the cell that does not depend on the isovalue: the points' (min, max) when
+// they were computed, else the cheap bounds.
+inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
+                        __constant const int *cls_start, __constant const int *cls_offsets,
+                        float negmass, float iso, uint *words, float2 *range)
+{
+    float vals[NUNION];
+    const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
+    float vlo = INFINITY, vhi = -INFINITY;
+    for (int u = 0; u < nu; ++u) {
+        vals[u] = pdata[corner + cls_offsets[u0 + u]];
+        vlo = fmin(vlo, vals[u]);
+        vhi = fmax(vhi, vals[u]);
+    }
+    const float wid = negmass * (vhi - vlo);
+    if (!(vlo - wid <= iso && iso <= vhi + wid)) {
+        for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
+        *range = (float2)(vlo - wid, vhi + wid);
+        return 0;
+    }
+    return to_class_points(vals, cls, iso, words, range);
+}
+
 // ---- the cell ranges (isovalue-independent, kept while the data stay) ----
 // Per cell 2 bytes (8 per level-1 node, in the order of cell_word): the (min, max) of its B-net points (or its cheap bounds) quantised to
 // 1/255 of the bounds of its level-1 octree node, rounded outwards by one more step; (0, 255)
@@ -616,109 +647,17 @@ inline uchar2 range_quantise(float2 r, float2 nb)
     return (uchar2)((uchar)clamp(a, 0.0f, 255.0f), (uchar)clamp(b, 0.0f, 255.0f));
 }
 
-// Relevance bit set of the (TO, tet) pieces of a cell (bit e - ent_start[cls]: the piece's
-// B-coefficients straddle the isovalue, the thesis' tet code for the 144 tets of a TO),
-// in two steps. to_cheap gathers the data a cell's pieces read (the class union, at most
-// NUNION values) once and tests the cheap cell bounds of classify.cl (their range widened
-// by the negative weight mass): most cells the rays reach end there (false; *range: the
-// cheap bounds). to_point_bits then computes each distinct B-net point of the class's
-// pieces once: min <= iso <= max over a piece's coefficients iff one is <= iso and one is
-// >= iso, so each point marks the pieces whose B-net holds it in two masks
-// (to_class_points, generated from the class tables by splineviz/compute/to_program.py and
-// prepended to this file). It returns the number of relevant pieces and in *range the
-// points' (min, max), a bound of the spline on the cell that does not depend on the
-// isovalue. When `store` is not null and the range is not degenerate, it writes the points
-// quantised to 1/255 of that range (the stored points below) and sets *stored.
-inline bool to_cheap(__global const DATA_T *pdata, int corner, int cls,
-                     __constant const int *cls_start, __constant const int *cls_offsets,
-                     float negmass, float iso, float *vals, float2 *range)
-{
-    const int u0 = cls_start[cls], nu = cls_start[cls + 1] - u0;
-    float vlo = INFINITY, vhi = -INFINITY;
-    for (int u = 0; u < nu; ++u) {
-        vals[u] = pdata[corner + cls_offsets[u0 + u]];
-        vlo = fmin(vlo, vals[u]);
-        vhi = fmax(vhi, vals[u]);
-    }
-    const float wid = negmass * (vhi - vlo);
-    *range = (float2)(vlo - wid, vhi + wid);
-    return vlo - wid <= iso && iso <= vhi + wid;
-}
-
-inline int to_point_bits(const float *vals, int cls, float iso, uint *words, float2 *range,
-                         __global uchar *store, bool *stored)
-{
-    float x[TO_NPOINTS];
-    const int n = to_class_points(vals, cls, iso, words, range, x);
-    const float step = range_step(*range);
-    *stored = store != 0 && step > 0.0f;
-    if (*stored) {
-        const float inv = 1.0f / step, lo = range->x;
-        const int np = to_point_start[cls + 1] - to_point_start[cls];
-        for (int p = 0; p < np; ++p)
-            store[p] = (uchar)clamp(floor((x[p] - lo) * inv), 0.0f, 255.0f);
-    }
-    return n;
-}
-
-// ---- the stored points (isovalue-independent, kept while the data stay) ----
-// Per level-1 node that a ray needed the sums of, an entry of SP_WORDS words: 8 written flags
-// (one per cell, by parity class), each cell's range (float2, the min and max of its B-net
-// points), then the B-net points of the node's 8 cells (TO_ALL_POINTS bytes, class c's from
-// to_point_start[c]), each quantised to 1/255 of its cell's range. A later isovalue reads a
-// cell's relevant pieces from them with byte compares instead of its 149 or 365 sums of ~14
-// products (most of the classification of a first frame). A stored point q lies in
-// [lo + (q - 1) step, lo + (q + 2) step] with all rounding, so one counts as <= iso when
-// q <= floor(t) + 1 and as >= iso when q >= ceil(t) - 2 (t: iso's position in steps): a
-// superset of the relevant pieces, whose extra pieces have all their B-coefficients on one
-// side of iso, hence no root: the frames are the same.
-// Slots: 0 none, SP_BUSY while the first ray allocates the entry, else entry + 1 (claimed
-// before it is allocated, so racing rays take one entry, not one each).
-#define SP_BUSY 0xFFFFFFFFu
-#define SP_WORDS (24 + (TO_ALL_POINTS + 3) / 4)
-// A cell's points are read after its flag (volatile, then a read fence), through SP_POINTS
-// (defined in the prelude, whose generated code reads them).
-
-// Entry of node b, or -1 if it has none (yet).
-inline int sp_entry(__global const uint *sp_slots, int b)
-{
-    const uint s = ((volatile __global const uint *)sp_slots)[b];
-    if (s == 0u || s == SP_BUSY) return -1;
-    read_mem_fence(CLK_GLOBAL_MEM_FENCE);  // the slot before its entry's words
-    return (int)(s - 1u);
-}
-
-// A new entry for node b (its flags cleared), or -1: another ray holds or published the
-// slot, or the pool is full (sp_count[0], the entries asked for, tells the host to grow it).
-inline int sp_claim(__global uint *sp_slots, __global uint *sp_pool, int sp_cap,
-                    __global int *sp_count, int b)
-{
-    if (atomic_cmpxchg((volatile __global uint *)&sp_slots[b], 0u, SP_BUSY) != 0u) return -1;
-    const int a = atomic_inc(sp_count);
-    if (a >= sp_cap) {
-        atomic_xchg((volatile __global uint *)&sp_slots[b], 0u);  // a later frame takes it
-        return -1;
-    }
-    for (int w = 0; w < 8; ++w) sp_pool[a * SP_WORDS + w] = 0u;
-    mem_fence(CLK_GLOBAL_MEM_FENCE);  // the cleared flags before the slot
-    atomic_xchg((volatile __global uint *)&sp_slots[b], (uint)a + 1u);
-    return a;
-}
-
 // The bit set of `cell` at this epoch: from the brick cache, or computed by this ray and
 // stored (words first, then the written flag). The first ray to store a cell counts it
 // (counts[0] cells with a relevant piece, counts[1] relevant pieces).
-// A cell whose known range (ranges, see above) excludes iso is 0 without its sums, and one
-// whose points are stored takes its bits from them; the range and points of a newly
-// classified cell are stored for the next isovalues.
+// A cell whose known range (ranges, see above) excludes iso is 0 without its sums; the
+// range of a newly classified cell is stored for the next isovalues.
 inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap,
                            uint epoch, int3 cell, int BY, int BZ,
                            __global const DATA_T *pdata, int corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
-                           float negmass, float iso,
-                           __global int *counts, __global uchar2 *ranges,
-                           __global const float2 *bounds, __global uint *sp_slots,
-                           __global uint *sp_pool, int sp_cap, __global int *sp_count,
+                           float negmass, float iso, __global int *counts,
+                           __global uchar2 *ranges, __global const float2 *bounds,
                            uint *words)
 {
     const int a = brick_entry(slots, pool, pool_cap, epoch, cell, BY, BZ, counts);
@@ -739,41 +678,9 @@ inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_c
     if (range_excludes(q, nb, iso)) {
         for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
     } else {
-        const int pa = sp_entry(sp_slots, node);
-        volatile __global const uint *vsp = sp_pool;
-        if (pa >= 0 && vsp[pa * SP_WORDS + cls] != 0u) {
-            read_mem_fence(CLK_GLOBAL_MEM_FENCE);  // the flag before the points it publishes
-            const float2 cr = (float2)(as_float(vsp[pa * SP_WORDS + 8 + 2 * cls]),
-                                       as_float(vsp[pa * SP_WORDS + 9 + 2 * cls]));
-            if (cr.x <= iso && iso <= cr.y) {
-                const float t = (iso - cr.x) / range_step(cr);
-                n = to_class_stored((SP_POINTS)(sp_pool + pa * SP_WORDS + 24)
-                                    + to_point_start[cls], cls, (int)floor(t) + 1,
-                                    (int)ceil(t) - 2, words);
-            } else {
-                for (int w = 0; w < NWORDS; ++w) words[w] = 0u;  // exact: all points on one side
-            }
-        } else {
-            float vals[NUNION];
-            float2 r;
-            if (!to_cheap(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, vals, &r)) {
-                for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
-            } else {
-                const int a2 = pa >= 0 ? pa
-                             : sp_claim(sp_slots, sp_pool, sp_cap, sp_count, node);
-                bool stored;
-                n = to_point_bits(vals, cls, iso, words, &r, a2 < 0 ? 0
-                                  : (__global uchar *)(sp_pool + a2 * SP_WORDS + 24)
-                                    + to_point_start[cls], &stored);
-                if (stored) {
-                    sp_pool[a2 * SP_WORDS + 8 + 2 * cls] = as_uint(r.x);
-                    sp_pool[a2 * SP_WORDS + 9 + 2 * cls] = as_uint(r.y);
-                    mem_fence(CLK_GLOBAL_MEM_FENCE);  // the points before their flag
-                    atomic_xchg((volatile __global uint *)&sp_pool[a2 * SP_WORDS + cls], 1u);
-                }
-            }
-            if (q.x == 0 && q.y == 255) ranges[ci] = range_quantise(r, nb);
-        }
+        float2 r;
+        n = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words, &r);
+        if (q.x == 0 && q.y == 255) ranges[ci] = range_quantise(r, nb);
     }
     if (a < 0) return;
     for (int w = 0; w < NWORDS; ++w) pool[at + w] = words[w];
@@ -797,13 +704,9 @@ __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
     const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
-    float vals[NUNION];
     float2 range;
-    for (int w = 0; w < NWORDS; ++w) words[w] = 0u;
-    bool stored;
-    n_relevant[a] = to_cheap(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, vals,
-                             &range) ? to_point_bits(vals, cls, iso, words, &range, 0, &stored)
-                                     : 0;
+    n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words,
+                                 &range);
     for (int w = 0; w < NWORDS; ++w) bits[a * NWORDS + w] = words[w];
 }
 
@@ -914,8 +817,6 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
 #endif
 #ifdef MODEL_TO
                       __global uchar2 *ranges,  // isovalue-independent cell ranges
-                      __global uint *sp_slots, __global uint *sp_pool, int sp_cap,
-                      __global int *sp_count,   // isovalue-independent stored points
                       __constant const int *cls_start,
                       __constant const int *cls_offsets, __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
@@ -1022,8 +923,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 const int cls = ((lc.x & 1) << 2) | ((lc.y & 1) << 1) | (lc.z & 1);
                 uint words[NWORDS];
                 to_cached_bits(slots, pool, pool_cap, epoch, lc, BY, BZ, data, corner, cls,
-                               cls_start, cls_offsets, negmass, iso, counts, ranges,
-                               bounds, sp_slots, sp_pool, sp_cap, sp_count, words);
+                               cls_start, cls_offsets, negmass, iso, counts, ranges, bounds,
+                               words);
                 uint any_bit = 0u;
                 for (int w = 0; w < NWORDS; ++w) any_bit |= words[w];
                 if (any_bit != 0u) {
