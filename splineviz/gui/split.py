@@ -73,7 +73,7 @@ class LinkedViews:
         #: pane that holds its place in the splitter until its widget is shown
         self._steps: list[str] | None = None
         self._opening: View3D | None = None
-        self._placeholder: QWidget | None = None
+        self._stand_in: QWidget | None = None
         self._first_dragging = False
         #: hidden second views to close on the next turn, with their plane widgets
         self._closing: list = []
@@ -199,7 +199,7 @@ class LinkedViews:
             *self.window.view.plotter.renderer.GetBackground()))
         pane.setPalette(palette)
         pane.setAutoFillBackground(True)
-        self._placeholder = pane
+        self._stand_in = pane
         # added hidden, then shown and laid out at once: the first view is resized (and
         # repainted: a QOpenGLWidget paints in its resize event) once, not twice
         pane.hide()
@@ -219,7 +219,7 @@ class LinkedViews:
     def _first_paint(self) -> None:
         """The widget replaces the pane: its OpenGL context is made and painted once with
         the background only."""
-        pane, self._placeholder = self._placeholder, None
+        pane, self._stand_in = self._stand_in, None
         self.splitter.replaceWidget(self.splitter.indexOf(pane), self._opening.plotter)
         pane.deleteLater()
 
@@ -263,11 +263,11 @@ class LinkedViews:
         """Stop opening; the view made so far (None if none) is returned to be closed."""
         self._steps = None
         self._step_timer.stop()
-        if self._placeholder is not None:
-            self._placeholder.hide()
-            self._placeholder.setParent(None)
-            self._placeholder.deleteLater()
-            self._placeholder = None
+        if self._stand_in is not None:
+            self._stand_in.hide()
+            self._stand_in.setParent(None)
+            self._stand_in.deleteLater()
+            self._stand_in = None
         view, self._opening = self._opening, None
         return view
 

@@ -79,6 +79,18 @@ def _solve_factored(a, m, x):
         x[r] = v / a[r, r]
 
 
+@numba.njit(cache=True, inline="always")
+def _local(points, frames, i, j, inv):
+    """Coordinates of point j in point i's local frame (rows of frames[i]: two tangents and
+    the normal), divided by the scale (``inv`` = 1 / scale[i])."""
+    rx = points[j, 0] - points[i, 0]
+    ry = points[j, 1] - points[i, 1]
+    rz = points[j, 2] - points[i, 2]
+    return ((frames[i, 0, 0] * rx + frames[i, 0, 1] * ry + frames[i, 0, 2] * rz) * inv,
+            (frames[i, 1, 0] * rx + frames[i, 1, 1] * ry + frames[i, 1, 2] * rz) * inv,
+            (frames[i, 2, 0] * rx + frames[i, 2, 1] * ry + frames[i, 2, 2] * rz) * inv)
+
+
 @numba.njit(cache=True)
 def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, with_noise,
           exponent_sum, pair):
@@ -104,12 +116,7 @@ def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, w
         inv = 1.0 / scale[i]
         for k in range(n_nb):
             j = index[i, k]
-            rx = points[j, 0] - points[i, 0]
-            ry = points[j, 1] - points[i, 1]
-            rz = points[j, 2] - points[i, 2]
-            x = (frames[i, 0, 0] * rx + frames[i, 0, 1] * ry + frames[i, 0, 2] * rz) * inv
-            y = (frames[i, 1, 0] * rx + frames[i, 1, 1] * ry + frames[i, 1, 2] * rz) * inv
-            z = (frames[i, 2, 0] * rx + frames[i, 2, 1] * ry + frames[i, 2, 2] * rz) * inv
+            x, y, z = _local(points, frames, i, j, inv)
             zs[k] = z
             d2 = x * x + y * y + z * z
             for s in range(n_scales):
@@ -392,12 +399,7 @@ def _variable_fits(points, index, valid, frames, scale, ids, n_nb, q_max, cond_m
             if not valid[i, k]:
                 continue
             j = index[i, k]
-            rx = points[j, 0] - points[i, 0]
-            ry = points[j, 1] - points[i, 1]
-            rz = points[j, 2] - points[i, 2]
-            x = (frames[i, 0, 0] * rx + frames[i, 0, 1] * ry + frames[i, 0, 2] * rz) * inv
-            y = (frames[i, 1, 0] * rx + frames[i, 1, 1] * ry + frames[i, 1, 2] * rz) * inv
-            z = (frames[i, 2, 0] * rx + frames[i, 2, 1] * ry + frames[i, 2, 2] * rz) * inv
+            x, y, z = _local(points, frames, i, j, inv)
             w = np.exp(-(x * x + y * y + z * z))  # eq. (7.2), h = one spacing
             px[0] = w
             py[0] = 1.0
