@@ -113,6 +113,27 @@ def make_cell_classes():
             np.array(tets, np.int32))
 
 
+def walsh_sums(v: np.ndarray) -> np.ndarray:
+    """The 8 Walsh sums of values at a TO's data points (in the order of ``DATA_OFFSETS``):
+    ``out[m] = sum_i (-1)^popcount(i & m) v[i]``, m's bits 4, 2, 1 the x, y, z signs (m = 0:
+    the sum; 4, 2, 1: the differences along x, y, z; ...). Applied twice it gives 8 v.
+
+    Parameters
+    ----------
+    v : (..., 8)
+
+    Returns
+    -------
+    (..., 8)
+    """
+    out = np.array(v, dtype=np.float64)
+    for bit in (1, 2, 4):
+        lo = [i for i in range(8) if not i & bit]
+        a, b = out[..., lo], out[..., [i | bit for i in lo]]
+        out[..., lo], out[..., [i | bit for i in lo]] = a + b, a - b
+    return out
+
+
 @cache
 def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
     """The distinct B-net points of each cell class's pieces as stencils into the data the
@@ -135,17 +156,30 @@ def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
         ``pt_start`` (9,), class c's points are ``pt_start[c]:pt_start[c+1]``;
         ``rows`` (P+1,), ``cols`` (nnz,) indices into the class's union, ``weights`` (nnz,):
         point p = sum of weights[rows[p]:rows[p+1]] * union values[cols[...]];
-        ``pieces`` (P, words) uint32 bit sets.
+        ``pieces`` (P, words) uint32 bit sets;
+        the same points from the Walsh sums of the TOs they average (eq. 5.9 weights each TO's
+        8 data values, so a point is a short sum of those TOs' :func:`walsh_sums`):
+        ``to_start`` (9,), class c's TOs are ``to_start[c]:to_start[c+1]``; ``to_union``
+        (T, 8) the union indices (class-local) of each TO's data points in the order of
+        ``DATA_OFFSETS``; ``wrows`` (P+1,), ``wcols`` (wnnz,) = 8 * (class-local TO) + Walsh
+        index, ``wweights`` (wnnz,): point p = sum of wweights[wrows[p]:wrows[p+1]] * the
+        Walsh sums at wcols.
     """
     from splineviz.compute.table_cache import cached_arrays
 
     def make():
+        from splineviz.core import bform
+        from splineviz.core.splines import to_quadratic
+
         start, centre, tet = cell_classes()
         # base data point of each piece's TO relative to the cell corner: centre - 1/2
         base = np.rint(centre.astype(np.float64) - 0.5).astype(np.int64)
         tables = stencils(k)
+        alphas = bform.multi_indices(2)
+        parts = {}  # (tet, coefficient) -> eq. (5.9) parts, reference TO
         union, union_start, pt_start = [], [0], [0]
         rows, cols, weights, pieces = [0], [], [], []
+        tos, to_start, wrows, wcols, wweights = [], [0], [0], [], []
         for c in range(8):
             pts = sorted({p for e in range(start[c], start[c + 1])
                           for p in map(tuple, tables[tet[e]][0] + base[e])})
@@ -153,6 +187,7 @@ def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
             union.extend(pts)
             union_start.append(len(union))
             points = {}  # stencil (union index, weight) pairs -> point of the class
+            class_tos = {}  # TO centre (cell-local, doubled to integers) -> class-local index
             for e in range(start[c], start[c + 1]):
                 offsets, w = tables[tet[e]]
                 idx = [where[tuple(o)] for o in offsets + base[e]]
@@ -165,13 +200,32 @@ def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
                         weights.extend(w[i, nz])
                         rows.append(len(cols))
                         pieces.append(np.zeros(words, np.uint32))
+                        if (tet[e], i) not in parts:
+                            parts[tet[e], i] = to_quadratic.coefficient_parts(
+                                int(tet[e]), alphas[i], k)
+                        for pc, pw in parts[tet[e], i]:
+                            ctr = centre[e].astype(np.float64) + pc
+                            t = class_tos.setdefault(tuple(np.rint(2 * ctr).astype(int)),
+                                                     len(class_tos))
+                            if t == len(tos) - to_start[-1]:
+                                corners = np.rint(ctr + to.DATA_OFFSETS).astype(np.int64)
+                                tos.append([where[tuple(z)] for z in corners])
+                            hat = walsh_sums(pw) / 8.0
+                            for m in np.flatnonzero(hat):
+                                wcols.append(8 * t + m)
+                                wweights.append(hat[m])
+                        wrows.append(len(wcols))
                     bit = e - start[c]
                     pieces[pt_start[-1] + points[key]][bit >> 5] |= np.uint32(1 << (bit & 31))
             pt_start.append(pt_start[-1] + len(points))
+            to_start.append(len(tos))
         return {"union": np.array(union, np.int64), "union_start": np.array(union_start),
                 "pt_start": np.array(pt_start), "rows": np.array(rows),
                 "cols": np.array(cols), "weights": np.array(weights, np.float64),
-                "pieces": np.array(pieces, np.uint32)}
+                "pieces": np.array(pieces, np.uint32), "to_start": np.array(to_start),
+                "to_union": np.array(tos, np.int64), "wrows": np.array(wrows),
+                "wcols": np.array(wcols, np.int64),
+                "wweights": np.array(wweights, np.float64)}
 
     return cached_arrays(f"to-class-points-k{k:g}-w{words}", _TABLE_SOURCES, make)
 

@@ -17,6 +17,11 @@
 #define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
 #endif
 
+// Minimum and maximum of the bound loops: PoCL calls fmin/fmax out of line (two thirds of
+// the octree build). As fmin/fmax do, a NaN x (a missing sample) is ignored.
+inline float min_acc(float acc, float x) { return x < acc ? x : acc; }
+inline float max_acc(float acc, float x) { return x > acc ? x : acc; }
+
 #ifdef MODEL_TO
 // the TO bounds read the data offsets of the cell's parity class
 #define CLASS_ARGS , __constant const int *cls_start, __constant const int *cls_offsets
@@ -41,24 +46,24 @@ inline float2 cell_bounds(__global const DATA_T *data, int SY, int SZ, int i, in
         for (int b = 0; b < 3; ++b)
             for (int c = 0; c < 3; ++c) {
                 const float v = data[((i + a) * SY + (j + b)) * SZ + (k + c)];
-                lo = fmin(lo, v);
-                hi = fmax(hi, v);
+                lo = min_acc(lo, v);
+                hi = max_acc(hi, v);
             }
 #elif defined(MODEL_TO)
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
     const int base = ((i + GHOST) * SY + (j + GHOST)) * SZ + (k + GHOST);
     for (int e = cls_start[cls]; e < cls_start[cls + 1]; ++e) {
         const float v = data[base + cls_offsets[e]];
-        lo = fmin(lo, v);
-        hi = fmax(hi, v);
+        lo = min_acc(lo, v);
+        hi = max_acc(hi, v);
     }
 #else
     for (int a = 0; a < 2; ++a)
         for (int b = 0; b < 2; ++b)
             for (int c = 0; c < 2; ++c) {
                 const float v = data[((i + a) * SY + (j + b)) * SZ + (k + c)];
-                lo = fmin(lo, v);
-                hi = fmax(hi, v);
+                lo = min_acc(lo, v);
+                hi = max_acc(hi, v);
             }
 #endif
     const float w = negmass * (hi - lo);
@@ -78,8 +83,8 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
         for (int j = 2 * b; j < min(2 * b + 2, CY); ++j)
             for (int k = 2 * c; k < min(2 * c + 2, CZ); ++k) {
                 const float2 v = cell_bounds(data, SY, SZ, i, j, k, negmass CLASS_PASS);
-                lo = fmin(lo, v.x);
-                hi = fmax(hi, v.y);
+                lo = min_acc(lo, v.x);
+                hi = max_acc(hi, v.y);
             }
 #else
     // the node's cells read one box of samples (a trilinear cell i the samples i..i+1, a
@@ -94,8 +99,8 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
         for (int j = 2 * b; j <= min(2 * b + 1, CY - 1) + reach; ++j)
             for (int k = 2 * c; k <= min(2 * c + 1, CZ - 1) + reach; ++k) {
                 const float v = data[(i * SY + j) * SZ + k];
-                lo = fmin(lo, v);
-                hi = fmax(hi, v);
+                lo = min_acc(lo, v);
+                hi = max_acc(hi, v);
             }
     const float w = negmass * (hi - lo);
     lo -= w;
@@ -117,8 +122,8 @@ __kernel void reduce_level(__global float2 *bounds,
                 const int i = 2 * a + da, j = 2 * b + db, k = 2 * c + dc;
                 if (i < sx && j < sy && k < sz) {
                     const float2 v = bounds[src_off + (i * sy + j) * sz + k];
-                    lo = fmin(lo, v.x);
-                    hi = fmax(hi, v.y);
+                    lo = min_acc(lo, v.x);
+                    hi = max_acc(hi, v.y);
                 }
             }
     bounds[dst_off + (a * dy + b) * dz + c] = (float2)(lo, hi);

@@ -50,6 +50,11 @@
 #define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
 #endif
 #define BISECT_STEPS 40
+// Minimum and maximum for the per-cell and per-point loops: PoCL calls fmin/fmax out of
+// line, and those calls were a seventh of a to-quadratic frame. As fmin/fmax do, a NaN x is
+// ignored (the accumulator acc never is NaN where they are used).
+inline float min_acc(float acc, float x) { return x < acc ? x : acc; }
+inline float max_acc(float acc, float x) { return x > acc ? x : acc; }
 // low 24 bits of a cache entry (the top 8 bits hold the epoch of its isovalue)
 #define CODE_MASK 0xFFFFFFu
 // a cache slot claimed by a ray that is allocating its pool entry
@@ -125,8 +130,8 @@ inline int quadratic_roots(float a, float b, float c, float *r0, float *r1)
         return 1;
     }
     float x0 = q / c, x1 = a / q;
-    *r0 = fmin(x0, x1);
-    *r1 = fmax(x0, x1);
+    *r0 = min_acc(x0, x1);
+    *r1 = max_acc(x0, x1);
     return 2;
 }
 
@@ -309,16 +314,22 @@ __kernel void skip_codes(__global const float2 *bounds, __constant const int4 *l
 inline bool tet_interval(float4 r0, float4 r1, float4 r2, float4 r3, float3 p0, float3 d,
                          float *lo_out, float *hi_io, float4 *l_out, float4 *av_out)
 {
-    const float4 l = (float4)(dot(r0.xyz, p0) + r0.w, dot(r1.xyz, p0) + r1.w,
-                              dot(r2.xyz, p0) + r2.w, dot(r3.xyz, p0) + r3.w);
-    const float4 av = (float4)(dot(r0.xyz, d), dot(r1.xyz, d), dot(r2.xyz, d), dot(r3.xyz, d));
+    // the rows' dot products written out: PoCL calls dot out of line
+    const float4 l = (float4)(r0.x * p0.x + r0.y * p0.y + r0.z * p0.z + r0.w,
+                              r1.x * p0.x + r1.y * p0.y + r1.z * p0.z + r1.w,
+                              r2.x * p0.x + r2.y * p0.y + r2.z * p0.z + r2.w,
+                              r3.x * p0.x + r3.y * p0.y + r3.z * p0.z + r3.w);
+    const float4 av = (float4)(r0.x * d.x + r0.y * d.y + r0.z * d.z,
+                               r1.x * d.x + r1.y * d.y + r1.z * d.z,
+                               r2.x * d.x + r2.y * d.y + r2.z * d.z,
+                               r3.x * d.x + r3.y * d.y + r3.z * d.z);
     float lo = 0.0f, hi = *hi_io;
     const float lv[4] = {l.x, l.y, l.z, l.w}, avv[4] = {av.x, av.y, av.z, av.w};
     for (int m = 0; m < 4; ++m) {
         // a tiny slack keeps rays on shared faces from falling between two tets
         const float lm = lv[m] + TET_SLACK;
-        if (avv[m] > 0.0f) lo = fmax(lo, -lm / avv[m]);
-        else if (avv[m] < 0.0f) hi = fmin(hi, -lm / avv[m]);
+        if (avv[m] > 0.0f) lo = max_acc(lo, -lm / avv[m]);
+        else if (avv[m] < 0.0f) hi = min_acc(hi, -lm / avv[m]);
         else if (lm < 0.0f) return false;
     }
     *lo_out = lo;
@@ -506,8 +517,8 @@ inline uint type6_tet_code(__global const DATA_T *pdata, int base, __constant co
     float vlo = INFINITY, vhi = -INFINITY;
     for (int q = 0; q < 27; ++q) {
         vals[q] = pdata[base + stencil[q]];
-        vlo = fmin(vlo, vals[q]);
-        vhi = fmax(vhi, vals[q]);
+        vlo = min_acc(vlo, vals[q]);
+        vhi = max_acc(vhi, vals[q]);
     }
     const float w = negmass * (vhi - vlo);
     if (!(vlo - w <= iso && iso <= vhi + w)) return 0u;
@@ -599,8 +610,8 @@ inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
     float vlo = INFINITY, vhi = -INFINITY;
     for (int u = 0; u < nu; ++u) {
         vals[u] = pdata[corner + cls_offsets[u0 + u]];
-        vlo = fmin(vlo, vals[u]);
-        vhi = fmax(vhi, vals[u]);
+        vlo = min_acc(vlo, vals[u]);
+        vhi = max_acc(vhi, vals[u]);
     }
     const float wid = negmass * (vhi - vlo);
     if (!(vlo - wid <= iso && iso <= vhi + wid)) {
@@ -731,7 +742,7 @@ inline void to_segment_pieces(int cls, int nw, float3 p0, float3 d, float len, u
                        : (dq.y < 0.0f && c.y > 0) ? (c.y - q.y) / dq.y : INFINITY;
         const float tz = (dq.z > 0.0f && c.z < TO_SUB - 1) ? (c.z + 1 - q.z) / dq.z
                        : (dq.z < 0.0f && c.z > 0) ? (c.z - q.z) / dq.z : INFINITY;
-        const float tn = fmin(tx, fmin(ty, tz));
+        const float tn = min_acc(tx, min_acc(ty, tz));
         if (!(tn <= len)) break;
         if (tx == tn) c.x += dq.x > 0.0f ? 1 : -1;
         else if (ty == tn) c.y += dq.y > 0.0f ? 1 : -1;
@@ -897,8 +908,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
             const int L = skip_level(bounds, levels, n_levels, lc, iso);
             if (L < 0) {
                 const float3 te = exit_params(we, d, inv_d, cell, cell + 1);
-                const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
-                const float s_end = fmin(s_exit, send);
+                const float s_exit = max_acc(s, min_acc(te.x, min_acc(te.y, te.z)));
+                const float s_end = min_acc(s_exit, send);
 #ifdef MODEL_TRILINEAR
                 const Trilinear f = trilinear_coeffs(data, lc, SY, SZ);
                 const float3 p = we + s * d - convert_float3(cell);
@@ -982,7 +993,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 const int3 hi = min(lo + (1 << L), grid_cells);
 #endif
                 const float3 te = exit_params(we, d, inv_d, lo, hi);
-                const float s_exit = fmax(s, fmin(te.x, fmin(te.y, te.z)));
+                const float s_exit = max_acc(s, min_acc(te.x, min_acc(te.y, te.z)));
                 if (s_exit >= send) break;
                 const int a = argmin3(te);
                 const float3 q = we + s_exit * d;
@@ -993,7 +1004,10 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 cell = nc;
                 s = s_exit;
             }
-            if (any(cell < FIRST_CELL) || any(cell >= END_CELL)) break;
+            // componentwise: PoCL calls any() out of line
+            const int3 c0 = FIRST_CELL, c1 = END_CELL;
+            if (cell.x < c0.x || cell.y < c0.y || cell.z < c0.z
+                || cell.x >= c1.x || cell.y >= c1.y || cell.z >= c1.z) break;
         }
     }
 

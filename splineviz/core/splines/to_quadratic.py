@@ -87,27 +87,29 @@ def _is_s(xi, centres) -> bool:
     return any(tuple(np.round((xi - c) * 8).astype(int)) in s_pts for c in centres)
 
 
-def _ordered_data(centre, xi, tiebreak_point=None):
-    """The 8 data points of a TO ordered by distance to xi (§5.3), ties as documented."""
+def _ordered_data(centre, xi, tiebreak_point=None) -> list[int]:
+    """The 8 data points of a TO ordered by distance to xi (§5.3), ties as documented: their
+    indices into ``centre + DATA_OFFSETS``."""
     z = centre + to.DATA_OFFSETS
     keys = [
         (_sq(p, xi), _sq(p, tiebreak_point) if tiebreak_point is not None else 0, tuple(p))
         for p in z
     ]
-    return [z[i] for i in sorted(range(8), key=lambda i: keys[i])]
+    return sorted(range(8), key=lambda i: keys[i])
 
 
 def _roles(centres, xi):
     """Assign roles A, B, C, D to the TOs sharing xi (§5.3)."""
     if len(centres) == 1:
         return {"A": centres[0]}
-    second = [_sq(_ordered_data(c, xi)[1], xi) for c in centres]
+    second = [_sq(c + to.DATA_OFFSETS[_ordered_data(c, xi)[1]], xi) for c in centres]
     order = sorted(range(len(centres)), key=lambda i: (second[i], tuple(centres[i])))
     return {role: centres[i] for role, i in zip("ABCD", order, strict=False)}
 
 
-def coefficient_stencil(tet: int, alpha, k: float) -> dict:
-    """Data weights of one B-coefficient of the reference TO (eq. 5.9).
+def coefficient_parts(tet: int, alpha, k: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The terms of eq. (5.9) of one B-coefficient of the reference TO, one per TO sharing
+    its domain point.
 
     Parameters
     ----------
@@ -117,8 +119,10 @@ def coefficient_stencil(tet: int, alpha, k: float) -> dict:
 
     Returns
     -------
-    dict mapping integer data offsets (3-tuples, relative to the reference TO's base data point
-    (-1/2, -1/2, -1/2)) to weights.
+    list of ``(centre, weights)`` in role order (A, B, C, D): ``centre`` (3,) of the TO
+    relative to the reference TO, ``weights`` (8,) of its data points ``centre +
+    DATA_OFFSETS`` (in the order of :data:`~splineviz.core.partitions.truncated_octahedra.
+    DATA_OFFSETS`); the coefficient is the sum of the parts.
     """
     verts, _, _ = to.generic_tetrahedra()
     v = verts[tet]
@@ -130,17 +134,33 @@ def coefficient_stencil(tet: int, alpha, k: float) -> dict:
         raise RuntimeError(f"domain point {name} of tet {tet} lies in {len(centres)} TOs")
     is_s = _is_s(xi, centres)
     m, role_rules = _rule(name, is_s)
-    roles = _roles(centres, xi)
-    stencil: dict = {}
-    for role, centre in roles.items():
+    parts = []
+    for role, centre in _roles(centres, xi).items():
         mult, pattern = role_rules[role]
         tiebreak = None
         if name == "0101" and not is_s:
             tiebreak = v[3]
         elif name == "0110" and not is_s and role == "B":
             tiebreak = v[2]
-        for pos, z in enumerate(_ordered_data(centre, xi, tiebreak)):
-            w = mult * (k + pattern[pos]) / (k * 2.0**m)
+        weights = np.zeros(8)
+        for pos, i in enumerate(_ordered_data(centre, xi, tiebreak)):
+            weights[i] = mult * (k + pattern[pos]) / (k * 2.0**m)
+        parts.append((centre, weights))
+    return parts
+
+
+def coefficient_stencil(tet: int, alpha, k: float) -> dict:
+    """Data weights of one B-coefficient of the reference TO (eq. 5.9): the sum of its
+    :func:`coefficient_parts`.
+
+    Returns
+    -------
+    dict mapping integer data offsets (3-tuples, relative to the reference TO's base data point
+    (-1/2, -1/2, -1/2)) to weights.
+    """
+    stencil: dict = {}
+    for centre, weights in coefficient_parts(tet, alpha, k):
+        for z, w in zip(centre + to.DATA_OFFSETS, weights, strict=True):
             key = tuple(int(round(c)) for c in z + 0.5)
             stencil[key] = stencil.get(key, 0.0) + w
     return stencil
