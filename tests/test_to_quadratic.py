@@ -183,6 +183,21 @@ def test_stencils_reproduce_linear_functions_all_1440():
             assert np.allclose(w @ z[:, axis], want, atol=1e-13), (t, axis)
 
 
+def test_coefficient_parts_sum_to_the_stencils():
+    """Eq. (5.9) per TO: each part's weights sum to its share, the parts to the stencil."""
+    for t in (0, 17, 101, 143):
+        for alpha in bform.multi_indices(2):
+            parts = tq.coefficient_parts(t, alpha, 2)
+            assert 1 <= len(parts) <= 4
+            total = {}
+            for centre, w in parts:
+                for z, wz in zip(centre + to.DATA_OFFSETS, w, strict=True):
+                    key = tuple(int(round(c)) for c in z + 0.5)
+                    total[key] = total.get(key, 0.0) + wz
+            assert total == tq.coefficient_stencil(t, alpha, 2)
+            assert np.isclose(sum(w.sum() for _, w in parts), 1.0)
+
+
 @pytest.mark.parametrize("k", [3, 4, 7])
 def test_positive_for_k_at_least_3(k):
     """Corollary 3: all weights are >= 0 for k >= 3, so positive data give a positive spline."""
