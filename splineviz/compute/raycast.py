@@ -421,7 +421,7 @@ class RayCaster:
                      NPOINTS=len(self.spline.scheme.cube_points))
         elif self._family == "MODEL_TO":
             d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS,
-                     NUNION=self._nunion)
+                     NUNION=self._nunion, TO_STENCIL=self._to_stencil)
         return d
 
     def _ray_kernel(self, kernel: str, bricks: bool = False):
@@ -510,8 +510,9 @@ class RayCaster:
     def _to_tables(self) -> dict:
         """Upload the padded samples and the tables of the truncated-octahedral model.
 
-        From the core model: the 144 x 10 coefficient stencils of Q_k (CSR, offsets from each
-        TO's base data point flattened with the padded strides), barycentric matrices
+        From the core model: the 144 x 10 coefficient stencils of Q_k (dense: each tet's 28
+        data offsets from its TO's base data point, flattened with the padded strides, and
+        (144, 28, 16) weights, zero-padded), barycentric matrices
         (144, 4, 4); from :mod:`splineviz.compute.to_tables`: the (TO, tet) pieces per cell
         parity class and the union of the data each class reads (for the cell bounds).
         """
@@ -531,16 +532,19 @@ class RayCaster:
         _, py, pz = self._data.shape
         strides = np.array([py * pz, pz, 1], dtype=np.int64)
         self._strides = (py, pz)
-        rows = []
-        for offsets, w in to_tables.stencils(k):
-            flat = offsets @ strides
-            rows.extend((flat, w[i]) for i in range(w.shape[0]))
-        row_ptr = np.concatenate([[0], np.cumsum([np.count_nonzero(w) for _, w in rows])])
-        cols = np.concatenate([f[w != 0] for f, w in rows]).astype(np.int32)
-        wts = np.concatenate([w[w != 0] for _, w in rows]).astype(np.float32)
-        self._to_csr = [cla.to_device(q, a) for a in
-                        (row_ptr.astype(np.int32), cols, wts)]
-        self._negmass = float(max(np.sum(np.clip(-w, 0, None)) for _, w in rows))
+        tables = to_tables.stencils(k)
+        self._to_stencil = tables[0][0].shape[0]
+        if any(o.shape[0] != self._to_stencil for o, _ in tables):
+            raise AssertionError("TO stencils of different sizes")  # a bug: all read 28
+        # dense (144, K, 16): per tet, per data value, its weights in the 10 coefficients
+        # (a float16 of the kernel, zero-padded)
+        dense = np.zeros((len(tables), self._to_stencil, 16), np.float32)
+        dense[..., :10] = np.stack([w.T for _, w in tables])
+        self._to_dense = [
+            cla.to_device(q, np.stack([o @ strides for o, _ in tables]).astype(np.int32)),
+            cla.to_device(q, dense)]
+        self._negmass = float(max(np.sum(np.clip(-w, 0, None), axis=1).max()
+                                  for _, w in tables))
         start, centre, tet = cell_classes()
         # base data point of each piece's TO relative to the cell corner: centre - 1/2
         base_off = np.rint(centre.astype(np.float64) - 0.5).astype(np.int64)
@@ -931,7 +935,7 @@ class RayCaster:
             model_args = [*self._cache_args(), self._ranges.data, self._cls_start.data,
                           self._cls_offsets.data, e["start"].data, e["centre"].data,
                           e["base"].data, e["tet"].data,
-                          *(a.data for a in self._to_csr), self._bary.data, self._red.data]
+                          *(a.data for a in self._to_dense), self._bary.data, self._red.data]
         shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
         # a fixed work-group size, the launch padded to whole groups: PoCL compiles a kernel
         # per work-group size, and one chosen from each frame size made every new preview

@@ -756,8 +756,8 @@ inline void to_segment_pieces(int cls, int nw, float3 p0, float3 d, float len, u
 inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, const uint *words,
                           __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
-                          __constant const int *ent_tet, __global const int *row_ptr,
-                          __global const int *cols, __global const float *weights,
+                          __constant const int *ent_tet, __global const int *tet_offsets,
+                          __global const float16 *tet_weights,
                           __constant const float4 *bary, __constant const int *red,
                           float3 p0, float3 d, float len, float iso, float3 *grad,
                           int want_hess, float *hess)
@@ -781,16 +781,17 @@ inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, con
         float4 l, av;
         if (!tet_interval(r0, r1, r2, r3, pc, d, &lo, &hi, &l, &av)) continue;
         const int base = corner + ent_base[e];
-        // same CSR gather as type6_cube_root, but from __global data: OpenCL C 1.2 has no
-        // generic address space, so one helper cannot serve both (private vs global values)
-        float c[NCOEF];
-        for (int i = 0; i < NCOEF; ++i) {
-            const int r = t * NCOEF + i;
-            float acc = 0.0f;
-            for (int m = row_ptr[r]; m < row_ptr[r + 1]; ++m)
-                acc += weights[m] * pdata[base + cols[m]];
-            c[i] = acc - iso;
-        }
+        // the dense stencil (every tet reads TO_STENCIL data values): each value feeds the
+        // 10 coefficients' independent sums, where a sparse row per coefficient made one
+        // serial chain of loads and multiply-adds (half the weights are zero)
+        // (weights padded to a float16 per value: PoCL calls vload8/vload2 out of line)
+        __global const int *off = tet_offsets + t * TO_STENCIL;
+        __global const float16 *wt = tet_weights + t * TO_STENCIL;
+        float16 acc = (float16)(0.0f);
+        for (int m = 0; m < TO_STENCIL; ++m) acc += wt[m] * (float)pdata[base + off[m]];
+        const float c[NCOEF] = {acc.s0 - iso, acc.s1 - iso, acc.s2 - iso, acc.s3 - iso,
+                                acc.s4 - iso, acc.s5 - iso, acc.s6 - iso, acc.s7 - iso,
+                                acc.s8 - iso, acc.s9 - iso};
         float3 g;
         float h6[6];
         const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g,
@@ -831,8 +832,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                       __constant const int *cls_start,
                       __constant const int *cls_offsets, __constant const int *ent_start,
                       __constant const float4 *ent_centre, __constant const int *ent_base,
-                      __constant const int *ent_tet, __global const int *row_ptr,
-                      __global const int *cols, __global const float *weights,
+                      __constant const int *ent_tet, __global const int *tet_offsets,
+                      __global const float16 *tet_weights,
                       __constant const float4 *bary, __constant const int *red,
 #endif
                       float iso,
@@ -942,8 +943,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                     const float3 p = we + s * d - convert_float3(cell);
                     float3 g;
                     const float r = to_cell_root(data, corner, cls, words, ent_start,
-                                                 ent_centre, ent_base, ent_tet, row_ptr, cols,
-                                                 weights, bary, red, p, d, s_end - s, iso, &g,
+                                                 ent_centre, ent_base, ent_tet, tet_offsets,
+                                                 tet_weights, bary, red, p, d, s_end - s, iso, &g,
                                                  want_hess, hess_u);
                     if (r >= 0.0f) {
                         upos = convert_float3(cell) + p + r * d;
