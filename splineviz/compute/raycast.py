@@ -593,7 +593,12 @@ class RayCaster:
         self._strides = (py, pz)
         stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
         self._stencil = cla.to_device(q, stencil)
-        self._tet_csr = [cla.to_device(q, a) for a in _csr(scheme.tet_masks.reshape(-1, 27))]
+        # dense tet masks (24, 27, NCHUNK * 8): per tet and stencil value, its weights in the
+        # tet's coefficients, zero-padded to whole float8s of the kernel
+        n_tets, n_coef, _ = scheme.tet_masks.shape
+        dense = np.zeros((n_tets, 27, 8 * -(-n_coef // 8)), np.float32)
+        dense[..., :n_coef] = scheme.tet_masks.transpose(0, 2, 1)
+        self._tet_dense = cla.to_device(q, dense)
         self._cube_program, order = _cube_program(scheme)
         self._cube_program = [cla.to_device(q, a) for a in self._cube_program]
         # per program row (cube point), the bit set of the tets whose B-net holds it
@@ -927,7 +932,7 @@ class RayCaster:
         nx, ny, nz = shape
         model_args = []
         if self._family == "MODEL_TYPE6":
-            model_args = [*self._cache_args(), self._stencil.data, *(a.data for a in self._tet_csr),
+            model_args = [*self._cache_args(), self._stencil.data, self._tet_dense.data,
                           *(a.data for a in self._cube_program), self._point_tets.data,
                           self._bary.data, self._red.data]
         elif self._family == "MODEL_TO":
@@ -1066,14 +1071,6 @@ def _cube_program(scheme):
     cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
     weights = np.concatenate([w for _, w in rows]).astype(np.float32)
     return (row_ptr, cols, weights), np.array(order)
-
-
-def _csr(masks: np.ndarray):
-    """Sparse rows of a (rows, 27) mask matrix: (row_ptr int32, cols int32, weights float32)."""
-    nz = masks != 0
-    row_ptr = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int32)
-    rows, cols = np.nonzero(nz)
-    return row_ptr, cols.astype(np.int32), masks[rows, cols].astype(np.float32)
 
 
 def cla_sum(arr, queue) -> float:

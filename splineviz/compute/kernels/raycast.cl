@@ -182,6 +182,7 @@ inline float first_cubic_root(float4 k, float len)
 
 #if defined(MODEL_TYPE6) || defined(MODEL_TO)
 #define NCOEF ((DEGREE + 1) * (DEGREE + 2) * (DEGREE + 3) / 6)
+#define NCHUNK ((NCOEF + 7) / 8)  // float8s of a dense tet mask row
 #if DEGREE == 3
 #define NRED (10 + 4 + 1)
 #else
@@ -462,8 +463,7 @@ inline int cell_word(int a, int3 cell)
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
 inline float type6_cube_root(__global const DATA_T *pdata, int base,
-                             __constant const int *stencil, __global const int *row_ptr,
-                             __global const int *cols, __global const float *masks,
+                             __constant const int *stencil, __global const float8 *tet_weights,
                              __constant const float4 *bary, __constant const int *red,
                              uint code, float3 p0, float3 d, float len, float iso,
                              float3 *grad, int want_hess, float *hess)
@@ -478,14 +478,17 @@ inline float type6_cube_root(__global const DATA_T *pdata, int base,
         float lo, hi = best >= 0.0f ? best : len;
         float4 l, av;
         if (!tet_interval(r0, r1, r2, r3, p0, d, &lo, &hi, &l, &av)) continue;
+        // the dense tet mask: each stencil value feeds the NCOEF coefficients' independent
+        // sums, NCHUNK float8s at a time (sparse rows made one serial chain per coefficient)
+        float8 acc[NCHUNK];
+        for (int h = 0; h < NCHUNK; ++h) acc[h] = (float8)(0.0f);
+        __global const float8 *wt = tet_weights + t * 27 * NCHUNK;
+        for (int q = 0; q < 27; ++q)
+            for (int h = 0; h < NCHUNK; ++h) acc[h] += wt[q * NCHUNK + h] * vals[q];
+        const float *sums = (const float *)acc;
         float c[NCOEF];
-        for (int i = 0; i < NCOEF; ++i) {
-            // sparse tet masks (CSR over the 24 * NCOEF rows)
-            const int r = t * NCOEF + i;
-            float acc = 0.0f;
-            for (int e = row_ptr[r]; e < row_ptr[r + 1]; ++e) acc += masks[e] * vals[cols[e]];
-            c[i] = acc - iso;  // the coefficients of p - iso (constants reproduce exactly)
-        }
+        // the coefficients of p - iso (constants reproduce exactly)
+        for (int i = 0; i < NCOEF; ++i) c[i] = sums[i] - iso;
         float3 g;
         float h6[6];
         const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g,
@@ -823,8 +826,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                       int BY, int BZ, __global int *counts, float negmass,
 #endif
 #ifdef MODEL_TYPE6
-                      __constant const int *stencil, __global const int *row_ptr,
-                      __global const int *cols, __global const float *masks,
+                      __constant const int *stencil, __global const float8 *tet_weights,
                       __global const int *prog_ptr, __global const int *prog_cols,
                       __global const float *prog_w, __constant const uint *point_tets,
                       __constant const float4 *bary, __constant const int *red,
@@ -965,7 +967,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 if (tc != 0u) {
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;
-                    const float r = type6_cube_root(data, base, stencil, row_ptr, cols, masks,
+                    const float r = type6_cube_root(data, base, stencil, tet_weights,
                                                     bary, red, tc, p, d, s_end - s, iso, &g,
                                                     want_hess, hess_u);
                     if (r >= 0.0f) {
