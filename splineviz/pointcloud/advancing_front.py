@@ -828,9 +828,10 @@ class AdvancingFront:
 
     def _fill_holes(self):
         """Fill front loops left by given-up edges (not borders of the scan) of at most
-        ``MAX_HOLE_EDGES`` edges with the best-shaped triangulation of the loop (dynamic
-        programming over its diagonals, as in Liepa's hole filling, 2003); the relaxation after
-        the front evens out the new triangles."""
+        ``MAX_HOLE_EDGES`` edges, or ``LONG_HOLE_EDGES`` where the triangles stay on the
+        samples (:meth:`_on_the_samples`), with the best-shaped triangulation of the loop
+        (dynamic programming over its diagonals, as in Liepa's hole filling, 2003); the
+        relaxation after the front evens out the new triangles."""
         # filling one loop can change how loops through its vertices are traced: repeat
         failed: set[tuple[int, int]] = set()
         while True:
