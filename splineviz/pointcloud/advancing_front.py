@@ -83,6 +83,12 @@ REFINE_FACTOR = 0.6
 #: front loops left with at most this many edges are filled at the end (unless they are
 #: borders of the scan); the optimal triangulation costs O(edges^3)
 MAX_HOLE_EDGES = 40
+#: ... and loops of up to this many edges when the triangulation stays on the samples (no
+#: centroid beyond the border test's hard limit from the nearest input point): the rims of
+#: folds thinner than the spacing (Lucy's dress), where the fronts of the two sides meet
+#: facing apart and give up, leave long narrow loops; a loop around the mouth of a cavity
+#: (between Lucy's wing and back) would get a lid
+LONG_HOLE_EDGES = 64
 #: the corner angles of the triangles at one vertex may add up to at most 2 pi plus this:
 #: saddles of coarse meshes exceed 2 pi by up to ~0.55 rad (measured on the kitten), while a
 #: front that wraps around a vertex where the tangent plane misleads the wedge test (normals
@@ -822,9 +828,10 @@ class AdvancingFront:
 
     def _fill_holes(self):
         """Fill front loops left by given-up edges (not borders of the scan) of at most
-        ``MAX_HOLE_EDGES`` edges with the best-shaped triangulation of the loop (dynamic
-        programming over its diagonals, as in Liepa's hole filling, 2003); the relaxation after
-        the front evens out the new triangles."""
+        ``MAX_HOLE_EDGES`` edges, or ``LONG_HOLE_EDGES`` where the triangles stay on the
+        samples (:meth:`_on_the_samples`), with the best-shaped triangulation of the loop
+        (dynamic programming over its diagonals, as in Liepa's hole filling, 2003); the
+        relaxation after the front evens out the new triangles."""
         # filling one loop can change how loops through its vertices are traced: repeat
         failed: set[tuple[int, int]] = set()
         while True:
@@ -832,11 +839,11 @@ class AdvancingFront:
             for loop in (part for whole in self.front_loops() for part in simple_loops(whole)):
                 k = len(loop)
                 edges = [(loop[i], loop[(i + 1) % k]) for i in range(k)]
-                if k < 3 or k > MAX_HOLE_EDGES or edges[0] in failed or \
+                if k < 3 or k > LONG_HOLE_EDGES or edges[0] in failed or \
                         2 * sum(e in self.scan_border for e in edges) > k:
                     continue
                 tris = self._best_triangulation(loop)
-                if not tris:
+                if not tris or (k > MAX_HOLE_EDGES and not self._on_the_samples(tris)):
                     failed.update(edges)
                     continue
                 for tri in tris:
@@ -845,6 +852,13 @@ class AdvancingFront:
                 filled = True
             if not filled:
                 return
+
+    def _on_the_samples(self, tris):
+        """Whether every triangle of ``tris`` (vertex id triples) has its centroid within the
+        border test's hard limit (``outside_spacings`` local spacings) of an input point."""
+        tv = self.V[np.array(tris, dtype=np.int64)]
+        dist, idx = self.proj.conn.tree.query(tv.mean(axis=1))
+        return bool(np.all(dist <= self.outside_spacings * self.spacing[idx]))
 
     def _best_triangulation(self, loop):
         """Triangles ``(loop[i], loop[m], loop[j])`` of the polygon ``loop`` minimising the

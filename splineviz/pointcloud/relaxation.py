@@ -29,6 +29,19 @@ def _face_normals(v, f):
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals ``(V, 3)`` of triangles ``(F, 3)`` oriented
+    counter-clockwise (zero for a vertex of no triangle)."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # 2 x area x unit normal
+    n = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(n, f[:, k], fn)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
 def border_vertices(n_vertices: int, faces: np.ndarray) -> np.ndarray:
     """``(V,)`` bool: vertices on an edge that has exactly one triangle."""
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
@@ -183,8 +196,9 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
     """Tangential Laplacian relaxation with re-projection onto the point-set surface.
 
     Each interior vertex moves ``RELAX_STEP`` of the way to the centroid of its neighbours,
-    within its tangent plane, and is projected back (:meth:`Projector.project_with_normals`).
-    A move that would turn a triangle over is undone.
+    within the tangent plane of the mesh's vertex normal, and is projected back
+    (:meth:`Projector.project_with_normals`, with that normal as the hint of its side).  A
+    move that would turn a triangle over is undone.
 
     Parameters
     ----------
@@ -205,15 +219,22 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
     adj = ((adj + adj.T) > 0).astype(float)
     deg = np.asarray(adj.sum(axis=1)).ravel()
     movable = ~fixed & (deg > 0)
-    _, normals = projector.project_with_normals(v)
     for _ in range(iterations):
+        # the tangent plane is the mesh's own, not the surface's at the nearest samples: at a
+        # ridge or the rim of a thin part that plane is one side's and holds the direction
+        # across the rim, so vertices slid off it and the mesh cut the part short (Lucy's
+        # flaps and wing tips: the front's points-to-mesh p99 of 0.338 % of the diagonal
+        # became 0.410 % after relaxation, 0.346 % this way); the mesh's normal there
+        # bisects the sides, and the move follows the rim
+        normals = vertex_normals(v, faces)
         centroid = (adj @ v) / np.maximum(deg, 1)[:, None]
         move = centroid - v
         move -= np.einsum("ij,ij->i", move, normals)[:, None] * normals
         cand = v.copy()
         cand[movable] += RELAX_STEP * move[movable]
-        proj, pn = projector.project_with_normals(cand[movable])
-        cand[movable] = proj
+        # the normals also tell the side of a thin part a vertex belongs to: without them it
+        # is projected onto whichever side's samples are nearest
+        cand[movable] = projector.project_with_normals(cand[movable], normals[movable])[0]
         # undo moves that turn a triangle over relative to its old orientation
         old_n = _face_normals(v, faces)
         new_n = _face_normals(cand, faces)
@@ -222,7 +243,6 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
             bad = np.unique(faces[bad_faces])
             cand[bad] = v[bad]
         v = cand
-        normals[movable] = pn
     return v
 
 

@@ -19,7 +19,7 @@ from splineviz.pointcloud.advancing_front import BORDER_NEIGHBOURS, AdvancingFro
 from splineviz.pointcloud.cocone import cocone_connectivity
 from splineviz.pointcloud.guidance import guidance_field
 from splineviz.pointcloud.projection import Projector
-from splineviz.pointcloud.relaxation import optimize
+from splineviz.pointcloud.relaxation import optimize, vertex_normals
 
 
 class RemeshError(SplinevizError, ValueError):
@@ -174,19 +174,6 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     rep.flips = flips
     cells = np.hstack([np.full((len(faces), 1), 3, dtype=np.int64), faces]).ravel()
     return pv.PolyData(vertices, cells)
-
-
-def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals ``(V, 3)`` of triangles ``(F, 3)`` oriented
-    counter-clockwise (zero for a vertex of no triangle)."""
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])  # 2 x area x unit normal
-    n = np.zeros_like(v)
-    for k in range(3):
-        np.add.at(n, f[:, k], fn)
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
 
 
 def remesh_with_quality(points, edge_length=None, rho=None, job=None) -> dict:
