@@ -156,9 +156,14 @@ def fit_heights(vertices: np.ndarray, faces: np.ndarray, projector) -> np.ndarra
     block = block + sparse.identity(len(free), format="csc") * (1e-12 * block.diagonal().max())
     delta = np.zeros(n)
     delta[free] = spsolve(block, b[free])
-    _, normal = projector.project_with_normals(v[free])
+    # the area-weighted normals of the triangles: the vertices lie on the surface, so these
+    # are its normals to within the triangles' turn, and need no projection
+    normal = np.zeros_like(v)
+    for k in range(3):
+        np.add.at(normal, f[:, k], cross)
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
     move = np.zeros_like(v)
-    move[free] = delta[free, None] * normal
+    move[free] = delta[free, None] * normal[free]
     # where the mesh crosses folds the tangent planes mislead: moves that turn a triangle
     # are undone, corner by corner, until none does
     before = face_up
