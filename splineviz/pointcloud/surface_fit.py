@@ -102,8 +102,11 @@ def fit_heights(vertices: np.ndarray, faces: np.ndarray, projector) -> np.ndarra
     least-squares sense (see the module docstring).
 
     The surface's height over the mesh is sampled at the edge midpoints and face centroids
-    (zero at the corners, which lie on the surface) and integrated with the 7-point rule; the
-    P1 mass matrix is exact.  Border vertices and ``BORDER_RINGS`` rings around them stay.
+    (zero at the corners, which lie on the surface) and integrated with the 7-point rule,
+    exact for cubics (the height times a hat function over a triangle of a quadratic
+    surface; the edge-midpoint rule alone, exact for quadratics, leaves the largest deviation
+    on a sphere at 0.84 of the interpolating mesh's instead of 0.71); the P1 mass matrix is
+    exact.  Border vertices and ``BORDER_RINGS`` rings around them stay.
 
     Parameters
     ----------
