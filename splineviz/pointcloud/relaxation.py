@@ -24,7 +24,9 @@ FLIP_QUALITY_KEEP = 0.6
 RELAX_STEP = 0.5
 
 
-def _face_normals(v, f):
+def face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Unit normals ``(F, 3)`` of triangles ``f (F, 3)`` over vertices ``v (V, 3)``,
+    counter-clockwise."""
     n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
@@ -236,8 +238,8 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
         # is projected onto whichever side's samples are nearest
         cand[movable] = projector.project_with_normals(cand[movable], normals[movable])[0]
         # undo moves that turn a triangle over relative to its old orientation
-        old_n = _face_normals(v, faces)
-        new_n = _face_normals(cand, faces)
+        old_n = face_normals(v, faces)
+        new_n = face_normals(cand, faces)
         bad_faces = np.einsum("ij,ij->i", old_n, new_n) < 0.5
         if bad_faces.any():
             bad = np.unique(faces[bad_faces])

@@ -36,11 +36,13 @@ def _check(cloud, seconds_limit, hausdorff_limit, **kwargs):
 
 
 def test_kitten(shared_data):
-    # measured: points to mesh 0.62 %, two-sided 1.004 %.  The two-sided 1 % is out of reach
-    # for any mesh on the surface: the circumcentres of the Cocone triangles, projected onto
-    # the surface, lie up to 1.047 % of the diagonal from the nearest sample
+    # measured: points to mesh 0.73 %, two-sided 0.982 % (issue 13: no worse than the 1.005 %
+    # of the Cocone-connected projector).  The largest gap between samples on the surface is
+    # 0.986 %; before the least-squares vertex heights a triangle of 2.7 spacings in a bend
+    # the guidance's shortest edge cannot follow sat 0.29 % off the surface over a gap of
+    # 0.88 %: 1.077 %
     cloud = sv.read_points(shared_data / "points" / "kitten.xyz")
-    q = _check(cloud, 60, hausdorff_limit=0.011)
+    q = _check(cloud, 60, hausdorff_limit=0.01005)
     assert q["boundary_edges"] == 0  # the kitten is closed
 
 
@@ -92,3 +94,20 @@ def test_cli_remesh_user_errors(tmp_path, capsys):
     assert cli_main(["remesh", "x.ply", "-o", "m.ply", "--rho", "0"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--rho" in err
+
+
+@pytest.mark.slow
+def test_noisy_bunny_points_to_mesh_p99_against_the_anchor(shared_data):
+    # issue 13: the bunny with Gaussian noise of 0.2 % of the diagonal, default parameters;
+    # the 99th-percentile distance of the points to our mesh at most that to Poisson depth 8
+    # + isotropic remeshing at our vertex count (measured 0.527 % against 0.539 %; 0.550 %
+    # with the mesh's corners on the surface)
+    pytest.importorskip("open3d")
+    pytest.importorskip("pymeshlab")
+    from splineviz.pointcloud.bench import _poisson_remeshed, load_cloud
+
+    pts = load_cloud("bunny-noisy", shared_data / "points")
+    ours = sv.mesh_quality(sv.remesh(pts), reference=pts)
+    anchor = sv.mesh_quality(_poisson_remeshed(pts, ours["n_vertices"]), reference=pts)
+    assert ours["points_to_mesh_p99"] <= anchor["points_to_mesh_p99"]
+    assert ours["non_manifold_edges"] == 0
