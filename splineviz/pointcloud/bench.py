@@ -108,6 +108,11 @@ def _poisson_remeshed(points, n_vertices):
 
 def _child(queue, fn, args):
     try:
+        # the peers' libraries are loaded before the clock starts, as ours are (open3d's
+        # import alone takes 0.5-1 s, most of a small cloud's anchor time)
+        import open3d  # noqa: F401
+        import pymeshlab  # noqa: F401
+
         t = time.perf_counter()
         v, f = fn(*args)
         queue.put(("ok", np.asarray(v, float), np.asarray(f, np.int64), time.perf_counter() - t))
@@ -116,8 +121,11 @@ def _child(queue, fn, args):
 
 
 def run_peer(fn, args, timeout):
-    """Run ``fn(*args) -> (V, F)`` in a child process; ``(V, F, seconds)`` or a message."""
-    ctx = mp.get_context("fork")
+    """Run ``fn(*args) -> (V, F)`` in a child process; ``(V, F, seconds)`` or a message.
+
+    The child is spawned, not forked: the peers run OpenMP, which hangs in a child forked
+    from a process whose own OpenMP threads (numba's) have run."""
+    ctx = mp.get_context("spawn")
     queue = ctx.Queue()
     proc = ctx.Process(target=_child, args=(queue, fn, args))
     proc.start()
@@ -232,6 +240,7 @@ def run_bench(data_dir=None, clouds=CLOUDS, timeout=180.0, peers=True, out=sys.s
 
     for module in (local_fits, front_kernels, relaxation):
         module.compile_kernels()  # numba's cached kernels are loaded before any timing
+    import pyvista  # noqa: F401  (remesh's mesh type: loaded before the clock, as the peers')
     if projection:
         projection_table(out=out)
         print(file=out)
