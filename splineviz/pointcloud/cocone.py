@@ -140,10 +140,21 @@ def circumcenters(vertices: np.ndarray) -> np.ndarray:
     return out
 
 
+#: queries per k-d tree call from which :func:`tree_query` uses every core (threads cost
+#: more than they save on the front's batches of a few dozen points)
+PARALLEL_QUERIES = 2048
+
+
+def tree_query(tree: cKDTree, x: np.ndarray, k: int = 1):
+    """``tree.query(x, k)``: ``(distances, indices)``, on every core for big batches (the
+    result does not depend on the number of threads)."""
+    return tree.query(x, k=k, workers=-1 if len(x) >= PARALLEL_QUERIES else 1)
+
+
 def local_spacing(tree: cKDTree, points: np.ndarray, k: int = SPACING_NEIGHBOURS) -> np.ndarray:
     """Mean distance of each point to its ``k`` nearest other points, shape ``(N,)``."""
     k = min(k, len(points) - 1)
-    dist, _ = tree.query(points, k=k + 1)
+    dist, _ = tree_query(tree, points, k + 1)
     return dist[:, 1:].mean(axis=1)
 
 
@@ -266,7 +277,7 @@ def tangent_void_ratio(points: np.ndarray, normals: np.ndarray, spacing: np.ndar
     float: the ``quantile`` of the ratios (1.0 when there are none).
     """
     k = min(VOID_NEIGHBOURS, len(points) - 1)
-    _, idx = tree.query(points, k=k + 1)
+    _, idx = tree_query(tree, points, k + 1)
     idx = idx[:, 1:]
     helper = np.zeros_like(normals)
     helper[np.arange(len(points)), np.argmin(np.abs(normals), axis=1)] = 1.0
@@ -483,7 +494,7 @@ def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Con
     n = len(points)
     tree = cKDTree(points)
     k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
-    dist, nearest = tree.query(points, k=min(max(k + 1, int(neighbours)), n))
+    dist, nearest = tree_query(tree, points, min(max(k + 1, int(neighbours)), n))
     dist, idx = dist[:, :k + 1], nearest[:, :k + 1]
     nb = points[idx]
     d = nb - nb.mean(axis=1, keepdims=True)

@@ -34,6 +34,16 @@ def _tables():
 
 _EXPONENT_SUM, _PAIR = _tables()
 
+#: points per chunk of the parallel loops: smaller batches (the front's 64 apexes) run on
+#: the calling thread, where starting the threads would cost more than they save
+CHUNK = 512
+
+
+@numba.njit(cache=True)
+def _chunks(n):
+    """Number of chunks of about ``CHUNK`` points for ``n`` points (at least 1)."""
+    return max(1, n // CHUNK)
+
 
 @numba.njit(cache=True)
 def _cholesky(a, m, low):
@@ -91,16 +101,29 @@ def _local(points, frames, i, j, inv):
             (frames[i, 2, 0] * rx + frames[i, 2, 1] * ry + frames[i, 2, 2] * rz) * inv)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, with_noise,
           exponent_sum, pair):
-    n_scales, n_ids, n_nb = len(widths), len(ids), index.shape[1]
+    n_scales, n_ids = len(widths), len(ids)
     coeffs = np.zeros((n_scales, n_ids, _M))
     degree = np.zeros((n_scales, n_ids), dtype=np.int64)
     cond = np.zeros((n_scales, n_ids))
     spread = np.zeros((n_scales, n_ids))
     balance = np.zeros((n_scales, n_ids))
     sigma = np.zeros(n_ids)
+    n_chunks = _chunks(n_ids)
+    for c in numba.prange(n_chunks):
+        _fits_range(c * n_ids // n_chunks, (c + 1) * n_ids // n_chunks, points, index, valid,
+                    frames, scale, ids, widths, degrees, cond_max, with_noise, exponent_sum,
+                    pair, coeffs, degree, cond, spread, balance, sigma)
+    return coeffs, degree, cond, spread, balance, sigma
+
+
+@numba.njit(cache=True)
+def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degrees, cond_max,
+                with_noise, exponent_sum, pair, coeffs, degree, cond, spread, balance, sigma):
+    """The fits of points ``ids[lo:hi]`` into the outputs of :func:`_fits`."""
+    n_scales, n_nb = len(widths), index.shape[1]
     mono = np.empty((n_nb, _M2))
     zs = np.empty(n_nb)
     wt = np.empty((n_scales, n_nb))
@@ -111,7 +134,7 @@ def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, w
     col = np.empty(_M)
     x0 = np.empty(_M)
     e0 = np.empty(_M)
-    for p in range(n_ids):
+    for p in range(lo, hi):
         i = ids[p]
         inv = 1.0 / scale[i]
         for k in range(n_nb):
@@ -209,7 +232,6 @@ def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, w
                     _solve_factored(a, m, col)
                     tr += col[c]
                 sigma[p] = np.sqrt(rss / max(sw - tr, 1e-12))
-    return coeffs, degree, cond, spread, balance, sigma
 
 
 def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
@@ -374,14 +396,27 @@ def _condition_ok(a, m, cond_max, f, g):
     return ev[0] > 0.0 and ev[m - 1] <= cond_max * ev[0], lb
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _variable_fits(points, index, valid, frames, scale, ids, n_nb, q_max, cond_max, pair):
     m_max = (q_max + 1) * (q_max + 2) // 2
-    m2 = (2 * q_max + 1) * (2 * q_max + 2) // 2
     n_ids = len(ids)
     coeffs = np.zeros((n_ids, m_max))
     degree = np.ones(n_ids, dtype=np.int64)
     cond = np.zeros(n_ids)
+    n_chunks = _chunks(n_ids)
+    for c in numba.prange(n_chunks):
+        _variable_range(c * n_ids // n_chunks, (c + 1) * n_ids // n_chunks, points, index,
+                        valid, frames, scale, ids, n_nb, q_max, cond_max, pair, coeffs,
+                        degree, cond)
+    return coeffs, degree, cond
+
+
+@numba.njit(cache=True)
+def _variable_range(lo, hi, points, index, valid, frames, scale, ids, n_nb, q_max, cond_max,
+                    pair, coeffs, degree, cond):
+    """The fits of points ``ids[lo:hi]`` into the outputs of :func:`_variable_fits`."""
+    m_max = (q_max + 1) * (q_max + 2) // 2
+    m2 = (2 * q_max + 1) * (2 * q_max + 2) // 2
     mom = np.empty(m2)
     rhs = np.empty(m_max)
     px = np.empty(2 * q_max + 1)
@@ -390,7 +425,7 @@ def _variable_fits(points, index, valid, frames, scale, ids, n_nb, q_max, cond_m
     f = np.empty((m_max, m_max))
     g = np.empty((m_max, m_max))
     v = np.empty(m_max)
-    for p in range(n_ids):
+    for p in range(lo, hi):
         i = ids[p]
         inv = 1.0 / scale[i]
         mom[:] = 0.0
@@ -443,7 +478,6 @@ def _variable_fits(points, index, valid, frames, scale, ids, n_nb, q_max, cond_m
         _solve_factored(f, m, v)
         for c in range(m):
             coeffs[p, c] = v[c]
-    return coeffs, degree, cond
 
 
 def variable_degree_fits(points, index, valid, frames, scale, ids, n_neighbours, q_max,
@@ -556,17 +590,19 @@ def _project_one(points, frames, scale, coeffs, degree, reach, i, x, iterations,
         nrm[a] = (-frames[i, 0, a] * zu - frames[i, 1, a] * zv + frames[i, 2, a]) / length
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
     n_q = len(ids)
     pos = np.empty((n_q, 3))
     nrm = np.empty((n_q, 3))
-    pu = np.empty(coeffs.shape[1])
-    pv = np.empty(coeffs.shape[1])
-    loc = np.empty(3)
-    for p in range(n_q):
-        _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p], iterations,
-                     pu, pv, loc, pos[p], nrm[p])
+    n_chunks = _chunks(n_q)
+    for c in numba.prange(n_chunks):
+        pu = np.empty(coeffs.shape[1])
+        pv = np.empty(coeffs.shape[1])
+        loc = np.empty(3)
+        for p in range(c * n_q // n_chunks, (c + 1) * n_q // n_chunks):
+            _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p],
+                         iterations, pu, pv, loc, pos[p], nrm[p])
     return pos, nrm
 
 
@@ -584,18 +620,30 @@ def _median_of(values, k):
     return values[k // 2] if k % 2 else 0.5 * (values[k // 2 - 1] + values[k // 2])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterations):
-    m, k = sets.shape
+    m = sets.shape[0]
     pos = np.empty((m, 3))
     nrm = np.empty((m, 3))
+    n_chunks = _chunks(m)
+    for c in numba.prange(n_chunks):
+        _median_range(c * m // n_chunks, (c + 1) * m // n_chunks, points, frames, scale,
+                      coeffs, degree, reach, sets, r, iterations, pos, nrm)
+    return pos, nrm
+
+
+@numba.njit(cache=True)
+def _median_range(lo, hi, points, frames, scale, coeffs, degree, reach, sets, r, iterations,
+                  pos, nrm):
+    """The medians of queries ``lo:hi`` into ``pos`` and ``nrm`` (:func:`_project_median`)."""
+    k = sets.shape[1]
     each_pos = np.empty((k, 3))
     each_nrm = np.empty((k, 3))
     column = np.empty(k)
     pu = np.empty(coeffs.shape[1])
     pv = np.empty(coeffs.shape[1])
     loc = np.empty(3)
-    for p in range(m):
+    for p in range(lo, hi):
         for c in range(k):
             _project_one(points, frames, scale, coeffs, degree, reach, sets[p, c], r[p],
                          iterations, pu, pv, loc, each_pos[c], each_nrm[c])
@@ -606,7 +654,6 @@ def _project_median(points, frames, scale, coeffs, degree, reach, sets, r, itera
             for c in range(k):
                 column[c] = each_nrm[c, a]
             nrm[p, a] = _median_of(column, k)
-    return pos, nrm
 
 
 def project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterations):

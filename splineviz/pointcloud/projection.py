@@ -20,7 +20,12 @@ import numpy as np
 from scipy import sparse
 
 from splineviz.core.errors import SplinevizError
-from splineviz.pointcloud.cocone import Connectivity, cocone_connectivity, knn_connectivity
+from splineviz.pointcloud.cocone import (
+    Connectivity,
+    cocone_connectivity,
+    knn_connectivity,
+    tree_query,
+)
 from splineviz.pointcloud.local_fits import (
     project_median,
     sheet_mask,
@@ -500,7 +505,7 @@ class Projector:
         if near is not None and near.shape[1] >= k:
             index = near[:, :k].copy()
         else:
-            _, index = self.conn.tree.query(pts, k=k)
+            _, index = tree_query(self.conn.tree, pts, k)
         index[:, 0] = np.arange(n)  # points are distinct: the nearest is the point itself
         normals = self.conn.normals
         # the other side of a thin part is near but faces the other way (oriented normals)
@@ -649,9 +654,9 @@ class Projector:
 
     def _median_projection(self, r, hint=None):
         if hint is None:
-            _, nearest = self.conn.tree.query(r)
+            _, nearest = tree_query(self.conn.tree, r)
         else:
-            _, cand = self.conn.tree.query(r, k=min(HINT_CANDIDATES, len(self.points)))
+            _, cand = tree_query(self.conn.tree, r, min(HINT_CANDIDATES, len(self.points)))
             agree = np.einsum("mkc,mc->mk", self.normals[cand], hint) > 0
             first = np.where(agree.any(axis=1), np.argmax(agree, axis=1), 0)
             nearest = cand[np.arange(len(r)), first]

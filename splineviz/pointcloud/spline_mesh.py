@@ -49,6 +49,7 @@ from splineviz.core.curvature import spline_curvatures
 from splineviz.core.errors import SplinevizError
 from splineviz.core.isosurface import project_to_isosurface
 from splineviz.pointcloud.advancing_front import VERTEX_BUDGET, AdvancingFront, simple_loops
+from splineviz.pointcloud.cocone import tree_query
 from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 from splineviz.pointcloud.spline_kernels import compiled
@@ -152,7 +153,7 @@ class SplineProjector:
         lo, hi = spline.volume.finite_range
         self.tol = VALUE_TOL * max(hi - lo, 1e-300)
         tree = cKDTree(points)
-        dist, idx = tree.query(points, k=GRAPH_NEIGHBOURS + 1)
+        dist, idx = tree_query(tree, points, GRAPH_NEIGHBOURS + 1)
         rows = np.repeat(np.arange(len(points)), GRAPH_NEIGHBOURS)
         graph = sparse.csr_matrix((dist[:, 1:].ravel(), (rows, idx[:, 1:].ravel())),
                                   shape=(len(points), len(points)))

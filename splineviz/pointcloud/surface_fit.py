@@ -28,6 +28,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
+from splineviz.pointcloud.cocone import tree_query
 from splineviz.pointcloud.relaxation import face_normals, vertex_normals
 
 #: barycentric coordinates and weights of the 7-point triangle rule (exact for cubics):
@@ -86,7 +87,7 @@ def surface_heights(points: np.ndarray, up: np.ndarray, length: np.ndarray,
     """
     foot, normal = projector.project_with_normals(points)
     height = np.einsum("ij,ij->i", foot - points, normal)
-    dist, nearest = projector.conn.tree.query(foot)
+    dist, nearest = tree_query(projector.conn.tree, foot)
     bad = dist > OUTSIDE_SPACINGS * projector.scale[nearest]
     bad |= np.abs(height) > MAX_SAG * length
     bad |= np.einsum("ij,ij->i", normal, up) < np.cos(MAX_TILT)
