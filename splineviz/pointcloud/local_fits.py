@@ -34,8 +34,9 @@ def _tables():
 
 _EXPONENT_SUM, _PAIR = _tables()
 
-#: points per chunk of the parallel loops: smaller batches (the front's 64 apexes) run on
-#: the calling thread, where starting the threads would cost more than they save
+#: points per chunk of the parallel loops: batches of fewer than two chunks (the front's 64
+#: apexes) run on the calling thread without entering a parallel region, whose start costs
+#: more than such a batch (Lucy's front: +30 % time)
 CHUNK = 512
 
 
@@ -112,6 +113,11 @@ def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, w
     balance = np.zeros((n_scales, n_ids))
     sigma = np.zeros(n_ids)
     n_chunks = _chunks(n_ids)
+    if n_chunks == 1:
+        _fits_range(0, n_ids, points, index, valid, frames, scale, ids, widths, degrees,
+                    cond_max, with_noise, exponent_sum, pair, coeffs, degree, cond, spread,
+                    balance, sigma)
+        return coeffs, degree, cond, spread, balance, sigma
     for c in numba.prange(n_chunks):
         _fits_range(c * n_ids // n_chunks, (c + 1) * n_ids // n_chunks, points, index, valid,
                     frames, scale, ids, widths, degrees, cond_max, with_noise, exponent_sum,
@@ -404,6 +410,10 @@ def _variable_fits(points, index, valid, frames, scale, ids, n_nb, q_max, cond_m
     degree = np.ones(n_ids, dtype=np.int64)
     cond = np.zeros(n_ids)
     n_chunks = _chunks(n_ids)
+    if n_chunks == 1:
+        _variable_range(0, n_ids, points, index, valid, frames, scale, ids, n_nb, q_max,
+                        cond_max, pair, coeffs, degree, cond)
+        return coeffs, degree, cond
     for c in numba.prange(n_chunks):
         _variable_range(c * n_ids // n_chunks, (c + 1) * n_ids // n_chunks, points, index,
                         valid, frames, scale, ids, n_nb, q_max, cond_max, pair, coeffs,
@@ -596,14 +606,26 @@ def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
     pos = np.empty((n_q, 3))
     nrm = np.empty((n_q, 3))
     n_chunks = _chunks(n_q)
+    if n_chunks == 1:
+        _project_range(0, n_q, points, frames, scale, coeffs, degree, reach, ids, r,
+                       iterations, pos, nrm)
+        return pos, nrm
     for c in numba.prange(n_chunks):
-        pu = np.empty(coeffs.shape[1])
-        pv = np.empty(coeffs.shape[1])
-        loc = np.empty(3)
-        for p in range(c * n_q // n_chunks, (c + 1) * n_q // n_chunks):
-            _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p],
-                         iterations, pu, pv, loc, pos[p], nrm[p])
+        _project_range(c * n_q // n_chunks, (c + 1) * n_q // n_chunks, points, frames, scale,
+                       coeffs, degree, reach, ids, r, iterations, pos, nrm)
     return pos, nrm
+
+
+@numba.njit(cache=True)
+def _project_range(lo, hi, points, frames, scale, coeffs, degree, reach, ids, r, iterations,
+                   pos, nrm):
+    """The projections of queries ``lo:hi`` into ``pos`` and ``nrm`` (:func:`_project`)."""
+    pu = np.empty(coeffs.shape[1])
+    pv = np.empty(coeffs.shape[1])
+    loc = np.empty(3)
+    for p in range(lo, hi):
+        _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p], iterations,
+                     pu, pv, loc, pos[p], nrm[p])
 
 
 @numba.njit(cache=True)
@@ -626,6 +648,10 @@ def _project_median(points, frames, scale, coeffs, degree, reach, sets, r, itera
     pos = np.empty((m, 3))
     nrm = np.empty((m, 3))
     n_chunks = _chunks(m)
+    if n_chunks == 1:
+        _median_range(0, m, points, frames, scale, coeffs, degree, reach, sets, r, iterations,
+                      pos, nrm)
+        return pos, nrm
     for c in numba.prange(n_chunks):
         _median_range(c * m // n_chunks, (c + 1) * m // n_chunks, points, frames, scale,
                       coeffs, degree, reach, sets, r, iterations, pos, nrm)
