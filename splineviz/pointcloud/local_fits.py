@@ -600,34 +600,6 @@ def _project_one(points, frames, scale, coeffs, degree, reach, i, x, iterations,
         nrm[a] = (-frames[i, 0, a] * zu - frames[i, 1, a] * zv + frames[i, 2, a]) / length
 
 
-@numba.njit(cache=True, parallel=True)
-def _project(points, frames, scale, coeffs, degree, reach, ids, r, iterations):
-    n_q = len(ids)
-    pos = np.empty((n_q, 3))
-    nrm = np.empty((n_q, 3))
-    n_chunks = _chunks(n_q)
-    if n_chunks == 1:
-        _project_range(0, n_q, points, frames, scale, coeffs, degree, reach, ids, r,
-                       iterations, pos, nrm)
-        return pos, nrm
-    for c in numba.prange(n_chunks):
-        _project_range(c * n_q // n_chunks, (c + 1) * n_q // n_chunks, points, frames, scale,
-                       coeffs, degree, reach, ids, r, iterations, pos, nrm)
-    return pos, nrm
-
-
-@numba.njit(cache=True)
-def _project_range(lo, hi, points, frames, scale, coeffs, degree, reach, ids, r, iterations,
-                   pos, nrm):
-    """The projections of queries ``lo:hi`` into ``pos`` and ``nrm`` (:func:`_project`)."""
-    pu = np.empty(coeffs.shape[1])
-    pv = np.empty(coeffs.shape[1])
-    loc = np.empty(3)
-    for p in range(lo, hi):
-        _project_one(points, frames, scale, coeffs, degree, reach, ids[p], r[p], iterations,
-                     pu, pv, loc, pos[p], nrm[p])
-
-
 @numba.njit(cache=True)
 def _median_of(values, k):
     """Median of ``values[:k]``: the middle value, or the mean of the two middle ones for
@@ -730,12 +702,9 @@ def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r,
     -------
     positions (P, 3), unit normals (P, 3) in world coordinates.
     """
-    f64 = np.float64
-    return _project(np.ascontiguousarray(points, f64), np.ascontiguousarray(frames, f64),
-                    np.ascontiguousarray(scale, f64), np.ascontiguousarray(coeffs, f64),
-                    np.ascontiguousarray(degree, np.int64), np.ascontiguousarray(reach, f64),
-                    np.ascontiguousarray(ids, np.int64), np.ascontiguousarray(r, f64),
-                    int(iterations))
+    # the median of one projection is that projection
+    return project_median(points, frames, scale, coeffs, degree, reach,
+                          np.asarray(ids).reshape(-1, 1), r, iterations)
 
 
 def compile_kernels() -> None:
