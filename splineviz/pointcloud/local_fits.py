@@ -34,6 +34,11 @@ def _tables():
 
 _EXPONENT_SUM, _PAIR = _tables()
 
+# numba's parallel loops on OpenMP (libgomp1, which install.sh installs): numba tries TBB
+# first, and warns when the TBB already loaded in the process is too old (open3d and
+# pymeshlab bring TBB 2021.5); OpenMP first, TBB is never probed
+numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
+
 #: points per chunk of the parallel loops: batches of fewer than two chunks (the front's 64
 #: apexes) run on the calling thread without entering a parallel region, whose start costs
 #: more than such a batch (Lucy's front: +30 % time)
