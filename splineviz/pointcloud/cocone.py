@@ -24,6 +24,7 @@ from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
+from splineviz.pointcloud.local_fits import allowed_cores
 
 #: half opening angle of the co-cone around the plane orthogonal to the pole (Cocone: pi/8)
 COCONE_ANGLE = np.pi / 8
@@ -146,9 +147,9 @@ PARALLEL_QUERIES = 2048
 
 
 def tree_query(tree: cKDTree, x: np.ndarray, k: int = 1):
-    """``tree.query(x, k)``: ``(distances, indices)``, on every core for big batches (the
-    result does not depend on the number of threads)."""
-    return tree.query(x, k=k, workers=-1 if len(x) >= PARALLEL_QUERIES else 1)
+    """``tree.query(x, k)``: ``(distances, indices)``, on every allowed core for big batches
+    (the result does not depend on the number of threads)."""
+    return tree.query(x, k=k, workers=allowed_cores() if len(x) >= PARALLEL_QUERIES else 1)
 
 
 def local_spacing(tree: cKDTree, points: np.ndarray, k: int = SPACING_NEIGHBOURS) -> np.ndarray:

@@ -14,6 +14,8 @@ monomial basis ordered by total degree ``(1, x, y, x^2, xy, y^2, ...)``.
 
 from __future__ import annotations
 
+import os
+
 import numba
 import numpy as np
 
@@ -38,6 +40,20 @@ _EXPONENT_SUM, _PAIR = _tables()
 # first, and warns when the TBB already loaded in the process is too old (open3d and
 # pymeshlab bring TBB 2021.5); OpenMP first, TBB is never probed
 numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
+
+def allowed_cores() -> int:
+    """Number of cores this process may run on (a GUI job process leaves the GUI one:
+    :mod:`splineviz.gui.jobs`)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # no affinity on this platform
+        return os.cpu_count() or 1
+
+
+def _use_allowed_cores() -> None:
+    """numba's threads for the next parallel loops: one per allowed core."""
+    numba.set_num_threads(max(1, min(allowed_cores(), numba.config.NUMBA_NUM_THREADS)))
+
 
 #: points per chunk of the parallel loops: batches of fewer than two chunks (the front's 64
 #: apexes) run on the calling thread without entering a parallel region, whose start costs
@@ -282,6 +298,7 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
     """
     widths = np.array([w for w, _ in scales], dtype=np.float64)
     degrees = np.array([q for _, q in scales], dtype=np.int64)
+    _use_allowed_cores()
     return _fits(np.ascontiguousarray(points, dtype=np.float64),
                  np.ascontiguousarray(index, dtype=np.int64),
                  np.ascontiguousarray(valid, dtype=np.bool_),
@@ -529,6 +546,7 @@ def variable_degree_fits(points, index, valid, frames, scale, ids, n_neighbours,
         diagonal entry over the smallest Cholesky pivot)
     """
     q_max = int(q_max)
+    _use_allowed_cores()
     return _variable_fits(np.ascontiguousarray(points, dtype=np.float64),
                           np.ascontiguousarray(index, dtype=np.int64),
                           np.ascontiguousarray(valid, dtype=np.bool_),
@@ -676,6 +694,7 @@ def project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterat
     positions (M, 3), normals (M, 3): the medians (the normals not renormalised).
     """
     f64 = np.float64
+    _use_allowed_cores()
     return _project_median(np.ascontiguousarray(points, f64), np.ascontiguousarray(frames, f64),
                            np.ascontiguousarray(scale, f64), np.ascontiguousarray(coeffs, f64),
                            np.ascontiguousarray(degree, np.int64),
