@@ -537,12 +537,10 @@ class RayCaster:
         if any(o.shape[0] != self._to_stencil for o, _ in tables):
             raise AssertionError("TO stencils of different sizes")  # a bug: all read 28
         # dense (144, K, 16): per tet, per data value, its weights in the 10 coefficients
-        # (a float16 of the kernel, zero-padded)
-        dense = np.zeros((len(tables), self._to_stencil, 16), np.float32)
-        dense[..., :10] = np.stack([w.T for _, w in tables])
+        # (a float16 of the kernel)
         self._to_dense = [
             cla.to_device(q, np.stack([o @ strides for o, _ in tables]).astype(np.int32)),
-            cla.to_device(q, dense)]
+            cla.to_device(q, _padded_rows(np.stack([w.T for _, w in tables]), 16))]
         self._negmass = float(max(np.sum(np.clip(-w, 0, None), axis=1).max()
                                   for _, w in tables))
         start, centre, tet = cell_classes()
@@ -594,11 +592,8 @@ class RayCaster:
         stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
         self._stencil = cla.to_device(q, stencil)
         # dense tet masks (24, 27, NCHUNK * 8): per tet and stencil value, its weights in the
-        # tet's coefficients, zero-padded to whole float8s of the kernel
-        n_tets, n_coef, _ = scheme.tet_masks.shape
-        dense = np.zeros((n_tets, 27, 8 * -(-n_coef // 8)), np.float32)
-        dense[..., :n_coef] = scheme.tet_masks.transpose(0, 2, 1)
-        self._tet_dense = cla.to_device(q, dense)
+        # tet's coefficients (whole float8s of the kernel)
+        self._tet_dense = cla.to_device(q, _padded_rows(scheme.tet_masks.transpose(0, 2, 1), 8))
         self._cube_program, order = _cube_program(scheme)
         self._cube_program = [cla.to_device(q, a) for a in self._cube_program]
         # per program row (cube point), the bit set of the tets whose B-net holds it
@@ -1071,6 +1066,16 @@ def _cube_program(scheme):
     cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
     weights = np.concatenate([w for _, w in rows]).astype(np.float32)
     return (row_ptr, cols, weights), np.array(order)
+
+
+def _padded_rows(weights: np.ndarray, width: int) -> np.ndarray:
+    """Dense coefficient weights ``(T, K, C)`` as float32, the last axis zero-padded to a
+    multiple of ``width`` (whole vectors of the ray kernel): ``(T, K, width * ceil(C /
+    width))``."""
+    t, k, c = weights.shape
+    out = np.zeros((t, k, width * -(-c // width)), np.float32)
+    out[..., :c] = weights
+    return out
 
 
 def cla_sum(arr, queue) -> float:

@@ -29,7 +29,7 @@ from scipy import sparse
 from scipy.sparse.linalg import spsolve
 
 from splineviz.pointcloud.cocone import tree_query
-from splineviz.pointcloud.relaxation import face_normals, vertex_normals
+from splineviz.pointcloud.relaxation import border_vertices, face_normals, vertex_normals
 
 #: barycentric coordinates and weights of the 7-point triangle rule (exact for cubics):
 #: corners 1/20, edge midpoints 2/15, centroid 9/20
@@ -58,12 +58,10 @@ def _edges(faces: np.ndarray):
     return edges, inverse.reshape(3, -1).T
 
 
-def _fixed_vertices(n_vertices: int, edges: np.ndarray, face_edges: np.ndarray,
+def _fixed_vertices(n_vertices: int, faces: np.ndarray, edges: np.ndarray,
                     rings: int) -> np.ndarray:
     """``(V,)`` bool: vertices of border edges (one triangle) and ``rings`` rings around them."""
-    counts = np.bincount(face_edges.ravel(), minlength=len(edges))
-    fixed = np.zeros(n_vertices, dtype=bool)
-    fixed[edges[counts == 1].ravel()] = True
+    fixed = border_vertices(n_vertices, faces)
     for _ in range(rings):
         fixed[edges[fixed[edges].any(axis=1)].ravel()] = True
     return fixed
@@ -122,7 +120,7 @@ def fit_heights(vertices: np.ndarray, faces: np.ndarray, projector) -> np.ndarra
     if len(f) == 0:
         return v
     edges, face_edges = _edges(f)
-    fixed = _fixed_vertices(n, edges, face_edges, BORDER_RINGS)
+    fixed = _fixed_vertices(n, f, edges, BORDER_RINGS)
     used = np.zeros(n, dtype=bool)
     used[f.ravel()] = True
     free = np.flatnonzero(used & ~fixed)
