@@ -24,7 +24,7 @@ from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
-from splineviz.pointcloud.local_fits import allowed_cores
+from splineviz.pointcloud.local_fits import allowed_cores, use_allowed_cores
 
 #: half opening angle of the co-cone around the plane orthogonal to the pole (Cocone: pi/8)
 COCONE_ANGLE = np.pi / 8
@@ -454,6 +454,61 @@ def cocone_connectivity(cloud: PointCloud | np.ndarray,
 
 
 
+@numba.njit(cache=True, parallel=True)
+def _pca_rings(points, idx, dist, sectors):
+    """PCA normals and sector rings of :func:`knn_connectivity`.
+
+    Parameters
+    ----------
+    points : (N, 3) float64
+    idx, dist : (N, K + 1) nearest points (column 0 the point itself) and their distances,
+        sorted by distance
+    sectors : int
+
+    Returns
+    -------
+    normals : (N, 3) unit least-variance directions of each row's K + 1 points (unoriented)
+    ring : (N, sectors) int64, the nearest point in each angular sector around the normal
+        (-1 where a sector holds none)
+    ring_dist : (N, sectors) its distance
+    """
+    n, k1 = idx.shape
+    normals = np.empty((n, 3))
+    ring = np.full((n, sectors), -1, dtype=np.int64)
+    ring_dist = np.zeros((n, sectors))
+    for i in numba.prange(n):
+        mean = np.zeros(3)
+        for c in range(k1):
+            mean += points[idx[i, c]]
+        mean /= k1
+        cov = np.zeros((3, 3))
+        for c in range(k1):
+            d = points[idx[i, c]] - mean
+            for r in range(3):
+                for s in range(3):
+                    cov[r, s] += d[r] * d[s]
+        _, vec = np.linalg.eigh(cov)
+        nrm = vec[:, 0].copy()
+        normals[i] = nrm
+        # tangent directions: a unit vector orthogonal to the normal, and their cross product
+        axis = np.argmin(np.abs(nrm))
+        helper = np.zeros(3)
+        helper[axis] = 1.0
+        t1 = np.cross(helper, nrm)
+        t1 /= np.sqrt(t1[0] ** 2 + t1[1] ** 2 + t1[2] ** 2)
+        t2 = np.cross(nrm, t1)
+        # columns are sorted by distance: the first point met in a sector is its nearest
+        for c in range(1, k1):
+            rel = points[idx[i, c]] - points[i]
+            angle = np.arctan2(rel[0] * t2[0] + rel[1] * t2[1] + rel[2] * t2[2],
+                               rel[0] * t1[0] + rel[1] * t1[1] + rel[2] * t1[2])
+            s = min(int((angle + np.pi) / (2 * np.pi) * sectors), sectors - 1)
+            if ring[i, s] < 0:
+                ring[i, s] = idx[i, c]
+                ring_dist[i, s] = dist[i, c]
+    return normals, ring, ring_dist
+
+
 #: nearest points whose covariance gives the normal of :func:`knn_connectivity`
 NORMAL_NEIGHBOURS = 12
 #: angular sectors around the normal in which :func:`knn_connectivity` joins the nearest point
@@ -496,27 +551,13 @@ def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Con
     tree = cKDTree(points)
     k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
     dist, nearest = tree_query(tree, points, min(max(k + 1, int(neighbours)), n))
-    dist, idx = dist[:, :k + 1], nearest[:, :k + 1]
-    nb = points[idx]
-    d = nb - nb.mean(axis=1, keepdims=True)
-    _, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))
-    normals = vec[:, :, 0]
-    # tangent directions: any unit vector orthogonal to the normal, and their cross product
-    helper = np.zeros_like(normals)
-    helper[np.arange(n), np.argmin(np.abs(normals), axis=1)] = 1.0
-    t1 = np.cross(helper, normals)
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(normals, t1)
-    rel = nb[:, 1:] - points[:, None, :]
-    angle = np.arctan2(np.einsum("nkc,nc->nk", rel, t2), np.einsum("nkc,nc->nk", rel, t1))
-    sector = np.minimum(((angle + np.pi) / (2 * np.pi) * GRAPH_SECTORS).astype(int),
-                        GRAPH_SECTORS - 1)
-    rows = np.repeat(np.arange(n), k)
-    # columns are sorted by distance: the first of each (point, sector) key is the nearest
-    _, first = np.unique(rows * GRAPH_SECTORS + sector.ravel(), return_index=True)
-    graph = sparse.coo_matrix((dist[:, 1:].ravel()[first], (rows[first],
-                                                             idx[:, 1:].ravel()[first])),
-                              shape=(n, n)).tocsr()
+    dist = np.ascontiguousarray(dist[:, :k + 1])
+    use_allowed_cores()
+    normals, ring, ring_dist = _pca_rings(points, np.ascontiguousarray(nearest[:, :k + 1]),
+                                          dist, GRAPH_SECTORS)
+    has = ring >= 0
+    graph = sparse.coo_matrix((ring_dist[has], (np.repeat(np.arange(n), has.sum(axis=1)),
+                                                ring[has])), shape=(n, n)).tocsr()
     graph = graph.maximum(graph.T).tocsr()
     normals = orient_normals(normals, graph, points)
     spacing = dist[:, 1:min(SPACING_NEIGHBOURS, n - 1) + 1].mean(axis=1)

@@ -50,7 +50,7 @@ def allowed_cores() -> int:
         return os.cpu_count() or 1
 
 
-def _use_allowed_cores() -> None:
+def use_allowed_cores() -> None:
     """numba's threads for the next parallel loops: one per allowed core."""
     numba.set_num_threads(max(1, min(allowed_cores(), numba.config.NUMBA_NUM_THREADS)))
 
@@ -298,7 +298,7 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
     """
     widths = np.array([w for w, _ in scales], dtype=np.float64)
     degrees = np.array([q for _, q in scales], dtype=np.int64)
-    _use_allowed_cores()
+    use_allowed_cores()
     return _fits(np.ascontiguousarray(points, dtype=np.float64),
                  np.ascontiguousarray(index, dtype=np.int64),
                  np.ascontiguousarray(valid, dtype=np.bool_),
@@ -334,6 +334,68 @@ def sheet_mask(normals, index, cos_min):
     """
     return _sheet_mask(np.ascontiguousarray(normals, dtype=np.float64),
                        np.ascontiguousarray(index, dtype=np.int64), float(cos_min))
+
+
+@numba.njit(cache=True, parallel=True)
+def _neighbour_median(values, index):
+    n, k = index.shape
+    out = np.empty(n)
+    for i in numba.prange(n):
+        row = np.empty(k)
+        for c in range(k):
+            row[c] = values[index[i, c]]
+        out[i] = np.median(row)
+    return out
+
+
+def neighbour_median(values, index):
+    """``np.median(values[index], axis=1)``: the median over each point's neighbours.
+
+    Parameters
+    ----------
+    values : (N,) float64
+    index : (M, K) int neighbour ids
+
+    Returns
+    -------
+    (M,) float64
+    """
+    use_allowed_cores()
+    return _neighbour_median(np.ascontiguousarray(values, dtype=np.float64),
+                             np.ascontiguousarray(index, dtype=np.int64))
+
+
+@numba.njit(cache=True, parallel=True)
+def _nearest_in_rows(indptr, indices, data, k):
+    n = len(indptr) - 1
+    out = np.empty((n, k), dtype=np.int64)
+    for i in numba.prange(n):
+        lo, hi = indptr[i], indptr[i + 1]
+        # stable: equal lengths keep the order of the row, as np.lexsort
+        order = np.argsort(data[lo:hi], kind="mergesort")
+        out[i, :] = i
+        for c in range(min(k - 1, hi - lo)):
+            out[i, 1 + c] = indices[lo + order[c]]
+    return out
+
+
+def nearest_in_rows(graph, k):
+    """Each row's id followed by its ``k - 1`` nearest graph neighbours (smallest stored
+    lengths, ties in stored order); rows with fewer neighbours are padded with their own id.
+
+    Parameters
+    ----------
+    graph : (N, N) scipy.sparse.csr_matrix of edge lengths
+    k : int
+
+    Returns
+    -------
+    (N, k) int64
+    """
+    use_allowed_cores()
+    return _nearest_in_rows(np.ascontiguousarray(graph.indptr, dtype=np.int64),
+                            np.ascontiguousarray(graph.indices, dtype=np.int64),
+                            np.ascontiguousarray(graph.data, dtype=np.float64), int(k))
 
 
 def moment_pairs(q: int) -> np.ndarray:
@@ -546,7 +608,7 @@ def variable_degree_fits(points, index, valid, frames, scale, ids, n_neighbours,
         diagonal entry over the smallest Cholesky pivot)
     """
     q_max = int(q_max)
-    _use_allowed_cores()
+    use_allowed_cores()
     return _variable_fits(np.ascontiguousarray(points, dtype=np.float64),
                           np.ascontiguousarray(index, dtype=np.int64),
                           np.ascontiguousarray(valid, dtype=np.bool_),
@@ -694,7 +756,7 @@ def project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterat
     positions (M, 3), normals (M, 3): the medians (the normals not renormalised).
     """
     f64 = np.float64
-    _use_allowed_cores()
+    use_allowed_cores()
     return _project_median(np.ascontiguousarray(points, f64), np.ascontiguousarray(frames, f64),
                            np.ascontiguousarray(scale, f64), np.ascontiguousarray(coeffs, f64),
                            np.ascontiguousarray(degree, np.int64),
@@ -734,7 +796,9 @@ def project_on_polynomials(points, frames, scale, coeffs, degree, reach, ids, r,
 def compile_kernels() -> None:
     """Compile the kernels into numba's on-disk cache (install.sh runs this once: the first
     compilation takes 10-20 s, a cached load well under one)."""
-    from splineviz.pointcloud.cocone import _flip_in_order
+    from scipy import sparse
+
+    from splineviz.pointcloud.cocone import _flip_in_order, _pca_rings
 
     _flip_in_order(np.ones((2, 3)), np.arange(2), np.zeros(2, dtype=np.int32))
     rng = np.random.default_rng(0)
@@ -751,3 +815,7 @@ def compile_kernels() -> None:
                            np.full(12, 3.0), ids, points, 3)
     project_median(points, frames, scale, np.zeros((12, 21)), np.full(12, 5), np.full(12, 3.0),
                    index[:, :7], points, 3)
+    order = np.ascontiguousarray(index[:, :5])
+    _pca_rings(points, order, np.ones(order.shape), 6)
+    neighbour_median(scale, index)
+    nearest_in_rows(sparse.csr_matrix(np.ones((12, 12))), 7)

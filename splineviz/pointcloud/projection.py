@@ -14,7 +14,6 @@ basis of a higher one.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
 
 import numpy as np
 from scipy import sparse
@@ -27,6 +26,8 @@ from splineviz.pointcloud.cocone import (
     tree_query,
 )
 from splineviz.pointcloud.local_fits import (
+    nearest_in_rows,
+    neighbour_median,
     project_median,
     sheet_mask,
     smoothing_fits,
@@ -119,37 +120,6 @@ def basis(x: np.ndarray, y: np.ndarray, q: int) -> np.ndarray:
     """Monomial basis ``b(x)`` of eq. (7.3) at points; shape ``x.shape + (m,)``."""
     e = monomial_exponents(q)
     return _powers(x, q)[..., e[:, 0]] * _powers(y, q)[..., e[:, 1]]
-
-
-@cache
-def _derivative_tables(q: int):
-    """Exponents and index/factor arrays for :func:`evaluate` (cached per degree)."""
-    e = monomial_exponents(q)
-    return (e[:, 0], e[:, 1], np.maximum(e[:, 0] - 1, 0), np.maximum(e[:, 1] - 1, 0),
-            e[:, 0].astype(float), e[:, 1].astype(float))
-
-
-def evaluate(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray):
-    """Polynomial values and first derivatives.
-
-    Parameters
-    ----------
-    coeffs : (P, m) coefficients for the basis of :func:`monomial_exponents`, zero-padded
-        for lower degrees.
-    x, y : (P,) local coordinates.
-
-    Returns
-    -------
-    z, z_x, z_y : (P,) each.
-    """
-    q = int(round((np.sqrt(8 * coeffs.shape[-1] + 1) - 3) / 2))
-    ea, eb, ea1, eb1, fa, fb = _derivative_tables(q)
-    px, py = _powers(x, q), _powers(y, q)
-    bx, by = px[..., ea], py[..., eb]
-    z = np.sum(coeffs * bx * by, axis=-1)
-    zx = np.sum(coeffs * (fa * px[..., ea1]) * by, axis=-1)
-    zy = np.sum(coeffs * bx * (fb * py[..., eb1]), axis=-1)
-    return z, zx, zy
 
 
 def frames_from_normals(normals: np.ndarray) -> np.ndarray:
@@ -351,10 +321,10 @@ def choose_scale(values: np.ndarray, spread: np.ndarray, sigma: np.ndarray,
     return ok.sum(axis=1) - 1
 
 
-def _local_normals(coeffs: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Unit normals ``(-z_x, -z_y, 1)/|.|`` of polynomial graphs in local coordinates."""
-    _, zx, zy = evaluate(coeffs, x, y)
-    nrm = np.stack([-zx, -zy, np.ones_like(zx)], axis=-1)
+def _origin_normals(coeffs: np.ndarray) -> np.ndarray:
+    """Unit normals ``(-z_x, -z_y, 1)/|.|`` of polynomial graphs at the local origin, where
+    the derivatives are the linear coefficients: ``(P, m)`` -> ``(P, 3)``."""
+    nrm = np.stack([-coeffs[:, 1], -coeffs[:, 2], np.ones(len(coeffs))], axis=-1)
     return nrm / np.linalg.norm(nrm, axis=-1, keepdims=True)
 
 
@@ -473,8 +443,7 @@ class Projector:
                 c, q, k = fit_polynomials(local, w, int(fixed_degree), np.inf)
                 c = np.pad(c, ((0, 0), (0, coeffs.shape[1] - c.shape[1])))
             coeffs[todo], degree[todo], cond[todo] = c, q, k
-            zero = np.zeros(len(todo))
-            nloc = _local_normals(c, zero, zero)
+            nloc = _origin_normals(c)
             tilt = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0))
             bad = tilt > MAX_TILT
             if it == MAX_BISECTIONS or not bad.any():
@@ -485,8 +454,7 @@ class Projector:
             frames[todo[bad]] = frames_from_normals(newz)
             todo = todo[bad]
         self.frames, self.coeffs, self.degree, self.cond = frames, coeffs, degree, cond
-        zero = np.zeros(n)
-        nloc = _local_normals(coeffs, zero, zero)
+        nloc = _origin_normals(coeffs)
         self.normals = np.einsum("nji,nj->ni", frames, nloc)
 
     def _fit_adaptive(self, cond_max):
@@ -526,7 +494,7 @@ class Projector:
         # parts): there they would pass for noise and open the intervals to the widest fit;
         # creases are lines, so the median over the whole neighbourhood is the noise of the
         # surface around them (and it steadies the estimate from a handful of residuals)
-        noise = np.median(raw[index], axis=1)
+        noise = neighbour_median(raw, index)
         # a scanner's noise varies slowly over a scan; patches of residuals far above the
         # cloud's floor are strongly bent surface (ears, tips) or detail finer than the
         # samples resolve (Lucy's dress folds and feathers: their median residual, 0.2
@@ -540,8 +508,7 @@ class Projector:
         for it in range(MAX_BISECTIONS + 1):
             self._choose(todo, index, valid, frames, noise[todo], cond_max,
                          coeffs, degree, cond, reach, width, fits if it == 0 else None)
-            zero = np.zeros(len(todo))
-            nloc = _local_normals(coeffs[todo], zero, zero)
+            nloc = _origin_normals(coeffs[todo])
             bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
             if it == MAX_BISECTIONS or not bad.any():
                 break
@@ -551,8 +518,7 @@ class Projector:
             todo = todo[bad]
         self.frames, self.coeffs, self.degree, self.cond, self.reach, self.width = (
             frames, coeffs, degree, cond, reach, width)
-        zero = np.zeros(n)
-        self.normals = np.einsum("nji,nj->ni", frames, _local_normals(coeffs, zero, zero))
+        self.normals = np.einsum("nji,nj->ni", frames, _origin_normals(coeffs))
 
     def _choose(self, ids, index, valid, frames, noise, cond_max, coeffs, degree, cond, reach,
                 width, fits=None):
@@ -592,16 +558,7 @@ class Projector:
 
     def _median_sets(self):
         """Each point with its nearest graph neighbours: ``(N, MEDIAN_NEIGHBOURS)`` ids."""
-        g, n = self.conn.graph, len(self.points)
-        k = MEDIAN_NEIGHBOURS
-        sets = np.repeat(np.arange(n)[:, None], k, axis=1)
-        counts = np.diff(g.indptr)
-        rows = np.repeat(np.arange(n), counts)
-        order = np.lexsort((g.data, rows))
-        rank = np.arange(len(order)) - np.repeat(g.indptr[:-1], counts)
-        take = rank < k - 1
-        sets[rows[order][take], 1 + rank[take]] = g.indices[order][take]
-        self.median_sets = sets
+        self.median_sets = nearest_in_rows(self.conn.graph, MEDIAN_NEIGHBOURS)
 
     # -- queries ---------------------------------------------------------------------------
     def principal_curvatures(self) -> np.ndarray:

@@ -3,9 +3,13 @@ k-nearest connectivity the standalone projector builds."""
 
 import numpy as np
 import pc_surfaces as S
+from scipy import sparse
+from scipy.spatial import cKDTree
 
-from splineviz.pointcloud.cocone import knn_connectivity
+from splineviz.pointcloud.cocone import _pca_rings, knn_connectivity
 from splineviz.pointcloud.local_fits import (
+    nearest_in_rows,
+    neighbour_median,
     project_median,
     project_on_polynomials,
     sheet_mask,
@@ -112,6 +116,51 @@ def test_knn_connectivity_normals_and_ring_graph():
     pull = np.add.reduceat(d, g.indptr[:-1], axis=0) / counts[:, None]
     assert np.percentile(np.linalg.norm(pull, axis=1), 99) < 0.5
     assert len(conn.triangles) == 0
+
+
+def test_pca_rings_match_the_numpy_formulation():
+    rng = np.random.default_rng(4)
+    pts = S.sphere(2000, seed=5) + 0.003 * rng.normal(size=(2000, 3))
+    dist, idx = cKDTree(pts).query(pts, 13)
+    normals, ring, ring_dist = _pca_rings(pts, idx, dist, 6)
+    # reference: batched covariance eigenvectors, then the nearest point per angular sector
+    nb = pts[idx]
+    d = nb - nb.mean(axis=1, keepdims=True)
+    want = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))[1][:, :, 0]
+    assert np.allclose(np.abs(np.einsum("ij,ij->i", normals, want)), 1.0, atol=1e-12)
+    for i in rng.choice(len(pts), 200, replace=False):
+        n = normals[i]
+        t1 = np.cross(np.eye(3)[np.argmin(np.abs(n))], n)
+        t1 /= np.linalg.norm(t1)
+        t2 = np.cross(n, t1)
+        rel = pts[idx[i, 1:]] - pts[i]
+        sector = np.minimum(((np.arctan2(rel @ t2, rel @ t1) + np.pi) / (2 * np.pi) * 6)
+                            .astype(int), 5)
+        for s in range(6):
+            hit = np.flatnonzero(sector == s)
+            assert ring[i, s] == (idx[i, 1 + hit[0]] if len(hit) else -1)
+            if len(hit):
+                assert ring_dist[i, s] == dist[i, 1 + hit[0]]
+
+
+def test_neighbour_median_and_nearest_in_rows_match_numpy():
+    rng = np.random.default_rng(6)
+    values = rng.normal(size=500)
+    for k in (7, 8):  # odd and even counts
+        index = rng.integers(0, 500, size=(300, k))
+        assert np.array_equal(neighbour_median(values, index), np.median(values[index], axis=1))
+    # a graph with tied lengths and rows shorter than k
+    rows = rng.integers(0, 60, 400)
+    cols = rng.integers(0, 60, 400)
+    keep = rows != cols
+    g = sparse.coo_matrix((rng.integers(1, 4, keep.sum()).astype(float),
+                           (rows[keep], cols[keep])), shape=(70, 70)).tocsr()
+    got = nearest_in_rows(g, 7)
+    for i in range(70):
+        lo, hi = g.indptr[i], g.indptr[i + 1]
+        order = np.argsort(g.data[lo:hi], kind="stable")[:6]
+        want = np.r_[i, g.indices[lo:hi][order], np.full(6 - len(order), i)]
+        assert np.array_equal(got[i], want)
 
 
 def _eigen_fits(pts, index, valid, frames, scale, k, q_max, cond_max):
