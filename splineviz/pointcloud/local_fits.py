@@ -132,23 +132,25 @@ def _fits(points, index, valid, frames, scale, ids, widths, degrees, cond_max, w
     cond = np.zeros((n_scales, n_ids))
     spread = np.zeros((n_scales, n_ids))
     balance = np.zeros((n_scales, n_ids))
-    sigma = np.zeros(n_ids)
+    rss = np.zeros((n_scales, n_ids))
+    dof = np.zeros((n_scales, n_ids))
     n_chunks = _chunks(n_ids)
     if n_chunks == 1:
         _fits_range(0, n_ids, points, index, valid, frames, scale, ids, widths, degrees,
                     cond_max, with_noise, exponent_sum, pair, coeffs, degree, cond, spread,
-                    balance, sigma)
-        return coeffs, degree, cond, spread, balance, sigma
+                    balance, rss, dof)
+        return coeffs, degree, cond, spread, balance, rss, dof
     for c in numba.prange(n_chunks):
         _fits_range(c * n_ids // n_chunks, (c + 1) * n_ids // n_chunks, points, index, valid,
                     frames, scale, ids, widths, degrees, cond_max, with_noise, exponent_sum,
-                    pair, coeffs, degree, cond, spread, balance, sigma)
-    return coeffs, degree, cond, spread, balance, sigma
+                    pair, coeffs, degree, cond, spread, balance, rss, dof)
+    return coeffs, degree, cond, spread, balance, rss, dof
 
 
 @numba.njit(cache=True)
 def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degrees, cond_max,
-                with_noise, exponent_sum, pair, coeffs, degree, cond, spread, balance, sigma):
+                with_noise, exponent_sum, pair, coeffs, degree, cond, spread, balance, rss_out,
+                dof_out):
     """The fits of points ``ids[lo:hi]`` into the outputs of :func:`_fits`."""
     n_scales, n_nb = len(widths), index.shape[1]
     mono = np.empty((n_nb, _M2))
@@ -199,7 +201,7 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
                     mom[c] += w * mono[k, c]
                 for c in range(m):
                     rhs[c] += w * zs[k] * mono[k, c]
-                if with_noise and s == 0:
+                if with_noise:
                     for c in range(m2):
                         mom2[c] += w * w * mono[k, c]
             # the fit runs in coordinates divided by h: (x/h)^a (y/h)^b, so that the
@@ -247,7 +249,7 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
                 acc += (w * bl) ** 2
                 rss += w * (zs[k] - bz) ** 2
             spread[s, p] = acc
-            if with_noise and s == 0:
+            if with_noise:
                 # E[sum w r^2] = sigma^2 (sum w - tr(A^-1 B^T W^2 B)) for weighted LS
                 for r in range(m):
                     for c in range(m):
@@ -258,7 +260,8 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
                         col[r] = c2[r, c]
                     _solve_factored(a, m, col)
                     tr += col[c]
-                sigma[p] = np.sqrt(rss / max(sw - tr, 1e-12))
+                rss_out[s, p] = rss
+                dof_out[s, p] = max(sw - tr, 1e-12)
 
 
 def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
@@ -280,7 +283,7 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
     scales : sequence of (width h in spacings, degree q <= MAX_DEGREE)
     cond_max : float
     noise : bool
-        Also estimate the noise from the residuals of the first fit.
+        Also return the residuals of every fit and the noise they measure.
 
     Returns
     -------
@@ -295,17 +298,24 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
         the cloud (half a Gaussian), near 0 inside
     sigma : (P,) unbiased residual standard deviation of the first fit, in spacings (zero
         without ``noise``)
+    rss : (S, P) weighted residual sum of squares ``sum w r^2`` of each fit (spacings^2;
+        zero without ``noise``)
+    dof : (S, P) its expectation over the noise variance, ``sum w - tr(A^-1 B^T W^2 B)``
+        (zero without ``noise``)
     """
     widths = np.array([w for w, _ in scales], dtype=np.float64)
     degrees = np.array([q for _, q in scales], dtype=np.int64)
     use_allowed_cores()
-    return _fits(np.ascontiguousarray(points, dtype=np.float64),
-                 np.ascontiguousarray(index, dtype=np.int64),
-                 np.ascontiguousarray(valid, dtype=np.bool_),
-                 np.ascontiguousarray(frames, dtype=np.float64),
-                 np.ascontiguousarray(scale, dtype=np.float64),
-                 np.ascontiguousarray(ids, dtype=np.int64), widths, degrees,
-                 float(cond_max), bool(noise), _EXPONENT_SUM, _PAIR)
+    out = _fits(np.ascontiguousarray(points, dtype=np.float64),
+                np.ascontiguousarray(index, dtype=np.int64),
+                np.ascontiguousarray(valid, dtype=np.bool_),
+                np.ascontiguousarray(frames, dtype=np.float64),
+                np.ascontiguousarray(scale, dtype=np.float64),
+                np.ascontiguousarray(ids, dtype=np.int64), widths, degrees,
+                float(cond_max), bool(noise), _EXPONENT_SUM, _PAIR)
+    rss, dof = out[5], out[6]
+    sigma = np.sqrt(rss[0] / dof[0]) if noise else np.zeros(len(ids))
+    return (*out[:5], sigma, rss, dof)
 
 
 @numba.njit(cache=True)

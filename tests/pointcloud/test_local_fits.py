@@ -44,26 +44,29 @@ def test_quadratic_is_reproduced_at_every_width():
     f = lambda x, y: true[0] + true[1] * x + true[2] * y + true[3] * x * x \
         + true[4] * x * y + true[5] * y * y  # noqa: E731
     pts, index = _grid_patch(f)
-    coeffs, degree, _, _, _, sigma = _fit(pts, index, noise=True)
+    coeffs, degree, _, _, _, sigma, rss, _ = _fit(pts, index, noise=True)
     true[0] = 0.0  # local heights are relative to the point itself, which is on the surface
     for s in range(3):
         assert np.allclose(coeffs[s, 0, :6], true, atol=1e-9)
         assert np.allclose(coeffs[s, 0, 6:], 0.0, atol=1e-9)
     assert degree[:, 0].tolist() == [3, 2, 2]
-    assert sigma[0] < 1e-9
+    assert sigma[0] < 1e-9 and np.all(rss < 1e-15)
 
 
 def test_noise_estimate_and_variance_factor():
     """On a noisy plane: the residual estimate recovers sigma, and ``spread`` predicts the
     variance of the fitted height at the origin over repeated noise (local heights are
     relative to the noisy point itself: its own height is added back)."""
-    values, sigmas = [], []
+    values, sigmas, ratios = [], [], []
     for seed in range(60):
         pts, index = _grid_patch(lambda x, y: 0.0 * x, noise=0.1, seed=seed)
-        coeffs, _, _, spread, _, sigma = _fit(pts, index, noise=True)
+        coeffs, _, _, spread, _, sigma, rss, dof = _fit(pts, index, noise=True)
         values.append(coeffs[:, 0, 0] + pts[0, 2])
         sigmas.append(sigma[0])
+        ratios.append(rss[:, 0] / dof[:, 0])
     assert abs(np.mean(sigmas) / 0.1 - 1.0) < 0.1
+    # every fit's residual sum has the expectation dof * sigma^2 (the degree test's premise)
+    assert np.all(np.abs(np.mean(ratios, axis=0) / 0.1**2 - 1.0) < 0.1)
     predicted = 0.1 * np.sqrt(spread[:, 0])
     measured = np.std(values, axis=0)
     assert np.all(np.abs(measured / predicted - 1.0) < 0.3)
@@ -78,7 +81,7 @@ def test_scan_lines_fall_back_to_the_plane_and_borders_lean():
     pts = np.c_[np.r_[x, x], np.r_[np.zeros(61), np.ones(61)], 0.1 * np.r_[x, x]]
     pts = np.r_[[[0.0, 0.0, 0.0]], pts[pts[:, 0] ** 2 + pts[:, 1] ** 2 > 0]]
     index = np.arange(len(pts))[None]
-    coeffs, degree, _, _, _, _ = _fit(pts, index)
+    coeffs, degree = _fit(pts, index)[:2]
     assert degree[:, 0].tolist() == [1, 1, 1]
     assert np.allclose(coeffs[:, 0, 1], 0.1, atol=1e-6)
     pts, index = _grid_patch(lambda x, y: 0.0 * x, n=41)
