@@ -395,8 +395,9 @@ class Projector:
     stays within the confidence intervals of the narrower fits is taken
     (:func:`choose_scale`), so noise is averaged out where the surface is flat enough and
     curvature detail stops the widening; the widest fit turns cubic where an F-test on the
-    residuals finds cubic terms (:func:`choose_fit`).  Neighbourhoods are the ``ADAPTIVE_NEIGHBOURS``
-    nearest points whose oriented normals agree (the two sides of a thin part stay apart).
+    residuals finds cubic terms (:func:`choose_fit`).  Neighbourhoods are the
+    ``ADAPTIVE_NEIGHBOURS`` nearest points whose oriented normals agree (the two sides of a
+    thin part stay apart).
 
     With a number for ``smoothing`` the thesis' fixed scheme runs: breadth-first
     neighbourhoods (r_c rule and overlap rule, Fig. 7.6) and variable degree at that width.
@@ -517,8 +518,8 @@ class Projector:
         level from the residuals of the narrowest smoothing fit, pooled over the nearest
         points (median); clean points keep the interpolating variable-degree fit of §7.2,
         noisy ones take the widest of the ``SCALES`` fits that the intersection of confidence
-        intervals accepts, cubic where the residuals call for it (:func:`choose_fit`).  The LCS re-orientation of Fig. 7.5 runs on
-        the chosen polynomial.
+        intervals accepts, cubic where the residuals call for it (:func:`choose_fit`).  The
+        LCS re-orientation of Fig. 7.5 runs on the chosen polynomial.
         """
         pts, n = self.points, len(self.points)
         k = min(ADAPTIVE_NEIGHBOURS, n)

@@ -285,6 +285,29 @@ def test_cli_corrupt_file_is_one_line_error(qapp, tmp_path, capsys):
     assert not Path(tmp_path / "x.png").exists()
 
 
+def test_remesh_panel_edge_length_follows_a_cloud_read_before_the_window(qtbot, tmp_path,
+                                                                          shared_data):
+    """``splineviz cloud.xyz`` reads the cloud before the window opens: the uniform mode's
+    edge length is still twice the cloud's spacing, not the panel's placeholder of 1."""
+    from PySide6.QtCore import QSettings
+
+    from splineviz.model.opening import scene_from_path
+    from splineviz.model.summaries import cached_spacing
+
+    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
+    path = shared_data / "points" / "kitten.xyz"
+    w = MainWindow(scene=scene_from_path(str(path)), size=SIZE)
+    qtbot.addWidget(w)
+    w.show()
+    w.wait_idle()
+    qtbot.wait(50)  # the spacing job's result is delivered through the event loop
+    cloud = w.scene.of_kind(PointsNode)[-1]
+    assert w.remesh_panel.points is cloud
+    assert w.remesh_panel.edge.value() == pytest.approx(2.0 * cached_spacing(cloud.data),
+                                                        abs=1e-5)
+    w.close()
+
+
 def test_remesh_panel_runs_remesh_in_a_job_and_cancel_acts_at_once(window, shared_data):
     import time
 

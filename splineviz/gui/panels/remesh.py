@@ -81,6 +81,10 @@ class RemeshPanel(QWidget):
         scene.inserted.connect(self._inserted)
         scene.removed.connect(self._removed)
         self._set_points(None)
+        # a scene given to the window (the app reads the file named on its command line
+        # before the window opens) has its clouds already: they were inserted unseen
+        for node in scene.of_kind(PointsNode):
+            self._inserted(node)
 
     def _inserted(self, node) -> None:
         if isinstance(node, PointsNode):
