@@ -453,7 +453,6 @@ def cocone_connectivity(cloud: PointCloud | np.ndarray,
     return Connectivity(points, inverse, graph, normals, spacing, tree, faces)
 
 
-
 @numba.njit(cache=True, parallel=True)
 def _pca_rings(points, idx, dist, sectors):
     """PCA normals and sector rings of :func:`knn_connectivity`.
