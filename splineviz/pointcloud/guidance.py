@@ -19,6 +19,7 @@ from scipy import sparse
 from scipy.sparse import csgraph
 
 from splineviz.core.errors import SplinevizError
+from splineviz.pointcloud.local_fits import neighbour_median
 
 #: default angle (radians) subtended by one edge on the osculating circle
 DEFAULT_RHO = 0.35
@@ -116,7 +117,7 @@ def guidance_field(projector, edge_length: float | None = None, rho: float | Non
         raise GuidanceError(f"gradation must be positive, got {gradation}")
     kappa = np.abs(projector.principal_curvatures()).max(axis=1)
     # a median over each point's nearest neighbours removes single noisy curvature estimates
-    kappa = np.median(kappa[projector.median_sets], axis=1)
+    kappa = neighbour_median(kappa, projector.median_sets)
     ideal = 2.0 * np.sin(rho / 2.0) / np.maximum(kappa, 1e-300)
     # never finer than the samples: where the cloud is sparse, the local spacing sets the floor
     floor = SAMPLING_FLOOR * projector.scale
