@@ -685,10 +685,13 @@ class RayCaster:
                 nrel = cla.empty(q, n, np.int32)
                 code_buf = cla.empty(q, n, np.uint32)
                 _, ny, nz = self._volume.shape
-                # room in the pool for every candidate brick
+                # room in the pool for every candidate brick, and their entries taken
                 ijk = np.stack(np.unravel_index(cells, self._cells))
-                bricks = len(np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:])))
-                self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + bricks)
+                bricks = np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:]))
+                self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + len(bricks))
+                self._ray_kernel("brick_entries")(
+                    q, (len(bricks),), None, cla.to_device(q, bricks.astype(np.int32)).data,
+                    *self._cache_args()[:-1])
                 self._ray_kernel("tet_codes")(
                     q, (n,), None, self._data.data, np.int32(self._strides[0]),
                     np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
