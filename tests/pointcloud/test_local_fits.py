@@ -53,6 +53,20 @@ def test_quadratic_is_reproduced_at_every_width():
     assert sigma[0] < 1e-9 and np.all(rss < 1e-15)
 
 
+def test_quartic_is_reproduced_by_the_degree_4_fit():
+    # the degree test's alternative (projection.DETAIL_SCALE): exact on a quartic graph, whose
+    # quartic part a quadratic at the same width misses
+    rng = np.random.default_rng(3)
+    true = np.r_[0.0, 0.1 * rng.normal(size=14)]
+    e = np.array([(t - b, b) for t in range(5) for b in range(t + 1)])
+    f = lambda x, y: sum(c * x**a * y**b for c, (a, b) in zip(true, e, strict=True))  # noqa: E731
+    pts, index = _grid_patch(f)
+    coeffs, degree, _, _, _, _, rss, _ = _fit(pts, index, ((3.4, 4), (3.4, 2)), noise=True)
+    assert degree[:, 0].tolist() == [4, 2]
+    assert np.allclose(coeffs[0, 0], true, atol=1e-8)
+    assert rss[0, 0] < 1e-15 < rss[1, 0]
+
+
 def test_noise_estimate_and_variance_factor():
     """On a noisy plane: the residual estimate recovers sigma, and ``spread`` predicts the
     variance of the fitted height at the origin over repeated noise (local heights are
@@ -60,7 +74,8 @@ def test_noise_estimate_and_variance_factor():
     values, sigmas, ratios = [], [], []
     for seed in range(60):
         pts, index = _grid_patch(lambda x, y: 0.0 * x, noise=0.1, seed=seed)
-        coeffs, _, _, spread, _, sigma, rss, dof = _fit(pts, index, noise=True)
+        coeffs, _, _, spread, _, sigma, rss, dof = _fit(pts, index, SCALES + ((3.4, 4),),
+                                                        noise=True)
         values.append(coeffs[:, 0, 0] + pts[0, 2])
         sigmas.append(sigma[0])
         ratios.append(rss[:, 0] / dof[:, 0])
