@@ -41,6 +41,7 @@ _EXPONENT_SUM, _PAIR = _tables()
 # pymeshlab bring TBB 2021.5); OpenMP first, TBB is never probed
 numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
 
+
 def allowed_cores() -> int:
     """Number of cores this process may run on (a GUI job process leaves the GUI one:
     :mod:`splineviz.gui.jobs`)."""
