@@ -3,14 +3,15 @@
 #   ./install.sh          the application
 #   ./install.sh --dev    the application, its tests and the first-party plugins
 # System packages (headless OpenGL, Xvfb for Qt windows, binutils for the PoCL OpenCL
-# compiler, python3-venv) are installed with apt when missing and we are root or have sudo.
+# compiler, Debian's PoCL for processors newer than the LLVM of the pip wheel's PoCL,
+# python3-venv) are installed with apt when missing and we are root or have sudo.
 set -euo pipefail
 cd "$(dirname "$0")"
 
 APT_PACKAGES=(python3-venv binutils xvfb xauth libgl1 libegl1 libegl-mesa0 libgl1-mesa-dri
               libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
               libxcb-render-util0 libxcb-shape0 libxcb-xinerama0 libxcb-randr0 libdbus-1-3
-              libfontconfig1 libusb-1.0-0 libgomp1)
+              libfontconfig1 libusb-1.0-0 libgomp1 pocl-opencl-icd)
 
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then

@@ -54,6 +54,10 @@ class Device:
     has_fp64: bool
 
 
+#: the smallest program every working OpenCL compiler builds
+_PROBE_KERNEL = "__kernel void probe(__global float *a) { a[0] = sqrt(a[1]); }"
+
+
 def _kind(cl, dev) -> str:
     if dev.type & cl.device_type.GPU:
         return "gpu"
@@ -110,8 +114,12 @@ def _select(preference: str) -> Device:
         try:
             ctx = cl.Context([dev])
             queue = cl.CommandQueue(ctx)
-        except cl.Error as exc:
-            errors.append(f"{name}: {exc}")
+            # a device whose compiler cannot build for this processor (PoCL 3.0's LLVM on a
+            # CPU newer than it knows: "unknown target CPU 'generic'") must not hide a
+            # working one, such as Debian's PoCL beside the pip wheel's
+            cl.Program(ctx, _PROBE_KERNEL).build()
+        except (cl.Error, RuntimeError) as exc:
+            errors.append(f"{name}: {str(exc).strip().splitlines()[0]}")
             continue
         fp64 = bool(getattr(dev, "double_fp_config", 0))
         return Device(ctx, queue, dev, name, kind, fp64)
