@@ -11,9 +11,9 @@ import pytest
 
 from splineviz.model.session import load_scene, save_scene
 
-from .helpers import DATA
 from .golden import frames as golden_frames
 from .golden import sessions as golden_sessions
+from .helpers import DATA
 
 RECORDED = json.loads(golden_frames.RECORD.read_text())
 
