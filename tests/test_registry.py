@@ -152,3 +152,13 @@ def test_plugins_are_found_when_only_io_and_core_are_imported(tmp_path):
     out = subprocess.run([sys.executable, "-c", CHECK, str(tmp_path)], capture_output=True,
                          text=True, env=env, cwd=tmp_path, timeout=300)
     assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]
+
+
+def test_each_extension_point_has_one_registry():
+    from splineviz import plugins
+    from splineviz.core.sources import SOURCES
+    from splineviz.core.splines import MODELS
+    from splineviz.io.registry import FORMATS
+
+    assert all(isinstance(r, Registry) for r in (MODELS, FORMATS, SOURCES))
+    assert plugins.SOURCES is SOURCES  # the old import path names the same registry
