@@ -134,11 +134,17 @@ class Registry(MutableMapping, Generic[V]):
     def lookup(self, key, default=_RAISE) -> V:
         """The entry of ``key``, loading extensions first when it is missing.
 
+        Parameters
+        ----------
+        key : hashable
+        default : optional
+            Returned when ``key`` is still missing after loading; without it, that raises.
+
         Raises
         ------
         error
-            ``"unknown <what> <key>; choose one of <names>"`` when no built-in entry or
-            extension has ``key`` and no ``default`` is given.
+            ``"unknown <what> <key>; choose one of <keys>"`` when neither a built-in entry
+            nor an extension has ``key``.
         """
         if key not in self._entries:
             load_extensions()
@@ -147,11 +153,9 @@ class Registry(MutableMapping, Generic[V]):
         except KeyError:
             if default is not _RAISE:
                 return default
-            names = ", ".join(self.describe(k) if not isinstance(k, str) else k
-                              for k in self._entries)
-            raise self.error(f"unknown {self.what} {self.describe(key)}; "
-                             + (f"choose one of {names}" if names else "none is installed")
-                             ) from None
+        keys = ", ".join(k if isinstance(k, str) else self.describe(k) for k in self._entries)
+        choice = f"choose one of {keys}" if keys else "none is installed"
+        raise self.error(f"unknown {self.what} {self.describe(key)}; {choice}")
 
     def names(self) -> list:
         """Every key, extensions loaded, in registration order."""
