@@ -44,8 +44,9 @@ done
 # not the first time the model is chosen in the app
 .venv/bin/python -c "from splineviz.compute.to_tables import cell_classes, class_points, stencils, subcell_masks; stencils(2); cell_classes(); class_points(2); subcell_masks()" \
   || echo "install.sh: could not prepare the ray-casting tables (they are made on first use)" >&2
-# the point projection's numba kernels into numba's cache (10-20 s once, not at first use)
-.venv/bin/python -c "from splineviz.pointcloud.local_fits import compile_kernels; compile_kernels()" \
+# the point projection's numba kernels (the fits and the connectivity's normals) into numba's
+# cache (10-20 s once, not at first use)
+.venv/bin/python -c "from splineviz.pointcloud import cocone, local_fits; local_fits.compile_kernels(); cocone.compile_kernels()" \
   || echo "install.sh: could not compile the projection kernels (they compile on first use)" >&2
 # ... and the mesher's (the advancing front's geometry tests, the valence flips, the spline
 # front's evaluation of type-6 splines)

@@ -2,11 +2,27 @@
 
 The public API is imported lazily so that ``import splineviz`` stays cheap and never pulls in
 Qt, VTK or OpenCL before they are needed.
+
+This package also installs the plugin loader as the registries' loader hook (models, formats,
+sources: :mod:`splineviz.core.registry`): a registry that misses a name, or lists its entries,
+loads the plugins first, so that ``core``, ``io`` and ``model`` find plugin entries without
+importing :mod:`splineviz.plugins` (an import-linter contract forbids it).
 """
 
 from importlib import import_module
 
+from splineviz.core import registry as _registry
+
 __version__ = "0.1.0"
+
+
+def _load_plugins() -> None:
+    # imported by name, like the lazy public API below: plugin discovery starts on the first
+    # registry miss, not on ``import splineviz``
+    import_module("splineviz.plugins").ensure_loaded()
+
+
+_registry.set_loader(_load_plugins)
 
 # public name -> "module:attribute"
 _LAZY = {
@@ -16,7 +32,7 @@ _LAZY = {
     "VolumeError": "splineviz.core.volume:VolumeError",
     "PointCloud": "splineviz.core.points:PointCloud",
     "PointCloudError": "splineviz.core.points:PointCloudError",
-    "build_spline": "splineviz.plugins:build_spline",  # core's, plus plugin models
+    "build_spline": "splineviz.core.splines:build_spline",  # plugin models through the hook
     "testfunctions": "splineviz.core.testfunctions:",
     "Camera": "splineviz.core.camera:Camera",
     "RayCaster": "splineviz.compute.raycast:RayCaster",

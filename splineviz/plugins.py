@@ -6,11 +6,16 @@ A plugin is any installed distribution that declares, in its ``pyproject.toml``:
     myplugin = "my_package:register"
 
 ``register(api)`` receives a :class:`PluginAPI` and adds readers/writers, synthetic data
-sources and spline models through it. Discovery (:func:`discover`) only reads installed
-metadata; plugin code is imported on the first :func:`ensure_loaded` call (the first file read,
-or GUI start-up), never on ``import splineviz``. A plugin that fails to import, raises in
-``register`` or registers something invalid is recorded in :func:`failures`, logged, and
-skipped: what it registered is rolled back, and start-up goes on.
+sources and spline models through it, into the registries of :mod:`splineviz.io.registry`,
+:mod:`splineviz.core.sources` and :mod:`splineviz.core.splines.registry`. Discovery
+(:func:`discover`) only reads installed metadata; plugin code is imported on the first
+:func:`ensure_loaded` call, never on ``import splineviz``. ``import splineviz`` installs
+:func:`ensure_loaded` as the registries' loader hook (:func:`splineviz.core.registry.set_loader`),
+so the first lookup that misses or lists a registry (the first file read, an unknown model name,
+the GUI's Sources menu) loads the plugins, whichever layer asks: ``io``, ``core`` and ``model``
+never import this module. A plugin that fails to import, raises in ``register`` or registers
+something invalid is recorded in :func:`failures`, logged, and skipped: what it registered is
+rolled back, and start-up goes on.
 
 Plugins are code the user chose to install; session files never name or load plugins.
 """
@@ -24,6 +29,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import metadata
 
+from splineviz.core.sources import SOURCES, Source, source_volume, sources  # noqa: F401
+from splineviz.core.splines import build_spline  # noqa: F401  (finds plugin models too)
 from splineviz.io.errors import PluginError
 
 GROUP = "splineviz.plugins"
@@ -31,50 +38,6 @@ GROUP = "splineviz.plugins"
 DISABLE_ENV = "SPLINEVIZ_DISABLE_PLUGINS"
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class Source:
-    """A synthetic data source: a scalar function sampled on a grid.
-
-    Attributes
-    ----------
-    name : str
-        Registry key, e.g. ``"marschner-lobb"``.
-    title : str
-        Human-readable name for menus.
-    function : callable
-        Vectorised ``f(x, y, z) -> values`` over arrays of equal shape.
-    bounds : ((xmin, xmax), (ymin, ymax), (zmin, zmax))
-    shape : (3,) tuple of int
-        Default sampling grid.
-    isovalue : float or None
-        A suggested isovalue.
-    plugin : str
-    description : str
-    """
-
-    name: str
-    title: str
-    function: Callable
-    bounds: tuple
-    shape: tuple[int, int, int] = (64, 64, 64)
-    isovalue: float | None = None
-    plugin: str = ""
-    description: str = ""
-
-    def volume(self, shape=None):
-        """Sample the source on ``shape`` (default :attr:`shape`) -> :class:`~splineviz.Volume`."""
-        from splineviz.core.volume import Volume
-
-        shp = tuple(int(n) for n in (shape or self.shape))
-        if len(shp) != 3 or min(shp) < 2:
-            raise PluginError(f"source {self.name!r} needs a shape of three sizes >= 2, got {shp}")
-        return Volume.from_function(self.function, shp, self.bounds)
-
-
-#: name -> Source, filled by plugins
-SOURCES: dict[str, Source] = {}
 
 
 @dataclass
@@ -130,7 +93,7 @@ class PluginAPI:
                                      plugin=self.plugin)
 
         def undo():
-            registry.FORMATS.pop((kind, name), None)
+            registry.FORMATS.unregister((kind, name))
 
         self._staged.append((f"{kind} format {name}", do, undo))
 
@@ -152,10 +115,10 @@ class PluginAPI:
         src = Source(name, title or name, function, b, shp, isovalue, self.plugin, description)
 
         def do():
-            SOURCES[name] = src
+            SOURCES.register(name, src)
 
         def undo():
-            SOURCES.pop(name, None)
+            SOURCES.unregister(name)
 
         self._staged.append((f"source {name}", do, undo))
 
@@ -203,6 +166,9 @@ class PluginAPI:
 
 _RECORDS: dict[str, PluginRecord] = {}
 _LOADED = False
+# set while load_plugins runs: a registry lookup made by a plugin's register() on the loading
+# thread (the lock is reentrant) must not start loading again
+_LOADING = False
 _LOCK = threading.RLock()
 
 
@@ -225,37 +191,46 @@ def load_plugins(*, reload: bool = False) -> list[PluginRecord]:
     Failures never propagate: a plugin whose import or ``register`` raises is marked
     ``"failed"`` with a one-line reason, logged, and skipped.
     """
-    global _LOADED
+    global _LOADED, _LOADING
     with _LOCK:
-        if _LOADED and not reload:
+        if _LOADING or (_LOADED and not reload):
             return list(_RECORDS.values())
-        disabled = _disabled()
-        for ep in metadata.entry_points(group=GROUP):
-            if ep.name in _RECORDS and _RECORDS[ep.name].state == "loaded":
-                continue
-            dist = getattr(getattr(ep, "dist", None), "name", "") or ""
-            rec = PluginRecord(ep.name, ep.value, dist)
-            _RECORDS[ep.name] = rec
-            if "all" in disabled or ep.name in disabled:
-                rec.state = "disabled"
-                continue
-            try:
-                register = ep.load()
-                if not callable(register):
-                    raise PluginError(f"entry point {ep.value} is not callable")
-                api = PluginAPI(ep.name)
-                register(api)
-                rec.registered = api._commit()
-                rec.state = "loaded"
-            except BaseException as exc:  # noqa: BLE001 - a plugin must never break start-up
-                if isinstance(exc, KeyboardInterrupt):
-                    raise
-                rec.state = "failed"
-                rec.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
-                log.warning("plugin %s (%s) failed and was skipped: %s", ep.name, ep.value,
-                            rec.error)
+        _LOADING = True
+        try:
+            _load_entry_points()
+        finally:
+            _LOADING = False
         _LOADED = True
         return list(_RECORDS.values())
+
+
+def _load_entry_points() -> None:
+    """Import and register each entry point not loaded yet (the caller holds ``_LOCK``)."""
+    disabled = _disabled()
+    for ep in metadata.entry_points(group=GROUP):
+        if ep.name in _RECORDS and _RECORDS[ep.name].state == "loaded":
+            continue
+        dist = getattr(getattr(ep, "dist", None), "name", "") or ""
+        rec = PluginRecord(ep.name, ep.value, dist)
+        _RECORDS[ep.name] = rec
+        if "all" in disabled or ep.name in disabled:
+            rec.state = "disabled"
+            continue
+        try:
+            register = ep.load()
+            if not callable(register):
+                raise PluginError(f"entry point {ep.value} is not callable")
+            api = PluginAPI(ep.name)
+            register(api)
+            rec.registered = api._commit()
+            rec.state = "loaded"
+        except BaseException as exc:  # noqa: BLE001 - a plugin must never break start-up
+            if isinstance(exc, KeyboardInterrupt):
+                raise
+            rec.state = "failed"
+            rec.error = f"{type(exc).__name__}: {exc}".splitlines()[0]
+            log.warning("plugin %s (%s) failed and was skipped: %s", ep.name, ep.value,
+                        rec.error)
 
 
 def ensure_loaded() -> None:
@@ -267,33 +242,3 @@ def ensure_loaded() -> None:
 def failures() -> list[PluginRecord]:
     """Plugins that failed to load, with their reasons (for an "About plugins" dialog)."""
     return [r for r in _RECORDS.values() if r.state == "failed"]
-
-
-def sources() -> dict[str, Source]:
-    """All synthetic data sources offered by the loaded plugins (for the GUI's Sources menu)."""
-    ensure_loaded()
-    return dict(SOURCES)
-
-
-def source_volume(name: str, shape=None):
-    """Sample the source ``name`` -> :class:`~splineviz.Volume`."""
-    srcs = sources()
-    if name not in srcs:
-        names = ", ".join(sorted(srcs)) or "none"
-        raise PluginError(f"unknown source {name!r}; available: {names}")
-    return srcs[name].volume(shape)
-
-
-def build_spline(volume, model: str = "to-quadratic", **kwargs):
-    """:func:`splineviz.core.splines.build_spline`, with plugin models available.
-
-    ``splineviz.build_spline`` points here: a model name that the core does not know loads
-    the plugins (once) before giving up, so a model plugin works without any change to core
-    code, while ``import splineviz`` and built-in models never import plugin code.
-    """
-    from splineviz.core.splines import MODELS
-    from splineviz.core.splines import build_spline as core_build_spline
-
-    if model not in MODELS:
-        ensure_loaded()
-    return core_build_spline(volume, model, **kwargs)

@@ -99,12 +99,6 @@ def _cached_caster(key, make, budget: int):
     return rc, seconds, False
 
 
-def clear_worker_cache() -> None:
-    """Drop this process's cached brick ray casters."""
-    with _cache_lock:
-        _cache.clear()
-
-
 @dataclass(frozen=True)
 class BrickTask:
     """What a worker needs to render one brick (small: the volume travels separately)."""

@@ -175,7 +175,19 @@ class ChunkedVolume:
     @classmethod
     def from_dask(cls, array, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0), levels=(),
                   name: str = "dask array") -> ChunkedVolume:
-        """A chunked volume of any 3-D dask array (see :meth:`Volume.from_dask`)."""
+        """A volume of a 3-D dask array, read lazily brick by brick, never whole (also
+        spelt ``Volume.from_dask``).
+
+        :class:`splineviz.RayCaster`-like rendering of it goes through
+        :class:`splineviz.compute.bricked.BrickedRayCaster`.
+
+        Parameters
+        ----------
+        array : (nx, ny, nz) dask array
+        spacing, origin : (3,) float
+        levels : sequence of :class:`Level`, coarser versions
+        name : str
+        """
         return cls(array, spacing, origin, tuple(levels), name)
 
     @classmethod
@@ -265,3 +277,9 @@ def coarsen_level(level: Level, max_samples: int) -> Level:
     origin = tuple(o + 0.5 * (factors[a] - 1) * s
                    for a, (o, s) in enumerate(zip(level.origin, level.spacing, strict=True)))
     return Level(data.astype(np.float32), spacing, origin)
+
+
+# ``Volume.from_dask`` (the README's spelling) returns a ChunkedVolume, so it is set here, where
+# ChunkedVolume lives: volume.py must not import this module, which builds on it. The package
+# ``splineviz.core`` imports this module, so the name exists wherever Volume can be imported.
+Volume.from_dask = staticmethod(ChunkedVolume.from_dask)

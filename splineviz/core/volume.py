@@ -36,6 +36,10 @@ class Volume:
     >>> v = Volume(np.zeros((4, 5, 6)), spacing=(1, 1, 2))
     >>> v.shape, v.bounds[2]
     ((4, 5, 6), (0.0, 10.0))
+
+    ``Volume.from_dask(array, spacing, origin)`` wraps a dask array as a lazily read
+    :class:`~splineviz.core.chunked.ChunkedVolume`; :mod:`splineviz.core.chunked` defines it,
+    since the chunked volume builds on this module and not the reverse.
     """
 
     data: np.ndarray
@@ -116,23 +120,3 @@ class Volume:
         spacing = tuple((hi - lo) / max(n - 1, 1)
                         for (lo, hi), n in zip(bounds, shape, strict=True))
         return cls(func(x, y, z), spacing=spacing, origin=tuple(lo for lo, _ in bounds))
-
-    @staticmethod
-    def from_dask(array, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0), levels=(),
-                  name: str = "dask array"):
-        """A volume of a 3-D dask array, read lazily brick by brick, never whole.
-
-        Returns a :class:`splineviz.core.chunked.ChunkedVolume` (same geometry convention);
-        :class:`splineviz.RayCaster`-like rendering of it goes through
-        :class:`splineviz.compute.bricked.BrickedRayCaster`.
-
-        Parameters
-        ----------
-        array : (nx, ny, nz) dask array
-        spacing, origin : (3,) float
-        levels : sequence of :class:`splineviz.core.chunked.Level`, coarser versions
-        name : str
-        """
-        from splineviz.core.chunked import ChunkedVolume
-
-        return ChunkedVolume.from_dask(array, spacing, origin, levels, name)

@@ -355,27 +355,6 @@ class View3D(QObject):
             time.sleep(0.005)
         raise TimeoutError("exact frames did not arrive in time")
 
-    def measure_interaction(self, steps: int = 20, degrees: float = 3.0) -> dict:
-        """Rotate the camera ``steps`` times as a drag would (previews) and time the frames.
-
-        Returns
-        -------
-        dict with ``mean_ms``, ``median_ms``, ``fps`` and the window ``size``.
-        """
-        self.spline_scene.set_interacting(True)
-        times = []
-        try:
-            for _ in range(steps):
-                self.plotter.camera.Azimuth(degrees)
-                t = time.perf_counter()
-                self.plotter.render()
-                times.append(time.perf_counter() - t)
-        finally:
-            self.spline_scene.set_interacting(False)
-        t = np.asarray(times)
-        return {"mean_ms": 1000 * t.mean(), "median_ms": 1000 * np.median(t),
-                "fps": 1.0 / np.median(t), "size": self.spline_scene.window_size()}
-
     # -- camera --------------------------------------------------------------------------
 
     def standard_view(self, name: str | None) -> None:

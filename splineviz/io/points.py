@@ -313,9 +313,6 @@ register_format("off", (".off",), _read_off, None, kind="points",
 
 def load_point_data(path, *, format=None) -> PointData:
     """Read a point file as stored (see :func:`read_points`)."""
-    from splineviz.plugins import ensure_loaded
-
-    ensure_loaded()
     p = regular_input(path)
     fmt = find_format(p, "points", name=format)
     with reader_errors(p.name, fmt.name):

@@ -5,7 +5,8 @@ A :class:`Format` has a name, a kind (``"volume"``, ``"points"``, ``"mesh"`` or
 ``sniff(head: bytes) -> bool`` that recognises the format from the first :data:`SNIFF_BYTES`
 bytes. Lookup goes by suffix first; when the suffix is unknown, or the content contradicts it
 (e.g. a PNG renamed ``.nrrd``), the content decides. Plugins add formats with
-:func:`register_format`.
+:func:`register_format`; :data:`FORMATS` is a :class:`~splineviz.core.registry.Registry`, so
+listing or looking up formats loads the plugins first.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from splineviz.core.registry import Registry
 from splineviz.io.errors import CorruptFileError, UnknownFormatError
 
 #: bytes read from the start of a file to recognise its format
@@ -57,7 +59,8 @@ class Format:
 
 
 #: (kind, name) -> Format
-FORMATS: dict[tuple[str, str], Format] = {}
+FORMATS: Registry[Format] = Registry("format", error=UnknownFormatError,
+                                     describe=lambda key: f"{key[1]!r} ({key[0]})")
 
 
 def register_format(name, extensions, reader=None, writer=None, *, kind, sniff=None,
@@ -89,17 +92,16 @@ def register_format(name, extensions, reader=None, writer=None, *, kind, sniff=N
         (e if e.startswith(".") else "." + e).lower() for e in ([extensions] if isinstance(
             extensions, str) else extensions)
     )
-    if (kind, name) in FORMATS and not replace:
-        raise ValueError(f"a {kind} format named {name!r} is already registered")
     fmt = Format(name, kind, exts, reader, writer, sniff, bool(folder), description, plugin)
-    FORMATS[(kind, name)] = fmt
-    return fmt
+    return FORMATS.register((kind, name), fmt, replace=replace)
 
 
 def formats(kind: str, *, mode: str = "read") -> list[Format]:
-    """Registered formats of ``kind`` that can ``mode`` (``"read"`` or ``"write"``)."""
+    """Registered formats of ``kind`` that can ``mode`` (``"read"`` or ``"write"``), plugin
+    formats included."""
     attr = "reader" if mode == "read" else "writer"
-    return [f for (k, _), f in FORMATS.items() if k == kind and getattr(f, attr) is not None]
+    return [f for (k, _), f in FORMATS.entries().items()
+            if k == kind and getattr(f, attr) is not None]
 
 
 def _names(kind: str, mode: str) -> str:
@@ -148,7 +150,7 @@ def find_format(path, kind: str, *, mode: str = "read", name: str | None = None)
     """
     path = Path(os.fspath(path))
     if name is not None:
-        fmt = FORMATS.get((kind, name))
+        fmt = FORMATS.lookup((kind, name), None)
         if fmt is None or (fmt.reader if mode == "read" else fmt.writer) is None:
             raise UnknownFormatError(
                 f"no {kind} format {name!r} can {mode}; valid formats: {_names(kind, mode)}"

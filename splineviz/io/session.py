@@ -485,8 +485,8 @@ class Session(_Model):
         """The :class:`~splineviz.Volume` behind ``obj_id`` (a VolumeFile, a Source, or an
         Isosurface, whose input is read); ``allow_outside`` as in
         :func:`~splineviz.io.volumes.read_volume` (for the file's own header)."""
+        from splineviz.core.sources import source_volume
         from splineviz.io.volumes import read_volume
-        from splineviz.plugins import source_volume
 
         obj = self.object(obj_id)
         if obj.type == "Isosurface":
@@ -740,7 +740,7 @@ def _resolve(session: Session, session_file: Path) -> None:
 
 
 def _check_data(session: Session, repoint) -> None:
-    from splineviz.plugins import sources
+    from splineviz.core.sources import sources
 
     for obj_id, p in session.data_files():
         while True:

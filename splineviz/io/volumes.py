@@ -782,9 +782,6 @@ _RAW_OPTIONS = ("dims", "dtype", "byteorder", "offset")
 def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="little",
                      offset=0, allow_outside=False) -> VolumeData:
     """Read a volume file in its own sample type (see :func:`read_volume`)."""
-    from splineviz.plugins import ensure_loaded
-
-    ensure_loaded()
     p = regular_input(path, allow_dir=True)
     if dims is not None or dtype is not None:
         format = format or "raw"
@@ -955,9 +952,6 @@ def write_volume(path, volume, *, format=None) -> Path:
     Path
         The written file.
     """
-    from splineviz.plugins import ensure_loaded
-
-    ensure_loaded()
     vol = volume if isinstance(volume, Volume) else Volume(volume)
     p = Path(os.fspath(path)).expanduser()
     fmt = find_format(p, "volume", mode="write", name=format)

@@ -9,7 +9,7 @@ from splineviz.model.nodes import SectionNode
 
 def isosurface_spline(scene, iso):
     """The spline of an isosurface node over its volume's active samples."""
-    from splineviz.plugins import build_spline
+    from splineviz.core.splines import build_spline
 
     return build_spline(scene.volume_of(iso).active, iso.model, **iso.model_options())
 

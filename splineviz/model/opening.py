@@ -150,10 +150,10 @@ def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
 
 def override(scene: Scene, *, isovalue=None, model=None) -> None:
     """Set the isovalue and/or spline model of every isosurface (command-line flags)."""
-    from splineviz.plugins import ensure_loaded
+    from splineviz.core.registry import load_extensions
 
     if model is not None:
-        ensure_loaded()  # a plugin model named on the command line
+        load_extensions()  # a plugin model named on the command line
     if (isovalue is not None or model is not None) and not scene.isosurfaces:
         raise SplinevizError("--iso and --model need a volume; this scene has no isosurface")
     for iso in scene.isosurfaces:

@@ -239,10 +239,10 @@ def _plane_volume(session: Session, obj) -> str | None:
 def apply_session(scene: Scene, session: Session, data: dict | None = None) -> Scene:
     """Replace the contents of ``scene`` by ``session`` (``data`` from
     :func:`read_session_data`; read here when None). Ids and every property are kept."""
-    from splineviz.plugins import ensure_loaded
+    from splineviz.core.registry import load_extensions
 
     data = read_session_data(session) if data is None else data
-    ensure_loaded()  # plugin models named by isosurfaces
+    load_extensions()  # plugin models named by isosurfaces
     scene.clear()
     for obj in session.objects:
         p = obj.properties

@@ -24,7 +24,7 @@ from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from splineviz.core.errors import SplinevizError
 from splineviz.core.points import PointCloud
-from splineviz.pointcloud.local_fits import allowed_cores, use_allowed_cores
+from splineviz.pointcloud.threads import allowed_cores, use_allowed_cores
 
 #: half opening angle of the co-cone around the plane orthogonal to the pole (Cocone: pi/8)
 COCONE_ANGLE = np.pi / 8
@@ -563,3 +563,11 @@ def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Con
     nearest = nearest[:, :neighbours] if neighbours > 0 else None
     return Connectivity(points, inverse, graph, normals, spacing, tree,
                         np.empty((0, 3), dtype=np.int64), nearest)
+
+
+def compile_kernels() -> None:
+    """Compile the kernels into numba's on-disk cache (install.sh runs this once)."""
+    _flip_in_order(np.ones((2, 3)), np.arange(2), np.zeros(2, dtype=np.int32))
+    points = np.random.default_rng(0).normal(size=(12, 3))
+    order = np.argsort(np.linalg.norm(points[:, None] - points[None], axis=-1), axis=1)[:, :5]
+    _pca_rings(points, np.ascontiguousarray(order), np.ones(order.shape), 6)

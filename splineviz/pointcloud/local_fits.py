@@ -14,10 +14,10 @@ monomial basis ordered by total degree ``(1, x, y, x^2, xy, y^2, ...)``.
 
 from __future__ import annotations
 
-import os
-
 import numba
 import numpy as np
+
+from splineviz.pointcloud.threads import use_allowed_cores
 
 #: highest degree of the smoothing fits (their moments reach degree 2 * MAX_DEGREE)
 MAX_DEGREE = 4
@@ -35,26 +35,6 @@ def _tables():
 
 
 _EXPONENT_SUM, _PAIR = _tables()
-
-# numba's parallel loops on OpenMP (libgomp1, which install.sh installs): numba tries TBB
-# first, and warns when the TBB already loaded in the process is too old (open3d and
-# pymeshlab bring TBB 2021.5); OpenMP first, TBB is never probed
-numba.config.THREADING_LAYER_PRIORITY = ["omp", "tbb", "workqueue"]
-
-
-def allowed_cores() -> int:
-    """Number of cores this process may run on (a GUI job process leaves the GUI one:
-    :mod:`splineviz.gui.jobs`)."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # no affinity on this platform
-        return os.cpu_count() or 1
-
-
-def use_allowed_cores() -> None:
-    """numba's threads for the next parallel loops: one per allowed core."""
-    numba.set_num_threads(max(1, min(allowed_cores(), numba.config.NUMBA_NUM_THREADS)))
-
 
 #: points per chunk of the parallel loops: batches of fewer than two chunks (the front's 64
 #: apexes) run on the calling thread without entering a parallel region, whose start costs
@@ -826,9 +806,6 @@ def compile_kernels() -> None:
     compilation takes 10-20 s, a cached load well under one)."""
     from scipy import sparse
 
-    from splineviz.pointcloud.cocone import _flip_in_order, _pca_rings
-
-    _flip_in_order(np.ones((2, 3)), np.arange(2), np.zeros(2, dtype=np.int32))
     rng = np.random.default_rng(0)
     points = rng.normal(size=(12, 3))
     index = np.argsort(np.linalg.norm(points[:, None] - points[None], axis=-1), axis=1)
@@ -843,7 +820,5 @@ def compile_kernels() -> None:
                            np.full(12, 3.0), ids, points, 3)
     project_median(points, frames, scale, np.zeros((12, 21)), np.full(12, 5), np.full(12, 3.0),
                    index[:, :7], points, 3)
-    order = np.ascontiguousarray(index[:, :5])
-    _pca_rings(points, order, np.ones(order.shape), 6)
     neighbour_median(scale, index)
     nearest_in_rows(sparse.csr_matrix(np.ones((12, 12))), 7)

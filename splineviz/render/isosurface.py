@@ -409,11 +409,6 @@ class IsosurfaceLayer:
                 self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
             return self._caster, self._preview
 
-    @property
-    def exact_path(self) -> str:
-        """``"opencl"`` or ``"numpy"``: how exact frames of this layer are made."""
-        return self._casters()[0].stats.get("path", "numpy")
-
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
                 blocking: bool = True, progress=None,
                 cancelled=None) -> RenderedFrame | None:

@@ -239,14 +239,6 @@ class FrameQuad:
     def set_view_scale(self, sx: float, sy: float) -> None:
         self._uniforms.SetUniform2f("viewScale", (float(sx), float(sy)))
 
-    def set_image(self, hit: np.ndarray, normal_rgba: np.ndarray, depth: np.ndarray) -> None:
-        """Upload a frame: ``normal_rgba`` (H, W, 4) uint8 from :func:`view_normals`, ``depth``
-        (H, W) window depth, ``hit`` (H, W) bool. Row 0 is the top row."""
-        h, w = hit.shape
-        flip = (np.ascontiguousarray(a[::-1]).reshape(h * w, -1)
-                for a in (normal_rgba, pack_depth(depth)))
-        self.set_textures((w, h), *flip)
-
     def set_colors(self, size, colors: np.ndarray | None) -> None:
         """Per-pixel surface colours ``(W*H, 3)`` uint8 in VTK row order (see
         :func:`frame_colors`), or None for the flat front colour."""

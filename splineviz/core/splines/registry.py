@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from splineviz.core.errors import SplinevizError
+from splineviz.core.registry import Registry
 
 
 class UnknownModelError(SplinevizError, ValueError):
@@ -103,13 +104,16 @@ def _builtin() -> dict[str, ModelSpec]:
 
 
 #: model name -> :class:`ModelSpec` (plugins add to it through ``api.add_model``)
-MODELS: dict[str, ModelSpec] = _builtin()
+MODELS: Registry[ModelSpec] = Registry("spline model", _builtin(), error=UnknownModelError)
 
 
 def model_spec(name: str) -> ModelSpec:
-    """The :class:`ModelSpec` of ``name``; :class:`UnknownModelError` names the valid ones."""
-    spec = MODELS.get(name)
-    if spec is None:
-        raise UnknownModelError(f"unknown spline model {name!r}; choose one of "
-                                f"{', '.join(MODELS)}")
-    return spec
+    """The :class:`ModelSpec` of ``name``, plugin models included: the one check of a model
+    name that nodes, sessions, the render layer and the ray casters share.
+
+    Raises
+    ------
+    UnknownModelError
+        "unknown spline model 'x'; choose one of ..." naming the valid models.
+    """
+    return MODELS.lookup(name)
