@@ -26,6 +26,7 @@ import numpy as np
 
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError, SplinevizWarning
+from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
 from splineviz.core.splines import MODELS
 from splineviz.core.volume import Volume
@@ -75,20 +76,6 @@ class RenderedFrame:
     @property
     def final(self) -> bool:
         return self.scale >= 1.0 and self.path != "preview"
-
-
-@dataclass
-class Material:
-    """Phong constants of the headlight model (defaults: the reference ray caster's)."""
-
-    ambient: float = 0.15
-    diffuse: float = 0.75
-    specular: float = 0.35
-    shininess: float = 24.0
-
-
-#: named materials offered in the GUI (the model's table)
-MATERIALS = {name: Material(*consts) for name, consts in nodes.MATERIALS.items()}
 
 
 def make_caster(volume, model: str, device=None, options=None):
