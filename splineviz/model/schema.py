@@ -97,7 +97,9 @@ def register(type_name: str, node_cls: type[Node], origin: type[BaseModel] | Non
     subclass with more properties) and register the properties model derived from it;
     returns that model."""
     OBJECT_NODES[type_name] = (node_cls, origin)
-    PROPERTIES[type_name] = properties_model(type_name, node_cls, origin)
+    model = PROPERTIES[type_name] = properties_model(type_name, node_cls, origin)
+    # a module attribute, so that sessions pickle (a worker process reads their data)
+    globals()[model.__name__] = model
     register_object_type(type_name, PROPERTIES[type_name])
     return PROPERTIES[type_name]
 
