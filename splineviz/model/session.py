@@ -64,10 +64,11 @@ def _origin(node, type_name: str, path, read_options) -> dict:
     if type_name == "Source":
         return {"source": node.source, "shape": list(node.data.shape)}
     if path is None:
-        what = {"VolumeFile": "volume", "PointsFile": "point cloud"}.get(type_name, "mesh")
-        hint = " save the session with save_scene, which writes it" \
-            if type_name == "VolumeFile" else ""
-        raise SessionError(f"{what} {node.name!r} has no file;{hint}".rstrip(";"))
+        if type_name == "VolumeFile":
+            raise SessionError(f"volume {node.name!r} has no file; save the session with "
+                               "save_scene, which writes it")
+        what = "point cloud" if type_name == "PointsFile" else "mesh"
+        raise SessionError(f"{what} {node.name!r} has no file")
     options = {"format": node.format} if isinstance(node, PointsNode) else read_options
     return {"path": path, **(options or {})}
 
@@ -83,9 +84,8 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
     """The :class:`~splineviz.io.session.Session` of ``scene``.
 
     Each node is written as its properties (the document keeps the non-default ones: its
-    ``Node.state()``), its input
-    references as the object's ``inputs`` (those naming nodes of the scene) and, for data,
-    where the data comes from.
+    ``Node.state()``), its input references as the object's ``inputs`` (those naming nodes
+    of the scene) and, for data, where the data comes from.
 
     Parameters
     ----------
@@ -119,9 +119,8 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
               name=node.name, id=node.id)
     view = s.views[0]
     view.camera = CameraState(**scene.camera.pose())
-    view_props = {k: getattr(scene.view, k) for k in ViewNode.properties()}
-    for k, v in view_props.items():
-        setattr(view, k, v)
+    for k in ViewNode.properties():
+        setattr(view, k, getattr(scene.view, k))
     if scene.view.split:
         # the split as two views side by side with one camera; each hides the objects
         # shown only on the other side

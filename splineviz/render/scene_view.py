@@ -2,11 +2,12 @@
 
 A :class:`SceneView` shows a :class:`splineviz.model.Scene` in a pyvista plotter (the GUI's
 ``QtInteractor`` or an off-screen ``pyvista.Plotter``). It subscribes to the scene's events
-and keeps a :class:`~splineviz.render.scene.SplineScene` in step: an
-:class:`~splineviz.render.isosurface.IsosurfaceLayer` per isosurface node, an outline per
-volume, points and meshes as VTK props, clip planes per volume or scene-wide, the camera and
-the view settings (background, axes grid with world units). It holds no state of its own
-that a session would need.
+and keeps a :class:`~splineviz.render.scene.SplineScene` in step through one
+:class:`NodeView` per node, of the class :data:`VIEW_CLASSES` names for the node's type: an
+:class:`~splineviz.render.isosurface.IsosurfaceLayer` per isosurface node (reading the
+node), an outline per volume, points and meshes as VTK props, clip planes per volume or
+scene-wide, section curves; and the camera and the view settings (background or gradient,
+axes grid with world units). It holds no state of its own that a session would need.
 
 The window, ``splineviz FILE --screenshot``, ``splineviz render`` and session rendering all
 draw through this class, so a session renders the same headless as in the window.

@@ -237,3 +237,14 @@ def test_gradient_background_is_shown_and_saved(tmp_path):
     scene.add_volume(ml_volume(), "ml", path=tmp_path / "v.npy", isosurface=False)
     back = load_scene(save_scene(scene, tmp_path / "g.svs"))
     assert back.view.background2 == (1.0, 1.0, 1.0)
+
+
+def test_view_documents_mean_what_the_view_nodes_mean():
+    # the views of a document keep io's own layout (lights, cells, hidden objects); their
+    # camera and display entries are the camera and view nodes' properties
+    from splineviz.io.session import CameraState, View
+    from splineviz.model import CameraNode
+
+    for node_cls, doc_cls in ((CameraNode, CameraState), (ViewNode, View)):
+        for name, info in node_cls.properties().items():
+            assert doc_cls.model_fields[name].get_default() == info.get_default(), name
