@@ -64,7 +64,6 @@ from pydantic import (
     ValidationError,
     ValidationInfo,
     field_validator,
-    model_validator,
 )
 
 from splineviz.io._util import atomic_write_bytes, confined, outside_allowed
@@ -161,8 +160,26 @@ class MeshFileOrigin(_Model):
     _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
 
 
+class CameraBase(_Model):
+    """A view's camera, VTK conventions (as :class:`splineviz.core.camera.Camera`). Its
+    entries are the properties of the scene's camera node: :func:`camera_model` is this
+    class with them (derived and registered by :mod:`splineviz.model.schema`)."""
+
+    def to_camera(self):
+        """The :class:`splineviz.core.camera.Camera` of this state (perspective only)."""
+        from splineviz.core.camera import Camera, CameraError
+
+        try:
+            return Camera(self.position, self.focal_point, view_up=self.view_up,
+                          view_angle=self.view_angle)
+        except CameraError as exc:
+            raise SessionError(f"the session's camera is unusable: {exc}") from None
+
+
 #: object type -> model of its properties (filled by :func:`register_object_type`)
 PROPERTIES: dict[str, type[BaseModel]] = {}
+#: the model of a view's camera (set by :func:`register_camera_model`)
+_CAMERA: dict[str, type[CameraBase]] = {}
 
 
 def register_object_type(name: str, properties: type[BaseModel]) -> None:
@@ -170,14 +187,34 @@ def register_object_type(name: str, properties: type[BaseModel]) -> None:
     PROPERTIES[name] = properties
 
 
-def object_types() -> dict[str, type[BaseModel]]:
-    """Object type -> properties model of every declared pipeline object type."""
-    if not PROPERTIES:
+def register_camera_model(model: type[CameraBase]) -> None:
+    """Declare the model of a view's camera (a subclass of :class:`CameraBase`)."""
+    _CAMERA["camera"] = model
+
+
+def _declared() -> None:
+    if not PROPERTIES or not _CAMERA:
         # the scene nodes declare the properties (see the comment above the origins); a
         # document read before anything imported the scene model needs them all the same
         import splineviz.model.schema  # noqa: F401
 
+
+def object_types() -> dict[str, type[BaseModel]]:
+    """Object type -> properties model of every declared pipeline object type."""
+    _declared()
     return PROPERTIES
+
+
+def camera_model() -> type[CameraBase]:
+    """The model of a view's camera (:class:`CameraBase` with the camera node's fields)."""
+    _declared()
+    return _CAMERA["camera"]
+
+
+def __getattr__(name: str):
+    if name == "CameraState":  # the name of the camera model before it was derived
+        return camera_model()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class PipelineObject(_Model):
@@ -225,33 +262,6 @@ FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
 
 
 # ---------------------------------------------------------------------------- views
-class CameraState(_Model):
-    """VTK camera conventions, as :class:`splineviz.core.camera.Camera`."""
-
-    position: Vec3 = (0.0, 0.0, 1.0)
-    focal_point: Vec3 = (0.0, 0.0, 0.0)
-    view_up: Vec3 = (0.0, 1.0, 0.0)
-    view_angle: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 30.0
-    parallel_projection: bool = False
-    parallel_scale: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] = 1.0
-
-    @model_validator(mode="after")
-    def _distinct(self):
-        if self.position == self.focal_point:
-            raise ValueError("camera position and focal point must differ")
-        return self
-
-    def to_camera(self):
-        """The :class:`splineviz.core.camera.Camera` of this state (perspective only)."""
-        from splineviz.core.camera import Camera, CameraError
-
-        try:
-            return Camera(self.position, self.focal_point, view_up=self.view_up,
-                          view_angle=self.view_angle)
-        except CameraError as exc:
-            raise SessionError(f"the session's camera is unusable: {exc}") from None
-
-
 class Light(_Model):
     type: Literal["headlight", "camera", "scene"] = "headlight"
     position: Vec3 = (0.0, 0.0, 1.0)
@@ -278,7 +288,7 @@ class View(_Model):
 
     id: Annotated[str, Field(pattern=ID_PATTERN)] = "view1"
     type: Literal["RenderView"] = "RenderView"
-    camera: CameraState = Field(default_factory=CameraState)
+    camera: Any = Field(default_factory=dict, validate_default=True)
     background: RGB = (0.1, 0.1, 0.15)
     background2: RGB | None = None
     lights: Annotated[list[Light], Field(max_length=MAX_LIGHTS)] = [Light()]
@@ -287,6 +297,12 @@ class View(_Model):
                       Field(max_length=MAX_OBJECTS)] = []
     show_axes: bool = True
     show_scale: bool = True
+
+    @field_validator("camera", mode="before")
+    @classmethod
+    def _camera(cls, v):
+        model = camera_model()
+        return v if isinstance(v, model) else model.model_validate(v)
 
 
 class Session(_Model):
@@ -446,9 +462,16 @@ class Session(_Model):
                 entry["properties"]["path"] = _relative(entry["properties"]["path"],
                                                         Path(base_dir))
             objects.append(entry)
-        views = [{"id": v.id, "type": v.type, **{k: val for k, val in v.model_dump(
-            mode="json", exclude_defaults=True).items() if k not in ("id", "type")}}
-            for v in self.views]
+        views = []
+        for v in self.views:
+            entry = {"id": v.id, "type": v.type}
+            camera = v.camera.model_dump(mode="json", exclude_defaults=True)
+            if camera:
+                entry["camera"] = camera
+            entry.update((k, val) for k, val in v.model_dump(
+                mode="json", exclude_defaults=True, exclude={"camera"}).items()
+                if k not in ("id", "type"))
+            views.append(entry)
         doc = {"format": FORMAT, "schema_version": SCHEMA_VERSION,
                "app_version": _app_version(),  # the version that wrote this document
                "objects": objects, "views": views}

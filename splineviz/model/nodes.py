@@ -381,6 +381,10 @@ class CameraNode(Node):
     parallel_projection: bool = False
     parallel_scale: Positive = 1.0
 
+    document_rules: ClassVar[tuple] = (
+        (lambda p: tuple(p["position"]) != tuple(p["focal_point"]),
+         "camera position and focal point must differ"),)
+
     def pose(self) -> dict:
         """The fields that place the camera (one dict, to compare or copy)."""
         return {k: getattr(self, k) for k in self.properties()}

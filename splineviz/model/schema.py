@@ -18,13 +18,16 @@ from pydantic import BaseModel, ConfigDict, create_model, model_validator
 from pydantic_core import PydanticUndefined
 
 from splineviz.io.session import (
+    CameraBase,
     MeshFileOrigin,
     PointsFileOrigin,
     SourceOrigin,
     VolumeFileOrigin,
+    register_camera_model,
     register_object_type,
 )
 from splineviz.model.nodes import (
+    CameraNode,
     ClipPlaneNode,
     IsosurfaceNode,
     MeshNode,
@@ -69,9 +72,11 @@ def _field(info):
 
 
 def properties_model(type_name: str, node_cls: type[Node],
-                     origin: type[BaseModel] | None = None) -> type[BaseModel]:
-    """The model of the properties of session objects of ``type_name``: the fields of
-    ``origin`` (where the data comes from), then the node's properties."""
+                     origin: type[BaseModel] | None = None,
+                     model_name: str | None = None) -> type[BaseModel]:
+    """The model (called ``model_name``, default ``<type_name>Props``) of the properties
+    of session objects of ``type_name``: the fields of ``origin`` (where the data comes
+    from, or another io base), then the node's properties."""
     fields = {session_names(node_cls)[k]: _field(f) for k, f in node_cls.properties().items()}
     rules = node_cls.document_rules
     validators = {}
@@ -84,7 +89,7 @@ def properties_model(type_name: str, node_cls: type[Node],
             return self
 
         validators["_document_rules"] = model_validator(mode="after")(_rules)
-    return create_model(f"{type_name}Props", __base__=origin or _Properties,
+    return create_model(model_name or f"{type_name}Props", __base__=origin or _Properties,
                         __validators__=validators, __module__=__name__, **fields)
 
 
@@ -106,3 +111,7 @@ def register(type_name: str, node_cls: type[Node], origin: type[BaseModel] | Non
 
 for _name, (_node, _origin) in list(OBJECT_NODES.items()):
     register(_name, _node, _origin)
+
+#: the model of a view's camera in a session: the camera node's properties
+CameraState = properties_model("Camera", CameraNode, CameraBase, model_name="CameraState")
+register_camera_model(CameraState)

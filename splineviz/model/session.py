@@ -22,7 +22,6 @@ import numpy as np
 from splineviz.io.errors import SessionError
 from splineviz.io.session import (
     READ_OPTIONS,
-    CameraState,
     Layout,
     Session,
     View,
@@ -118,7 +117,7 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
               inputs=[i for i in inputs if i is not None and i in scene],
               name=node.name, id=node.id)
     view = s.views[0]
-    view.camera = CameraState(**scene.camera.pose())
+    view.camera = scene.camera.pose()
     for k in ViewNode.properties():
         setattr(view, k, getattr(scene.view, k))
     if scene.view.split:
