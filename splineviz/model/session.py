@@ -34,6 +34,7 @@ from splineviz.model.nodes import (
     PointsNode,
     ViewNode,
     VolumeNode,
+    is_required_in_documents,
     mesh_arrays,
 )
 from splineviz.model.scene import Scene
@@ -73,10 +74,16 @@ def _origin(node, type_name: str, path, read_options) -> dict:
 
 
 def node_properties(node) -> dict:
-    """The session properties of ``node`` under their session names (the document keeps
-    those that differ from their defaults)."""
-    values = node.model_dump(mode="json", by_alias=True)
-    return {name: values[name] for name in session_names(type(node)).values()}
+    """The session properties of ``node``: its :meth:`~splineviz.model.nodes.Node.state`
+    (non-default properties, under their session names) and the properties a document
+    must state whatever their values."""
+    names = session_names(type(node))
+    state = node.state()
+    props = {name: state[name] for name in names.values() if name in state}
+    for field, info in type(node).properties().items():
+        if is_required_in_documents(info) and names[field] not in props:
+            props[names[field]] = getattr(node, field)
+    return props
 
 
 def to_session(scene: Scene, written: dict | None = None) -> Session:
