@@ -72,7 +72,7 @@ class Scene:
     >>> from splineviz.core import testfunctions as tf
     >>> scene = Scene()
     >>> vol = scene.add_volume(sv.Volume.from_function(tf.ml, (9, 9, 9), tf.ml.domain),
-    ...                        name="ML")
+    ...                        name="ML", isosurface=False)
     >>> iso = scene.add_isosurface(vol, isovalue=0.5)
     >>> [n.id for n in scene], iso.volume_id
     (['volume1', 'isosurface1'], 'volume1')
