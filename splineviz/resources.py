@@ -5,8 +5,10 @@
   blue for the highlighted part) and the colour app icon ``splineviz.svg``;
 * ``resources/sessions/*.svs`` -- example sessions that open synthetic data of the
   first-party ``sources`` plugin (no data files), each with a camera that shows the whole
-  data set. :data:`DEFAULT_SESSION` is the embedded default data (what ``splineviz`` opens
-  with no argument): Marschner-Lobb sampled on 41^3 points, a cubic C1 isosurface.
+  data set. :data:`DEFAULT_SESSION` describes the scene of the embedded default data
+  (Marschner-Lobb sampled on 41^3 points, a cubic C1 isosurface) as a session; the app
+  itself builds that scene in code (:func:`splineviz.model.opening.default_scene`) when
+  ``splineviz`` runs with no argument.
 
 This module names files only: it imports no Qt, so the command line and tests use it too.
 A GUI makes a ``QIcon(str(icon_path("open")))``, or a ``QSvgRenderer`` of
@@ -60,7 +62,7 @@ ICONS = (*TOOLBAR_ICONS, APP_ICON)
 #: standard view (:data:`splineviz.model.STANDARD_VIEWS` key) -> its icon
 VIEW_ICONS = {"+X": "view-px", "-X": "view-mx", "+Y": "view-py", "-Y": "view-my",
               "+Z": "view-pz", "-Z": "view-mz", "isometric": "view-iso"}
-#: the example session that holds the embedded default data
+#: the example session that describes the scene of the embedded default data
 DEFAULT_SESSION = "marschner-lobb"
 
 _ROOT_COLOR = re.compile(r'(<svg\b[^>]*?\bcolor=")([^"]*)(")')
@@ -183,7 +185,8 @@ def example_session(name: str) -> Path:
 
 
 def default_session() -> Path:
-    """The session of the embedded default data (:data:`DEFAULT_SESSION`): Marschner-Lobb
-    on 41^3 points of [-1, 1]^3, a cubic C1 isosurface at 0.5, a camera that shows the whole
-    box."""
+    """The example session :data:`DEFAULT_SESSION`: Marschner-Lobb on 41^3 points of
+    [-1, 1]^3, a cubic C1 isosurface at 0.5, a camera that shows the whole box (the scene
+    of the embedded default data, for scripts that want it as a file; the app does not
+    read it)."""
     return example_session(DEFAULT_SESSION)

@@ -21,21 +21,16 @@ import numpy as np
 
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.errors import SplinevizError
+from splineviz.core.material import BACK_COLOR, DEFAULT_MATERIAL, FRONT_COLOR, MATERIALS
 
 
 class ClipPlaneError(SplinevizError, ValueError):
     """Clip planes that are not (origin, normal) pairs with a non-zero normal."""
 
 
-#: Phong parameters of the headlight model shared by the reference and the kernels
-AMBIENT = 0.15
-DIFFUSE = 0.75
-SPECULAR = 0.35
-SHININESS = 24.0
-#: colour of the side the gradient points away from the viewer (for CT: the outside) ...
-FRONT_COLOR = (0.93, 0.78, 0.55)
-#: ... and of the other side (seen through clip planes)
-BACK_COLOR = (0.45, 0.62, 0.92)
+#: Phong parameters of the ray casters' headlight model (the default material; the kernels
+#: take them as defines from these names)
+AMBIENT, DIFFUSE, SPECULAR, SHININESS = MATERIALS[DEFAULT_MATERIAL].astuple()
 BACKGROUND = (0.10, 0.10, 0.14)
 
 #: bisection steps: enough to shrink any sampled bracket to float64 resolution

@@ -38,12 +38,18 @@ size, depth and number magnitude, and never names code to import or run. A malfo
 raises a :class:`~splineviz.io.errors.SessionError` and changes nothing.
 
 Migrations: :data:`MIGRATIONS` maps a schema version to the function that lifts a document
-to the next version; :func:`migrate` applies them in order.
+to the next version; :func:`migrate` applies them in order, then drops the entries that
+schema 1-4 allowed but nothing read (``Remesh`` objects, a view's ``size``, layout spans).
+
+Object types: where an object's data comes from (a file and its read options, a source) is
+declared here; every other property is declared once, by the scene node the object becomes
+(:mod:`splineviz.model.schema` derives the properties models from the nodes).
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import os
 import re
 import stat
@@ -56,11 +62,10 @@ from pydantic import (
     ConfigDict,
     Field,
     ValidationError,
+    ValidationInfo,
     field_validator,
-    model_validator,
 )
 
-from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
 from splineviz.io._util import atomic_write_bytes, confined, outside_allowed
 from splineviz.io.errors import (
     SessionError,
@@ -68,6 +73,8 @@ from splineviz.io.errors import (
     SessionPathError,
     SessionVersionError,
 )
+
+_log = logging.getLogger(__name__)
 
 FORMAT = "splineviz-session"
 SCHEMA_VERSION = 4
@@ -82,7 +89,8 @@ MAX_LIGHTS = 16
 #: longest stored path or name
 MAX_TEXT = 4096
 
-_ID = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
+#: pattern of object and view ids
+ID_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
 
 Finite = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
 Unit = Annotated[float, Field(allow_inf_nan=False, ge=0.0, le=1.0)]
@@ -90,18 +98,10 @@ Vec3 = tuple[Finite, Finite, Finite]
 RGB = tuple[Unit, Unit, Unit]
 Text = Annotated[str, Field(max_length=MAX_TEXT)]
 Size = Annotated[int, Field(ge=2, le=4096)]
-Sigma = Annotated[float, Field(ge=0, le=64, allow_inf_nan=False)]
 
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
-
-
-def nonzero_normal(v):
-    """A clip plane's normal, refused when it is the zero vector (pydantic validator)."""
-    if sum(c * c for c in v) == 0.0:
-        raise ValueError("a clip plane normal must not be zero")
-    return v
 
 
 def _check_path_text(v: str) -> str:
@@ -110,8 +110,12 @@ def _check_path_text(v: str) -> str:
     return v
 
 
-# ---------------------------------------------------------------------------- properties
-class VolumeFileProps(_Model):
+# ---------------------------------------------------------------------------- objects
+# Where an object's data comes from is io's to declare (a file and the options to read it,
+# or a plugin's source); an object's other properties are declared once, by the scene node
+# the object becomes (:mod:`splineviz.model.schema` derives each properties model from them
+# and registers it with :func:`register_object_type`).
+class VolumeFileOrigin(_Model):
     """A volume read with :func:`~splineviz.io.read_volume`; raw files need dims/dtype."""
 
     path: Text
@@ -124,194 +128,42 @@ class VolumeFileProps(_Model):
     spacing: tuple[Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)],
                    ...] | None = None
     origin: Vec3 | None = None
-    sigma: Sigma = 0.0  # Gaussian smoothing (voxels) applied before the spline is built
-    show_outline: bool = True
-    visible: bool = True
 
     _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
 
 
-class SourceProps(_Model):
+#: the read options of a volume file (the fields of :class:`VolumeFileOrigin` but ``path``)
+READ_OPTIONS = tuple(k for k in VolumeFileOrigin.model_fields if k != "path")
+
+
+class SourceOrigin(_Model):
     """A synthetic source offered by a plugin (see :mod:`splineviz.plugins`)."""
 
     source: Annotated[str, Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$")]
     shape: tuple[Size, Size, Size] = (64, 64, 64)
-    sigma: Sigma = 0.0
-    show_outline: bool = True
-    visible: bool = True
 
 
-class PointsFileProps(_Model):
+class PointsFileOrigin(_Model):
+    """A point cloud read with :func:`~splineviz.io.read_points`."""
+
     path: Text
     format: str | None = None
-    color: RGB = (0.8, 0.8, 0.8)
-    point_size: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 3.0
-    opacity: Unit = 1.0
-    visible: bool = True
 
     _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
 
 
-class MeshFileProps(_Model):
-    """A triangle mesh file; with a PointsFile input, the remeshing that made it."""
+class MeshFileOrigin(_Model):
+    """A triangle mesh file (with a PointsFile input: the remeshing that made it)."""
 
     path: Text
-    color: RGB = (0.8, 0.8, 0.8)
-    opacity: Unit = 1.0
-    show_edges: bool = False
-    visible: bool = True
-    edge_length: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None = None
-    rho: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False)] | None = None
 
     _v = field_validator("path")(classmethod(lambda cls, v: _check_path_text(v)))
 
 
-class IsosurfaceProps(_Model):
-    """An isosurface of the spline ``model`` over its input volume (thesis ch. 6)."""
-
-    isovalue: Finite
-    model: Annotated[str, Field(pattern=r"^[A-Za-z0-9_.\-]{1,64}$")] = "to-quadratic"
-    k: Annotated[int, Field(ge=1, le=16)] = 2
-    color: RGB = (0.9, 0.9, 0.9)
-    opacity: Unit = 1.0
-    visible: bool = True
-    material: Literal["default", "matte", "shiny", "metal"] = "default"
-    #: colour by (splineviz.core.colour_by): the field, its map, range and second volume
-    color_by: Literal[FIELDS] = "none"
-    color_map: Literal[COLORMAPS] = "viridis"
-    color_range: Literal[RANGE_MODES] = "auto"
-    color_min: Finite = 0.0
-    color_max: Finite = 1.0
-    color_volume: Annotated[str, Field(pattern=_ID)] | None = None
-    color_isosurface: Annotated[str, Field(pattern=_ID)] | None = None
-
-    @model_validator(mode="after")
-    def _range_order(self):
-        if not self.color_min < self.color_max:
-            raise ValueError("color_min must be below color_max")
-        return self
-
-
-class RemeshProps(_Model):
-    """A mesh from a point cloud by projection and advancing front (thesis ch. 7)."""
-
-    edge_length: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] | None = None
-    rho: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False)] | None = None
-    color: RGB = (0.8, 0.8, 0.8)
-    opacity: Unit = 1.0
-    show_edges: bool = True
-    visible: bool = True
-
-
-class ClipPlaneProps(_Model):
-    """A clip plane keeping the side its normal points to (DESIGN.md ``clip_planes``)."""
-
-    origin: Vec3 = (0.0, 0.0, 0.0)
-    normal: Vec3 = (1.0, 0.0, 0.0)
-    enabled: bool = True
-    show_widget: bool = True
-
-    _nonzero = field_validator("normal")(classmethod(lambda cls, v: nonzero_normal(v)))
-
-
-class SectionProps(_Model):
-    """Exact cross-section curves of its first input (an isosurface) with its second (a clip
-    plane or another isosurface), drawn as lines."""
-
-    color: RGB = (0.95, 0.25, 0.2)
-    line_width: Annotated[float, Field(gt=0, le=20, allow_inf_nan=False)] = 3.0
-    visible: bool = True
-
-
-# ---------------------------------------------------------------------------- objects
-class _Object(_Model):
-    id: Annotated[str, Field(pattern=_ID)]
-    name: Annotated[str, Field(max_length=200)] = ""
-    inputs: Annotated[list[Annotated[str, Field(pattern=_ID)]], Field(max_length=64)] = []
-
-
-class VolumeFile(_Object):
-    type: Literal["VolumeFile"] = "VolumeFile"
-    properties: VolumeFileProps
-
-
-class Source(_Object):
-    type: Literal["Source"] = "Source"
-    properties: SourceProps
-
-
-class PointsFile(_Object):
-    type: Literal["PointsFile"] = "PointsFile"
-    properties: PointsFileProps
-
-
-class MeshFile(_Object):
-    type: Literal["MeshFile"] = "MeshFile"
-    properties: MeshFileProps
-
-
-class Isosurface(_Object):
-    type: Literal["Isosurface"] = "Isosurface"
-    properties: IsosurfaceProps
-
-
-class Remesh(_Object):
-    type: Literal["Remesh"] = "Remesh"
-    properties: RemeshProps = Field(default_factory=RemeshProps)
-
-
-class ClipPlane(_Object):
-    type: Literal["ClipPlane"] = "ClipPlane"
-    properties: ClipPlaneProps = Field(default_factory=ClipPlaneProps)
-
-
-class Section(_Object):
-    type: Literal["Section"] = "Section"
-    properties: SectionProps = Field(default_factory=SectionProps)
-
-
-PipelineObject = Annotated[
-    VolumeFile | Source | PointsFile | MeshFile | Isosurface | Remesh | ClipPlane | Section,
-    Field(discriminator="type"),
-]
-
-#: object type -> (number of inputs allowed (min, max), input types allowed)
-INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
-    "VolumeFile": ((0, 0), ()),
-    "Source": ((0, 0), ()),
-    "PointsFile": ((0, 0), ()),
-    "MeshFile": ((0, 1), ("PointsFile",)),
-    "Isosurface": ((1, 1), ("VolumeFile", "Source")),
-    "Remesh": ((1, 1), ("PointsFile",)),
-    "ClipPlane": ((0, 64), ("VolumeFile", "Source", "Isosurface", "PointsFile", "MeshFile",
-                            "Remesh")),
-    "Section": ((2, 2), ("Isosurface", "ClipPlane")),
-}
-
-#: type name -> model class (for :meth:`Session.add`)
-OBJECT_TYPES = {c.__name__: c for c in (VolumeFile, Source, PointsFile, MeshFile, Isosurface,
-                                        Remesh, ClipPlane, Section)}
-
-#: object types whose ``properties.path`` names a data file
-FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
-
-
-# ---------------------------------------------------------------------------- views
-class CameraState(_Model):
-    """VTK camera conventions, as :class:`splineviz.core.camera.Camera`."""
-
-    position: Vec3 = (0.0, 0.0, 1.0)
-    focal_point: Vec3 = (0.0, 0.0, 0.0)
-    view_up: Vec3 = (0.0, 1.0, 0.0)
-    view_angle: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False)] = 30.0
-    parallel_projection: bool = False
-    parallel_scale: Annotated[float, Field(gt=0, le=MAX_MAGNITUDE, allow_inf_nan=False)] = 1.0
-
-    @model_validator(mode="after")
-    def _distinct(self):
-        if self.position == self.focal_point:
-            raise ValueError("camera position and focal point must differ")
-        return self
+class CameraBase(_Model):
+    """A view's camera, VTK conventions (as :class:`splineviz.core.camera.Camera`). Its
+    entries are the properties of the scene's camera node: :func:`camera_model` is this
+    class with them (derived and registered by :mod:`splineviz.model.schema`)."""
 
     def to_camera(self):
         """The :class:`splineviz.core.camera.Camera` of this state (perspective only)."""
@@ -323,13 +175,93 @@ class CameraState(_Model):
         except CameraError as exc:
             raise SessionError(f"the session's camera is unusable: {exc}") from None
 
+
+#: object type -> model of its properties (filled by :func:`register_object_type`)
+PROPERTIES: dict[str, type[BaseModel]] = {}
+#: the model of a view's camera (set by :func:`register_camera_model`)
+_CAMERA: dict[str, type[CameraBase]] = {}
+
+
+def register_object_type(name: str, properties: type[BaseModel]) -> None:
+    """Declare the pipeline object type ``name`` and the model of its properties."""
+    PROPERTIES[name] = properties
+
+
+def register_camera_model(model: type[CameraBase]) -> None:
+    """Declare the model of a view's camera (a subclass of :class:`CameraBase`)."""
+    _CAMERA["camera"] = model
+
+
+def _declared() -> None:
+    if not PROPERTIES or not _CAMERA:
+        # the scene nodes declare the properties (see the comment above the origins); a
+        # document read before anything imported the scene model needs them all the same
+        import splineviz.model.schema  # noqa: F401
+
+
+def object_types() -> dict[str, type[BaseModel]]:
+    """Object type -> properties model of every declared pipeline object type."""
+    _declared()
+    return PROPERTIES
+
+
+def camera_model() -> type[CameraBase]:
+    """The model of a view's camera (:class:`CameraBase` with the camera node's fields)."""
+    _declared()
+    return _CAMERA["camera"]
+
+
+def __getattr__(name: str):
+    if name == "CameraState":  # the name of the camera model before it was derived
+        return camera_model()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+class PipelineObject(_Model):
+    """One object of the pipeline: its id, type, name, inputs and properties (a model
+    of :func:`object_types` for its type)."""
+
+    id: Annotated[str, Field(pattern=ID_PATTERN)]
+    type: str
+    name: Annotated[str, Field(max_length=200)] = ""
+    inputs: Annotated[list[Annotated[str, Field(pattern=ID_PATTERN)]], Field(max_length=64)] = []
+    properties: Any = Field(default_factory=dict, validate_default=True)
+
+    @field_validator("type")
     @classmethod
-    def from_camera(cls, camera) -> CameraState:
-        """State of a :class:`splineviz.core.camera.Camera` (or anything with its fields)."""
-        return cls(position=tuple(camera.position), focal_point=tuple(camera.focal_point),
-                   view_up=tuple(camera.view_up), view_angle=float(camera.view_angle))
+    def _known_type(cls, v: str) -> str:
+        types = object_types()
+        if v not in types:
+            raise ValueError(f"unknown object type {v[:64]!r}; valid: {', '.join(types)}")
+        return v
+
+    @field_validator("properties", mode="before")
+    @classmethod
+    def _typed(cls, v, info: ValidationInfo):
+        model = object_types().get(info.data.get("type"))
+        if model is None:  # the type was refused already
+            return v
+        return v if isinstance(v, model) else model.model_validate(v)
 
 
+#: object type -> (number of inputs allowed (min, max), input types allowed); ``Remesh``
+#: is a type of schema 1-4 documents that :func:`migrate` removes (nothing ever read it)
+INPUT_RULES: dict[str, tuple[tuple[int, int], tuple[str, ...]]] = {
+    "VolumeFile": ((0, 0), ()),
+    "Source": ((0, 0), ()),
+    "PointsFile": ((0, 0), ()),
+    "MeshFile": ((0, 1), ("PointsFile",)),
+    "Isosurface": ((1, 1), ("VolumeFile", "Source")),
+    "Remesh": ((1, 1), ("PointsFile",)),
+    "ClipPlane": ((0, 64), ("VolumeFile", "Source", "Isosurface", "PointsFile", "MeshFile")),
+    "Section": ((2, 2), ("Isosurface", "ClipPlane")),
+}
+
+#: object types whose ``properties.path`` names a data file
+FILE_TYPES = ("VolumeFile", "PointsFile", "MeshFile")
+
+
+# ---------------------------------------------------------------------------- views
 class Light(_Model):
     type: Literal["headlight", "camera", "scene"] = "headlight"
     position: Vec3 = (0.0, 0.0, 1.0)
@@ -339,27 +271,38 @@ class Light(_Model):
 
 
 class Layout(_Model):
-    """Cell of the view in the window's grid of views."""
+    """Cell of the view in the window's grid of views (a split scene: the column)."""
 
     row: Annotated[int, Field(ge=0, le=15)] = 0
     col: Annotated[int, Field(ge=0, le=15)] = 0
-    row_span: Annotated[int, Field(ge=1, le=16)] = 1
-    col_span: Annotated[int, Field(ge=1, le=16)] = 1
 
 
 class View(_Model):
-    id: Annotated[str, Field(pattern=_ID)] = "view1"
+    """A render view: camera, background (a gradient up to ``background2`` when set),
+    lights, its cell in the layout, the objects it hides and its decorations.
+
+    ``lights`` round-trips in documents, but the renderer has one headlight (the shading of
+    :mod:`splineviz.core.material`): a scene loaded from a session with other lights says
+    so (see :func:`splineviz.model.session.apply_session`).
+    """
+
+    id: Annotated[str, Field(pattern=ID_PATTERN)] = "view1"
     type: Literal["RenderView"] = "RenderView"
-    camera: CameraState = Field(default_factory=CameraState)
+    camera: Any = Field(default_factory=dict, validate_default=True)
     background: RGB = (0.1, 0.1, 0.15)
-    background2: RGB | None = None  # gradient top colour
+    background2: RGB | None = None
     lights: Annotated[list[Light], Field(max_length=MAX_LIGHTS)] = [Light()]
     layout: Layout = Field(default_factory=Layout)
-    size: tuple[Annotated[int, Field(ge=1, le=16384)],
-                Annotated[int, Field(ge=1, le=16384)]] | None = None
-    hidden: Annotated[list[Annotated[str, Field(pattern=_ID)]], Field(max_length=MAX_OBJECTS)] = []
+    hidden: Annotated[list[Annotated[str, Field(pattern=ID_PATTERN)]],
+                      Field(max_length=MAX_OBJECTS)] = []
     show_axes: bool = True
     show_scale: bool = True
+
+    @field_validator("camera", mode="before")
+    @classmethod
+    def _camera(cls, v):
+        model = camera_model()
+        return v if isinstance(v, model) else model.model_validate(v)
 
 
 class Session(_Model):
@@ -419,13 +362,13 @@ class Session(_Model):
         >>> iso.id, s.clip_planes_for(iso.id)
         ('isosurface1', [])
         """
-        cls = OBJECT_TYPES.get(type)
-        if cls is None:
-            raise SessionError(f"unknown object type {type!r}; valid: {', '.join(OBJECT_TYPES)}")
+        types = object_types()
+        if type not in types:
+            raise SessionError(f"unknown object type {type!r}; valid: {', '.join(types)}")
         try:
-            obj = cls.model_validate({"id": id or self.new_id(type.lower()), "type": type,
-                                      "name": name, "inputs": list(inputs),
-                                      "properties": properties or {}})
+            obj = PipelineObject.model_validate({
+                "id": id or self.new_id(type.lower()), "type": type, "name": name,
+                "inputs": list(inputs), "properties": properties or {}})
         except ValidationError as exc:
             raise SessionError(f"invalid {type}: {_describe(exc)}") from None
         if any(o.id == obj.id for o in self.objects):
@@ -455,10 +398,6 @@ class Session(_Model):
                 v.hidden = [h for h in v.hidden if h != obj_id]
 
     # -- scene access for renderers and the GUI (no Qt, no VTK here)
-    def inputs_of(self, obj_id: str) -> list:
-        """The pipeline objects feeding ``obj_id``."""
-        return [self.object(i) for i in self.object(obj_id).inputs]
-
     def clip_planes_for(self, obj_id: str) -> list[tuple[tuple, tuple]]:
         """``(origin, normal)`` of every enabled clip plane that cuts ``obj_id``: planes that
         take it, or (for an isosurface) its volume, as input, and planes with no input, in
@@ -478,7 +417,7 @@ class Session(_Model):
         if view is None:
             raise KeyError(view_id)
         return [o for o in self.objects
-                if o.type in ("Isosurface", "PointsFile", "MeshFile", "Remesh")
+                if o.type in ("Isosurface", "PointsFile", "MeshFile")
                 and o.properties.visible and o.id not in view.hidden]
 
     def load_volume(self, obj_id: str, *, allow_outside: bool = False):
@@ -501,12 +440,10 @@ class Session(_Model):
                            origin=p.origin, allow_outside=allow_outside)
 
     def load_points(self, obj_id: str):
-        """The :class:`~splineviz.PointCloud` of a PointsFile (or of a Remesh's input)."""
+        """The :class:`~splineviz.PointCloud` of a PointsFile."""
         from splineviz.io.points import read_points
 
         obj = self.object(obj_id)
-        if obj.type == "Remesh":
-            obj = self.object(obj.inputs[0])
         if obj.type != "PointsFile":
             raise SessionError(f"object {obj_id!r} ({obj.type}) holds no point cloud")
         return read_points(obj.properties.path, format=obj.properties.format)
@@ -520,14 +457,21 @@ class Session(_Model):
             for key in ("name", "inputs"):
                 if key in d:
                     entry[key] = d[key]
-            entry["properties"] = d.get("properties", {})
+            entry["properties"] = o.properties.model_dump(mode="json", exclude_defaults=True)
             if "path" in entry["properties"] and base_dir is not None:
                 entry["properties"]["path"] = _relative(entry["properties"]["path"],
                                                         Path(base_dir))
             objects.append(entry)
-        views = [{"id": v.id, "type": v.type, **{k: val for k, val in v.model_dump(
-            mode="json", exclude_defaults=True).items() if k not in ("id", "type")}}
-            for v in self.views]
+        views = []
+        for v in self.views:
+            entry = {"id": v.id, "type": v.type}
+            camera = v.camera.model_dump(mode="json", exclude_defaults=True)
+            if camera:
+                entry["camera"] = camera
+            entry.update((k, val) for k, val in v.model_dump(
+                mode="json", exclude_defaults=True, exclude={"camera"}).items()
+                if k not in ("id", "type"))
+            views.append(entry)
         doc = {"format": FORMAT, "schema_version": SCHEMA_VERSION,
                "app_version": _app_version(),  # the version that wrote this document
                "objects": objects, "views": views}
@@ -613,6 +557,64 @@ def _v3_to_v4(doc: dict) -> dict:
 #: schema version -> function lifting a document of that version to the next one
 MIGRATIONS: dict[int, Callable[[dict], dict]] = {1: _v1_to_v2, 2: _v2_to_v3, 3: _v3_to_v4}
 
+#: the entries of schema 1-4 views that nothing ever read, and why each is dropped
+_UNREAD_VIEW_ENTRIES = {
+    "size": "the picture size is the window's, or --size on the command line",
+    "row_span": "views take one cell each", "col_span": "views take one cell each",
+}
+
+
+def _drop_unread(doc: dict) -> dict:
+    """Drop what schema 1-4 documents could hold but no version of the program ever read:
+    ``Remesh`` objects (with their ids in other objects' inputs and views' hidden lists),
+    a view's ``size`` and its layout's ``row_span``/``col_span``. The app never wrote them,
+    so no document it wrote changes; a value a user set by hand is named in one warning
+    line of the ``splineviz.io.session`` logger."""
+    objects = doc.get("objects")
+    dropped = set()
+    if isinstance(objects, list):
+        dropped = {o.get("id") for o in objects
+                   if isinstance(o, dict) and o.get("type") == "Remesh"}
+        if dropped:
+            _log.warning("session: %d Remesh object(s) dropped (%s); remesh the point cloud "
+                         "and save again to keep the mesh", len(dropped),
+                         ", ".join(map(str, sorted(dropped, key=str))))
+            objects = [_without_inputs(o, dropped) for o in objects
+                       if not (isinstance(o, dict) and o.get("type") == "Remesh")]
+    views = doc.get("views")
+    if isinstance(views, list):
+        views = [_view_without_unread(v, dropped) for v in views]
+    out = dict(doc)
+    if objects is not None:
+        out["objects"] = objects
+    if views is not None:
+        out["views"] = views
+    return out
+
+
+def _without_inputs(obj, dropped: set):
+    if not dropped or not isinstance(obj, dict) or not isinstance(obj.get("inputs"), list):
+        return obj
+    return {**obj, "inputs": [i for i in obj["inputs"] if i not in dropped]}
+
+
+def _view_without_unread(view, dropped: set):
+    if not isinstance(view, dict):
+        return view
+    view = dict(view)
+    if dropped and isinstance(view.get("hidden"), list):
+        view["hidden"] = [h for h in view["hidden"] if h not in dropped]
+    layout = view.get("layout")
+    if isinstance(layout, dict):
+        layout = view["layout"] = dict(layout)
+    for key, why in _UNREAD_VIEW_ENTRIES.items():
+        holder = view if key == "size" else layout
+        if isinstance(holder, dict) and key in holder:
+            value = holder.pop(key)
+            if value not in (None, 1):
+                _log.warning("session: view %s ignored (%s)", key, why)
+    return view
+
 
 def migrate(doc: dict) -> dict:
     """Lift a parsed session document to :data:`SCHEMA_VERSION` (a new dict; input unchanged).
@@ -637,7 +639,7 @@ def migrate(doc: dict) -> dict:
                                       "migrated")
         doc = step(doc)
         version = doc["schema_version"]
-    return doc
+    return _drop_unread(doc)
 
 
 # ---------------------------------------------------------------------------- load / save
@@ -679,9 +681,7 @@ def parse_document(text: str) -> dict:
 
 def _describe(err: ValidationError) -> str:
     e = err.errors()[0]
-    loc = ".".join(str(p) for p in e.get("loc", ()) if not (isinstance(p, str) and p in (
-        "VolumeFile", "Source", "PointsFile", "MeshFile", "Isosurface", "Remesh",
-        "ClipPlane", "Section")))
+    loc = ".".join(str(p) for p in e.get("loc", ()))
     msg = e.get("msg", "invalid value").rstrip(".")
     return f"{loc or 'document'}: {msg}"
 

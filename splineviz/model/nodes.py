@@ -5,9 +5,15 @@ napari habit): setting ``node.isovalue = 40.0`` validates the value and emits
 ``node.events.isovalue``; views (the VTK scene of :mod:`splineviz.render`, the Qt panels of
 :mod:`splineviz.gui`) subscribe to those signals and never hold state of their own.
 
-Heavy data (the samples of a volume, a point cloud, a mesh's arrays) live in fields that are
-never written to sessions (``exclude=True``); everything else is a plain property whose
-non-default values :meth:`Node.state` returns for session files.
+A node's fields are the one declaration of its properties: their types, defaults and
+validation. Sessions (:mod:`splineviz.model.schema`, :mod:`splineviz.model.session`), the
+render layer and the panels are derived from them, so a new property is one field here plus
+the code that shows it. Heavy data (the samples of a volume, a point cloud, a mesh's arrays)
+live in fields that are never written to sessions (``exclude=True``); fields made by
+:func:`reference` hold the ids of other nodes (a session's ``inputs``); fields made by
+:func:`origin` say where the data comes from (a session writes them in the object's own
+form, e.g. a path and its read options); everything else is a plain property whose
+non-default values :meth:`Node.state` returns, in field order (the order sessions write).
 
 Conventions: colours are RGB in [0, 1]; points and vectors are world coordinates; meshes
 are ``(V, 3)`` float vertex and ``(F, 3)`` int triangle arrays (DESIGN.md: pyvista objects
@@ -16,32 +22,96 @@ only at the render/io boundary).
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from psygnal import EventedModel
-from pydantic import ConfigDict, Field, ValidationError, field_validator
+from pydantic import AfterValidator, ConfigDict, Field, ValidationError
 
 from splineviz.core.chunked import ChunkedVolume
+from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
 from splineviz.core.errors import SplinevizError
+from splineviz.core.material import FRONT_COLOR, MATERIALS
 from splineviz.core.points import PointCloud
 from splineviz.core.volume import Volume
-from splineviz.io.session import nonzero_normal
+from splineviz.io.session import ID_PATTERN, MAX_MAGNITUDE
 
 Unit = Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)]
 RGB = tuple[Unit, Unit, Unit]
-Finite = Annotated[float, Field(allow_inf_nan=False)]
+#: finite and within what float32 rendering and session files take
+Finite = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
 Vec3 = tuple[Finite, Finite, Finite]
+NodeId = Annotated[str, Field(pattern=ID_PATTERN)]
+Positive = Annotated[float, Field(gt=0.0, le=MAX_MAGNITUDE, allow_inf_nan=False)]
+
+
+def nonzero_normal(v):
+    """A clip plane's normal, refused when it is the zero vector (pydantic validator)."""
+    if sum(c * c for c in v) == 0.0:
+        raise ValueError("a clip plane normal must not be zero")
+    return v
+
+
+def _model_name(name: str) -> str:
+    # the spline model registry is the one place that knows the valid names; plugins add
+    # theirs when first asked (a session may name one before anything loaded them)
+    from splineviz.core.splines.registry import MODELS, model_spec
+
+    if name not in MODELS:
+        from splineviz.plugins import ensure_loaded
+
+        ensure_loaded()
+    model_spec(name)
+    return name
+
+
+#: a key of the spline model registry (:data:`splineviz.core.splines.MODELS`)
+ModelName = Annotated[str, AfterValidator(_model_name)]
+Normal = Annotated[Vec3, AfterValidator(nonzero_normal)]
+
+
+def reference(*types: str, alias: str | None = None) -> Any:
+    """A field holding the id of another node (None: none). Without ``alias`` it is one of
+    the object's session ``inputs``, filled from an input of one of the session object
+    ``types``; with ``alias`` a property of that name."""
+    return Field(default=None, alias=alias,
+                 json_schema_extra=None if alias else {"inputs": list(types)})
+
+
+def origin(default=None, default_factory=None) -> Any:
+    """A field saying where a node's data comes from (a path, read options, a source)."""
+    if default_factory is not None:
+        return Field(default_factory=default_factory, json_schema_extra={"origin": True})
+    return Field(default=default, json_schema_extra={"origin": True})
+
+
+def per_view(default) -> Any:
+    """A field that sessions write into their views (a split, the side an object shows
+    in), not as a property of the object."""
+    return Field(default=default, json_schema_extra={"view": True})
+
+
+def is_required_in_documents(info) -> bool:
+    """Whether a session must state the field's value (its default is the node's only)."""
+    return _marked(info, "required")
+
+
+def _marked(info, key: str) -> bool:
+    return isinstance(info.json_schema_extra, dict) and key in info.json_schema_extra
+
+
+def is_reference(info) -> bool:
+    """Whether a field (pydantic ``FieldInfo``) is an input :func:`reference`."""
+    return _marked(info, "inputs")
+
+
+def is_origin(info) -> bool:
+    """Whether a field is an :func:`origin` field."""
+    return _marked(info, "origin")
+
 
 #: default colours of successive isosurfaces of one volume (qualitative: tell them apart)
-PALETTE = ((0.93, 0.78, 0.55), (0.55, 0.80, 0.55), (0.90, 0.50, 0.45), (0.60, 0.65, 0.95))
-#: named Phong materials: (ambient, diffuse, specular, shininess)
-MATERIALS = {
-    "default": (0.15, 0.75, 0.35, 24.0),
-    "matte": (0.2, 0.8, 0.0, 1.0),
-    "shiny": (0.1, 0.7, 0.7, 60.0),
-    "metal": (0.25, 0.55, 0.9, 12.0),
-}
+PALETTE = (FRONT_COLOR, (0.55, 0.80, 0.55), (0.90, 0.50, 0.45), (0.60, 0.65, 0.95))
 #: the widest range of smoothing sigmas offered (voxels)
 MAX_SIGMA = 8.0
 #: where an object shows while the view is split in two (:attr:`ViewNode.split`): in both
@@ -61,20 +131,24 @@ def _describe(exc: ValidationError) -> str:
 
 
 class Node(EventedModel):
-    """Base of all scene nodes: an id, a display name and visibility.
+    """Base of all scene nodes: an id and a display name.
 
-    Assigning a bad value raises :class:`ModelError` and leaves the node unchanged.
+    Assigning a bad value raises :class:`ModelError` and leaves the node unchanged. Fields of
+    a subclass are declared in the order sessions write them (``visible`` among them, where
+    a node can be hidden).
     """
 
     model_config = ConfigDict(arbitrary_types_allowed=True, validate_assignment=True,
-                              extra="forbid")
+                              extra="forbid", validate_by_name=True, validate_by_alias=True)
 
     id: str = ""
     name: str = ""
-    visible: bool = True
 
-    #: session object type written for this node (set by subclasses)
+    #: short name of the node's kind (set by subclasses)
     kind: str = Field(default="", exclude=True, frozen=True)
+    #: rules across properties that a saved document must keep; the node itself allows
+    #: them broken for a moment (a panel moves one end of a range past the other)
+    document_rules: ClassVar[tuple] = ()
 
     def __init__(self, **data: Any) -> None:
         try:
@@ -96,9 +170,25 @@ class Node(EventedModel):
         super().update({**(values or {}), **kwargs}, recurse=recurse)
 
     def state(self) -> dict:
-        """The properties that differ from their defaults (for session files)."""
-        return self.model_dump(mode="json", exclude_defaults=True,
+        """The properties that differ from their defaults, in field order, as JSON values
+        under their session names (napari's ``_get_state``); ``type(node)(**state)`` makes
+        the node again, apart from its data."""
+        return self.model_dump(mode="json", exclude_defaults=True, by_alias=True,
                                exclude={"id", "name", "kind"})
+
+    @classmethod
+    def properties(cls) -> dict:
+        """``{field name: FieldInfo}`` of the plain properties (no data, :func:`origin`,
+        input :func:`reference` or :func:`per_view` fields), in field order."""
+        return {k: f for k, f in cls.model_fields.items()
+                if k not in ("id", "name", "kind") and not f.exclude
+                and not any(_marked(f, m) for m in ("origin", "inputs", "view"))}
+
+    @classmethod
+    def references(cls) -> dict:
+        """``{field name: session object types it takes}`` of the input references."""
+        return {k: tuple(f.json_schema_extra["inputs"]) for k, f in cls.model_fields.items()
+                if is_reference(f)}
 
 
 class VolumeNode(Node):
@@ -111,11 +201,12 @@ class VolumeNode(Node):
     """
 
     kind: str = Field(default="volume", exclude=True, frozen=True)
-    path: str | None = None
-    read_options: dict = Field(default_factory=dict)
-    source: str | None = None
+    path: str | None = origin()
+    read_options: dict = origin(default_factory=dict)
+    source: str | None = origin()
     sigma: Annotated[float, Field(ge=0.0, le=MAX_SIGMA, allow_inf_nan=False)] = 0.0
     show_outline: bool = True
+    visible: bool = True
     #: in-memory samples, or a lazily read chunked volume (rendered in bricks)
     data: Volume | ChunkedVolume | None = Field(default=None, exclude=True, repr=False)
     smoothed: Volume | None = Field(default=None, exclude=True, repr=False)
@@ -151,63 +242,50 @@ class IsosurfaceNode(Node):
     """One spline isosurface of a volume (thesis ch. 6)."""
 
     kind: str = Field(default="isosurface", exclude=True, frozen=True)
-    volume_id: str = ""
-    model: str = "cubic-c1"
+    volume_id: str = reference("VolumeFile", "Source")
+    #: (a session must state it: no default there)
+    isovalue: Finite = Field(default=0.0, json_schema_extra={"required": True})
+    model: ModelName = "to-quadratic"
     k: Annotated[int, Field(ge=1, le=16)] = 2
-    isovalue: Finite = 0.0
-    color: RGB = PALETTE[0]
+    color: RGB = (0.9, 0.9, 0.9)
     opacity: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False)] = 1.0
-    material: str = "default"
+    visible: bool = True
+    material: Literal[tuple(MATERIALS)] = "default"
     #: colour by (:mod:`splineviz.core.colour_by`): field, map, range mode, manual range and
     #: the volume node whose values colour the surface when ``color_by == "volume"``
-    color_by: str = "none"
-    color_map: str = "viridis"
-    color_range: str = "auto"
+    color_by: Literal[FIELDS] = "none"
+    color_map: Literal[COLORMAPS] = "viridis"
+    color_range: Literal[RANGE_MODES] = "auto"
     color_min: Finite = 0.0
     color_max: Finite = 1.0
-    color_volume_id: str | None = None
+    color_volume_id: NodeId | None = reference(alias="color_volume")
     #: the isosurface node whose surface the distance is measured to (``"distance"``)
-    color_isosurface_id: str | None = None
+    color_isosurface_id: NodeId | None = reference(alias="color_isosurface")
     #: the view it shows in while the view is split (:data:`SIDES`)
-    shown_in: Side = "both"
+    shown_in: Side = per_view("both")
 
-    @field_validator("color_by", "color_map", "color_range", "model")
-    @classmethod
-    def _known_choice(cls, v: str, info) -> str:
-        from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
-        from splineviz.core.splines import MODELS
-
-        what, choices = {"color_by": ("colour-by field", FIELDS),
-                         "color_map": ("colour map", COLORMAPS),
-                         "color_range": ("range mode", RANGE_MODES),
-                         "model": ("spline model", MODELS)}[info.field_name]
-        if v not in choices:
-            raise ValueError(f"unknown {what} {v!r}; choose one of {', '.join(choices)}")
-        return v
+    document_rules: ClassVar[tuple] = (
+        (lambda p: p["color_min"] < p["color_max"], "color_min must be below color_max"),)
 
     def model_options(self) -> dict:
         """Keyword arguments of the spline model (``k`` for the models that take it)."""
-        from splineviz.core.splines import MODELS
+        from splineviz.core.splines.registry import model_spec
 
-        return {"k": self.k} if "k" in MODELS[self.model].options else {}
-
-    @field_validator("material")
-    @classmethod
-    def _known_material(cls, v: str) -> str:
-        if v not in MATERIALS:
-            raise ValueError(f"unknown material {v!r}; choose one of {', '.join(MATERIALS)}")
-        return v
+        return {"k": self.k} if "k" in model_spec(self.model).options else {}
 
 
 class PointsNode(Node):
     """A point cloud shown as points."""
 
     kind: str = Field(default="points", exclude=True, frozen=True)
-    path: str | None = None
-    color: RGB = (0.85, 0.85, 0.9)
+    path: str | None = origin()
+    #: the reader's format name when the file's suffix does not tell it
+    format: str | None = origin()
+    color: RGB = (0.8, 0.8, 0.8)
     point_size: Annotated[float, Field(gt=0.0, le=100.0, allow_inf_nan=False)] = 3.0
     opacity: Unit = 1.0
-    shown_in: Side = "both"
+    visible: bool = True
+    shown_in: Side = per_view("both")
     data: PointCloud | None = Field(default=None, exclude=True, repr=False)
 
 
@@ -219,14 +297,15 @@ class MeshNode(Node):
     """
 
     kind: str = Field(default="mesh", exclude=True, frozen=True)
-    path: str | None = None
-    points_id: str | None = None
-    edge_length: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
-    rho: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] | None = None
-    color: RGB = (0.75, 0.85, 0.95)
+    path: str | None = origin()
+    points_id: str | None = reference("PointsFile")
+    color: RGB = (0.8, 0.8, 0.8)
     opacity: Unit = 1.0
-    show_edges: bool = True
-    shown_in: Side = "both"
+    show_edges: bool = False
+    visible: bool = True
+    edge_length: Positive | None = None
+    rho: Annotated[float, Field(gt=0.0, le=10.0, allow_inf_nan=False)] | None = None
+    shown_in: Side = per_view("both")
     vertices: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     faces: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     normals: np.ndarray | None = Field(default=None, exclude=True, repr=False)
@@ -256,13 +335,11 @@ class ClipPlaneNode(Node):
     """
 
     kind: str = Field(default="clip_plane", exclude=True, frozen=True)
-    volume_id: str | None = None
+    volume_id: str | None = reference("VolumeFile", "Source")
     origin: Vec3 = (0.0, 0.0, 0.0)
-    normal: Vec3 = (1.0, 0.0, 0.0)
+    normal: Normal = (1.0, 0.0, 0.0)
     enabled: bool = True
     show_widget: bool = True
-
-    _nonzero = field_validator("normal")(classmethod(lambda cls, v: nonzero_normal(v)))
 
     def as_pair(self) -> tuple[tuple, tuple]:
         """``(origin, normal)`` as :meth:`splineviz.RayCaster.render` takes it."""
@@ -278,11 +355,12 @@ class SectionNode(Node):
     """
 
     kind: str = Field(default="section", exclude=True, frozen=True)
-    isosurface_id: str = ""
-    plane_id: str | None = None
-    other_id: str | None = None
+    isosurface_id: str = reference("Isosurface")
+    plane_id: str | None = reference("ClipPlane")
+    other_id: str | None = reference("Isosurface")
     color: RGB = (0.95, 0.25, 0.2)
     line_width: Annotated[float, Field(gt=0.0, le=20.0, allow_inf_nan=False)] = 3.0
+    visible: bool = True
     curves: list | None = Field(default=None, exclude=True, repr=False)
 
     @property
@@ -301,30 +379,36 @@ class CameraNode(Node):
     view_up: Vec3 = (0.0, 1.0, 0.0)
     view_angle: Annotated[float, Field(gt=0.0, lt=180.0, allow_inf_nan=False)] = 30.0
     parallel_projection: bool = False
-    parallel_scale: Annotated[float, Field(gt=0.0, allow_inf_nan=False)] = 1.0
+    parallel_scale: Positive = 1.0
+
+    document_rules: ClassVar[tuple] = (
+        (lambda p: tuple(p["position"]) != tuple(p["focal_point"]),
+         "camera position and focal point must differ"),)
 
     def pose(self) -> dict:
         """The fields that place the camera (one dict, to compare or copy)."""
-        return {k: getattr(self, k) for k in ("position", "focal_point", "view_up",
-                                              "view_angle", "parallel_projection",
-                                              "parallel_scale")}
+        return {k: getattr(self, k) for k in self.properties()}
 
 
 class ViewNode(Node):
-    """What the view shows around the objects: background, axes, scale bar, and whether it
-    is split into two side-by-side views with one camera (ParaView's "Link Camera"), each
-    showing the objects whose ``shown_in`` names its side or ``"both"``."""
+    """What the view shows around the objects: background (a gradient up to
+    ``background2`` when set, as ParaView's), axes, scale bar, and whether it is split
+    into two side-by-side views with one camera (ParaView's "Link Camera"), each showing
+    the objects whose ``shown_in`` names its side or ``"both"``."""
 
     kind: str = Field(default="view", exclude=True, frozen=True)
-    background: RGB = (0.10, 0.10, 0.14)
+    background: RGB = (0.1, 0.1, 0.15)
+    #: the colour at the top of a gradient background (None: a plain background)
+    background2: RGB | None = None
     show_axes: bool = True
     show_scale: bool = True
-    split: bool = False
+    split: bool = per_view(False)
 
 
-#: session object type -> node class (the one table the session conversion reads)
+#: node kind -> node class
 NODE_TYPES = {cls.model_fields["kind"].default: cls
-              for cls in (VolumeNode, IsosurfaceNode, PointsNode, MeshNode, ClipPlaneNode)}
+              for cls in (VolumeNode, IsosurfaceNode, PointsNode, MeshNode, ClipPlaneNode,
+                          SectionNode)}
 
 
 def mesh_arrays(mesh) -> tuple[np.ndarray, np.ndarray]:

@@ -20,6 +20,7 @@ from collections.abc import Iterator
 import numpy as np
 from psygnal import Signal
 
+from splineviz.core.raycast_reference import BACKGROUND
 from splineviz.core.volume import Volume
 from splineviz.model.nodes import (
     PALETTE,
@@ -47,6 +48,14 @@ STANDARD_VIEWS = {
 }
 
 
+#: how new point clouds and meshes look. A property's default is what a session without it
+#: means (schema 1-4 documents fixed those); a new object gets a look that tells it apart,
+#: as new isosurfaces get the next :data:`~splineviz.model.nodes.PALETTE` colour and a new
+#: scene the ray caster's background
+NEW_POINTS = {"color": (0.85, 0.85, 0.9)}
+NEW_MESH = {"color": (0.75, 0.85, 0.95), "show_edges": True}
+
+
 def default_model() -> str:
     """The model new isosurfaces start with: cubic C1 (smooth, with an OpenCL kernel)."""
     from splineviz.core.splines import MODELS
@@ -63,7 +72,7 @@ class Scene:
     >>> from splineviz.core import testfunctions as tf
     >>> scene = Scene()
     >>> vol = scene.add_volume(sv.Volume.from_function(tf.ml, (9, 9, 9), tf.ml.domain),
-    ...                        name="ML")
+    ...                        name="ML", isosurface=False)
     >>> iso = scene.add_isosurface(vol, isovalue=0.5)
     >>> [n.id for n in scene], iso.volume_id
     (['volume1', 'isosurface1'], 'volume1')
@@ -77,7 +86,7 @@ class Scene:
     def __init__(self):
         self._nodes: dict[str, Node] = {}
         self.camera = CameraNode(id="camera")
-        self.view = ViewNode(id="view")
+        self.view = ViewNode(id="view", background=BACKGROUND)
         self.selected: Node | None = None
         #: True after any change since :meth:`mark_saved`
         self.modified = False
@@ -333,10 +342,13 @@ class Scene:
                                     other_id=None if other is None else other.id, **props))
 
     def add_points(self, cloud, name: str = "", *, path=None, **props) -> PointsNode:
+        """A point cloud, in :data:`NEW_POINTS` unless ``props`` say otherwise."""
         return self.add(PointsNode(name=name, path=None if path is None else str(path),
-                                   data=cloud, **props))
+                                   data=cloud, **{**NEW_POINTS, **props}))
 
     def add_mesh(self, vertices, faces, name: str = "", *, normals=None, **props) -> MeshNode:
+        """A triangle mesh, in :data:`NEW_MESH` unless ``props`` say otherwise."""
+        props = {**NEW_MESH, **props}
         return self.add(MeshNode(name=name, vertices=np.asarray(vertices, dtype=np.float64),
                                  faces=np.asarray(faces, dtype=np.int64), normals=normals,
                                  **props))

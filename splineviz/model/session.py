@@ -13,6 +13,7 @@ complete. Loading is two steps so that a GUI can read data in a worker:
 
 from __future__ import annotations
 
+import logging
 import os
 from pathlib import Path
 
@@ -20,7 +21,7 @@ import numpy as np
 
 from splineviz.io.errors import SessionError
 from splineviz.io.session import (
-    CameraState,
+    READ_OPTIONS,
     Layout,
     Session,
     View,
@@ -29,14 +30,17 @@ from splineviz.io.session import (
 )
 from splineviz.model.nodes import (
     ClipPlaneNode,
-    IsosurfaceNode,
     MeshNode,
     PointsNode,
-    SectionNode,
+    ViewNode,
     VolumeNode,
+    is_required_in_documents,
     mesh_arrays,
 )
 from splineviz.model.scene import Scene
+from splineviz.model.schema import OBJECT_NODES, session_names
+
+_log = logging.getLogger(__name__)
 
 SESSION_SUFFIX = ".svs"
 
@@ -48,12 +52,46 @@ def session_path(path) -> Path:
     return p if p.suffix.lower() == SESSION_SUFFIX else p.with_name(p.name + SESSION_SUFFIX)
 
 
-def _props(node, *names) -> dict:
-    return {n: getattr(node, n) for n in names}
+def object_type(node) -> str | None:
+    """The session object type of ``node`` (None: the node is not a pipeline object)."""
+    if isinstance(node, VolumeNode):  # one node, two ways to say where its data is
+        return "Source" if node.source is not None else "VolumeFile"
+    return next((t for t, (cls, _) in OBJECT_NODES.items() if isinstance(node, cls)), None)
+
+
+def _origin(node, type_name: str, path, read_options) -> dict:
+    """The properties that say where ``node``'s data comes from (io's declaration)."""
+    if type_name == "Source":
+        return {"source": node.source, "shape": list(node.data.shape)}
+    if path is None:
+        if type_name == "VolumeFile":
+            raise SessionError(f"volume {node.name!r} has no file; save the session with "
+                               "save_scene, which writes it")
+        what = "point cloud" if type_name == "PointsFile" else "mesh"
+        raise SessionError(f"{what} {node.name!r} has no file")
+    options = {"format": node.format} if isinstance(node, PointsNode) else read_options
+    return {"path": path, **(options or {})}
+
+
+def node_properties(node) -> dict:
+    """The session properties of ``node``: its :meth:`~splineviz.model.nodes.Node.state`
+    (non-default properties, under their session names) and the properties a document
+    must state whatever their values."""
+    names = session_names(type(node))
+    state = node.state()
+    props = {name: state[name] for name in names.values() if name in state}
+    for field, info in type(node).properties().items():
+        if is_required_in_documents(info) and names[field] not in props:
+            props[names[field]] = getattr(node, field)
+    return props
 
 
 def to_session(scene: Scene, written: dict | None = None) -> Session:
     """The :class:`~splineviz.io.session.Session` of ``scene``.
+
+    Each node is written as its properties (the document keeps the non-default ones: its
+    ``Node.state()``), its input references as the object's ``inputs`` (those naming nodes
+    of the scene) and, for data, where the data comes from.
 
     Parameters
     ----------
@@ -72,60 +110,23 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
     written = written or {}
     s = Session()
     for node in scene:
-        common = {"name": node.name, "id": node.id}
-        path, read_options = getattr(node, "path", None), getattr(node, "read_options", {})
-        if path is None and node.id in written:
-            path, read_options = written[node.id]
-        if isinstance(node, VolumeNode):
-            extra = _props(node, "sigma", "show_outline", "visible")
-            if node.source is not None:
-                s.add("Source", {"source": node.source, "shape": list(node.data.shape),
-                                 **extra}, **common)
-            elif path is not None:
-                s.add("VolumeFile", {"path": path, **read_options, **extra}, **common)
-            else:
-                raise SessionError(f"volume {node.name!r} has no file; save the session with "
-                                   "save_scene, which writes it")
-        elif isinstance(node, IsosurfaceNode):
-            colour_by = _props(node, "color_by", "color_map", "color_range", "color_min",
-                               "color_max")
-            if node.color_volume_id is not None:
-                colour_by["color_volume"] = node.color_volume_id
-            if node.color_isosurface_id is not None:
-                colour_by["color_isosurface"] = node.color_isosurface_id
-            s.add("Isosurface", {**_props(node, "isovalue", "model", "k", "opacity", "visible",
-                                          "material"), "color": list(node.color), **colour_by},
-                  inputs=[node.volume_id], **common)
-        elif isinstance(node, PointsNode):
-            if path is None:
-                raise SessionError(f"point cloud {node.name!r} has no file")
-            s.add("PointsFile", {"path": path, "color": list(node.color),
-                                 **_props(node, "point_size", "opacity", "visible")}, **common)
-        elif isinstance(node, MeshNode):
-            if path is None:
-                raise SessionError(f"mesh {node.name!r} has no file")
-            provenance = {k: v for k, v in _props(node, "edge_length", "rho").items()
-                          if v is not None}
-            inputs = [node.points_id] if node.points_id in scene else []
-            s.add("MeshFile", {"path": path, "color": list(node.color),
-                               **_props(node, "opacity", "show_edges", "visible"),
-                               **provenance}, inputs=inputs, **common)
-        elif isinstance(node, SectionNode):
-            s.add("Section", {"color": list(node.color), **_props(node, "line_width", "visible")},
-                  inputs=node.inputs, **common)
-        elif isinstance(node, ClipPlaneNode):
-            s.add("ClipPlane", {"origin": list(node.origin), "normal": list(node.normal),
-                                **_props(node, "enabled", "show_widget")},
-                  inputs=[] if node.volume_id is None else [node.volume_id], **common)
+        type_name = object_type(node)
+        if type_name is None:
+            continue
+        props = {}
+        if OBJECT_NODES[type_name][1] is not None:
+            path, read_options = getattr(node, "path", None), getattr(node, "read_options", {})
+            if path is None and node.id in written:
+                path, read_options = written[node.id]
+            props = _origin(node, type_name, path, read_options)
+        inputs = [getattr(node, k) for k in type(node).references()]
+        s.add(type_name, {**props, **node_properties(node)},
+              inputs=[i for i in inputs if i is not None and i in scene],
+              name=node.name, id=node.id)
     view = s.views[0]
-    cam = scene.camera
-    view.camera = CameraState(position=cam.position, focal_point=cam.focal_point,
-                              view_up=cam.view_up, view_angle=cam.view_angle,
-                              parallel_projection=cam.parallel_projection,
-                              parallel_scale=cam.parallel_scale)
-    view.background = scene.view.background
-    view.show_axes = scene.view.show_axes
-    view.show_scale = scene.view.show_scale
+    view.camera = scene.camera.pose()
+    for k in ViewNode.properties():
+        setattr(view, k, getattr(scene.view, k))
     if scene.view.split:
         # the split as two views side by side with one camera; each hides the objects
         # shown only on the other side
@@ -236,6 +237,53 @@ def _plane_volume(session: Session, obj) -> str | None:
     return vols.pop() if len(vols) == 1 else None
 
 
+def _references(session: Session, obj, node_cls) -> dict:
+    """Reference fields of ``node_cls`` filled from ``obj``'s inputs: each input fills the
+    first empty reference that takes an object of its type."""
+    if node_cls is ClipPlaneNode:  # schema 2 planes also took isosurfaces and data
+        return {"volume_id": _plane_volume(session, obj)}
+    refs = dict.fromkeys(node_cls.references())
+    for i in obj.inputs:
+        typ = session.object(i).type
+        key = next((k for k, types in node_cls.references().items()
+                    if refs[k] is None and typ in types), None)
+        if key is not None:
+            refs[key] = i
+    return refs
+
+
+def _check_colour_by(session: Session, obj) -> None:
+    """The ids an isosurface is coloured by name objects of the right kind."""
+    p = obj.properties
+    kinds = {o.id: o.type for o in session.objects}
+    if p.color_volume is not None and kinds.get(p.color_volume) not in ("VolumeFile", "Source"):
+        raise SessionError(f"isosurface {obj.id!r} is coloured by {p.color_volume!r}, "
+                           "which is not a volume")
+    if p.color_isosurface is not None and kinds.get(p.color_isosurface) != "Isosurface":
+        raise SessionError(f"isosurface {obj.id!r} measures the distance to "
+                           f"{p.color_isosurface!r}, which is not an isosurface")
+
+
+def node_of(session: Session, obj, data=None):
+    """The scene node of the session object ``obj``: ``Node(**properties, data=...)``."""
+    node_cls, origin = OBJECT_NODES[obj.type]
+    values = obj.properties.model_dump()
+    kwargs = {k: values[name] for k, name in session_names(node_cls).items()}
+    kwargs.update(_references(session, obj, node_cls))
+    if obj.type == "VolumeFile":
+        kwargs.update(path=values["path"], data=data, read_options={
+            k: values[k] for k in READ_OPTIONS
+            if values[k] != origin.model_fields[k].default})
+    elif obj.type == "Source":
+        kwargs.update(source=values["source"], data=data)
+    elif obj.type == "PointsFile":
+        kwargs.update(path=values["path"], format=values["format"], data=data)
+    elif obj.type == "MeshFile":
+        v, f, n = data
+        kwargs.update(path=values["path"], vertices=v, faces=f, normals=n)
+    return node_cls(id=obj.id, name=obj.name or obj.id, **kwargs)
+
+
 def apply_session(scene: Scene, session: Session, data: dict | None = None) -> Scene:
     """Replace the contents of ``scene`` by ``session`` (``data`` from
     :func:`read_session_data`; read here when None). Ids and every property are kept."""
@@ -245,63 +293,16 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
     load_extensions()  # plugin models named by isosurfaces
     scene.clear()
     for obj in session.objects:
-        p = obj.properties
-        common = {"id": obj.id, "name": obj.name or obj.id}
-        if obj.type in ("VolumeFile", "Source"):
-            is_file = obj.type == "VolumeFile"
-            read = ({k: v for k, v in p.model_dump(exclude_defaults=True).items()
-                     if k in ("format", "dims", "dtype", "byteorder", "offset", "spacing",
-                              "origin")} if is_file else {})
-            scene.add(VolumeNode(path=p.path if is_file else None,
-                                 source=None if is_file else p.source, read_options=read,
-                                 sigma=p.sigma, show_outline=p.show_outline, visible=p.visible,
-                                 data=data[obj.id], **common))
-        elif obj.type == "Isosurface":
-            kinds = {o.id: o.type for o in session.objects}
-            if p.color_volume is not None and \
-                    kinds.get(p.color_volume) not in ("VolumeFile", "Source"):
-                raise SessionError(f"isosurface {obj.id!r} is coloured by {p.color_volume!r}, "
-                                   "which is not a volume")
-            if p.color_isosurface is not None and \
-                    kinds.get(p.color_isosurface) != "Isosurface":
-                raise SessionError(f"isosurface {obj.id!r} measures the distance to "
-                                   f"{p.color_isosurface!r}, which is not an isosurface")
-            scene.add(IsosurfaceNode(volume_id=obj.inputs[0], model=p.model, k=p.k,
-                                     isovalue=p.isovalue, color=p.color, opacity=p.opacity,
-                                     visible=p.visible, material=p.material,
-                                     color_by=p.color_by, color_map=p.color_map,
-                                     color_range=p.color_range, color_min=p.color_min,
-                                     color_max=p.color_max, color_volume_id=p.color_volume,
-                                     color_isosurface_id=p.color_isosurface,
-                                     **common))
-        elif obj.type == "PointsFile":
-            scene.add(PointsNode(path=p.path, color=p.color, point_size=p.point_size,
-                                 opacity=p.opacity, visible=p.visible, data=data[obj.id],
-                                 **common))
-        elif obj.type == "MeshFile":
-            v, f, n = data[obj.id]
-            scene.add(MeshNode(path=p.path, points_id=obj.inputs[0] if obj.inputs else None,
-                               edge_length=p.edge_length, rho=p.rho, color=p.color,
-                               opacity=p.opacity, show_edges=p.show_edges, visible=p.visible,
-                               vertices=v, faces=f, normals=n, **common))
-        elif obj.type == "ClipPlane":
-            scene.add(ClipPlaneNode(volume_id=_plane_volume(session, obj), origin=p.origin,
-                                    normal=p.normal, enabled=p.enabled,
-                                    show_widget=p.show_widget, **common))
-        elif obj.type == "Section":
-            first, second = obj.inputs
-            is_plane = session.object(second).type == "ClipPlane"
-            scene.add(SectionNode(isosurface_id=first, plane_id=second if is_plane else None,
-                                  other_id=None if is_plane else second, color=p.color,
-                                  line_width=p.line_width, visible=p.visible, **common))
+        if obj.type == "Isosurface":
+            _check_colour_by(session, obj)
+        scene.add(node_of(session, obj, data.get(obj.id)))
     view = session.views[0]
     _apply_split(scene, session)
-    c = view.camera
-    scene.camera.update(position=c.position, focal_point=c.focal_point, view_up=c.view_up,
-                        view_angle=c.view_angle, parallel_projection=c.parallel_projection,
-                        parallel_scale=c.parallel_scale)
-    scene.view.update(background=view.background, show_axes=view.show_axes,
-                      show_scale=view.show_scale)
+    scene.camera.update(view.camera.model_dump())
+    scene.view.update({k: getattr(view, k) for k in ViewNode.properties()})
+    if any(v.lights != View.model_fields["lights"].default for v in session.views):
+        _log.warning("session: the view's lights are not rendered (the view has one "
+                     "headlight); they are kept only in the session file")
     scene.mark_saved()
     return scene
 

@@ -1,7 +1,8 @@
 """An isosurface layer: the state of one ray-cast spline isosurface, free of any view.
 
-A layer holds the volume, the spline model, the isovalue, the appearance (colour, opacity,
-material) and the ray casters that make its frames. Views (:class:`~splineviz.render.scene.
+A layer reads the properties of its isosurface node (spline model, isovalue, colour,
+opacity, material, colour by) and holds the volume's data and the ray casters that make its
+frames. Views (:class:`~splineviz.render.scene.
 SplineScene`) ask it for frames of *their* camera and size with :meth:`IsosurfaceLayer.compute`
 and show them with a :class:`~splineviz.render.quad.FrameQuad`; several views (the window,
 an off-screen export) can show one layer. ``compute`` may run in a worker thread: the ray
@@ -26,8 +27,8 @@ import numpy as np
 
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError, SplinevizWarning
+from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
-from splineviz.core.splines import MODELS
 from splineviz.core.volume import Volume
 from splineviz.model import nodes
 
@@ -77,20 +78,6 @@ class RenderedFrame:
         return self.scale >= 1.0 and self.path != "preview"
 
 
-@dataclass
-class Material:
-    """Phong constants of the headlight model (defaults: the reference ray caster's)."""
-
-    ambient: float = 0.15
-    diffuse: float = 0.75
-    specular: float = 0.35
-    shininess: float = 24.0
-
-
-#: named materials offered in the GUI (the model's table)
-MATERIALS = {name: Material(*consts) for name, consts in nodes.MATERIALS.items()}
-
-
 def make_caster(volume, model: str, device=None, options=None):
     """The ray caster of a layer: a :class:`~splineviz.compute.raycast.RayCaster` of an
     in-memory volume, a :class:`~splineviz.compute.bricked.BrickedRayCaster` (bricks on dask
@@ -106,8 +93,22 @@ def make_caster(volume, model: str, device=None, options=None):
     return RayCaster(volume, model=model, device=device, **dict(options or {}))
 
 
+#: node properties whose change needs new frames (any other changes only the shading
+#: uniforms or the colouring of shown frames)
+FRAME_PROPERTIES = frozenset({"model", "k", "isovalue", "color_by"})
+
+
 class IsosurfaceLayer:
     """One spline isosurface of a volume (see module docstring).
+
+    The layer reads its :class:`~splineviz.model.IsosurfaceNode` (``node``) and holds no
+    copy of its properties: a change of the node tells the layer's listeners (``"frame"``
+    for :data:`FRAME_PROPERTIES`, else ``"appearance"``). What the node names by id (its
+    volume's data, a colour-by volume or reference surface) is given by the owner
+    (:meth:`set_volume`, :meth:`set_color_by`); ``visible`` is this view's: the node's
+    and its volume's visibility and the view's side. Without ``node`` the layer makes
+    its own from the keyword arguments (scripts, tests); the ``set_*`` methods write to
+    the node either way.
 
     Parameters
     ----------
@@ -121,13 +122,24 @@ class IsosurfaceLayer:
     name : str
     device : str or None
         OpenCL device preference passed to :class:`splineviz.RayCaster`.
+    material : str
+        A key of :data:`splineviz.core.material.MATERIALS`.
+    model_options : dict, optional
+        Keyword arguments of the model (``k``).
+    node : IsosurfaceNode, optional
+        The node to show; the other settings are then read from it.
     """
 
     def __init__(self, volume: Volume, model: str = "trilinear", isovalue=None,
                  color=PALETTE[0], opacity: float = 1.0, name: str = "isosurface",
-                 device: str | None = None, material: str = "default", model_options=None):
-        self._check_model(model)
-        self.name = name
+                 device: str | None = None, material: str = "default", model_options=None,
+                 node: nodes.IsosurfaceNode | None = None):
+        if node is None:
+            iso = (0.5 * sum(volume.finite_range) if isovalue is None else isovalue)
+            node = _layer_call(lambda: nodes.IsosurfaceNode(
+                name=name, model=model, isovalue=iso, color=color, opacity=opacity,
+                material=material, **dict(model_options or {})))
+        self.node = node
         self.visible = True
         self._device = device
         # one lock per caster: a preview (GUI thread) never waits for an exact frame that a
@@ -136,29 +148,24 @@ class IsosurfaceLayer:
         self._preview_lock = threading.RLock()
         self._listeners = []
         self._volume = volume
-        self._model = model
-        self._model_options = dict(model_options or {})
+        #: (model, options) the casters and splines are made for
+        self._cast = (node.model, node.model_options())
         #: clip planes of this layer alone, added to the view's (see :meth:`set_clip_planes`)
         self.clip_planes: tuple = ()
         self._version = 0
         self._caster = None
         self._preview = None
-        self.color = tuple(float(c) for c in color)
-        self.opacity = 1.0
-        self.set_opacity(opacity)
-        self.material_name = "default"
-        self.set_material(material)
-        self._isovalue = (0.5 * sum(volume.finite_range) if isovalue is None
-                          else float(isovalue))
         self.last_stats: dict = {}
-        #: colour by (core.colour_by.FIELDS), its map, range mode and manual limits
-        self.color_by = "none"
-        self.color_map = "viridis"
-        self.color_range = "auto"
-        self.color_limits = (0.0, 1.0)
+        self._limits = (0.0, 1.0)
+        self._keep_limits()
         self._color_volume: Volume | None = None
         self._color_reference: tuple | None = None  # (volume, model, options, isovalue)
         self._splines: dict = {}  # "own" / "other" -> Spline for the colour-by values
+        node.events.connect(self._node_changed)
+
+    def close(self) -> None:
+        """Stop following the node."""
+        self.node.events.disconnect(self._node_changed)
 
     # -- events --------------------------------------------------------------------------
 
@@ -177,7 +184,33 @@ class IsosurfaceLayer:
         for cb in list(self._listeners):
             cb(self, what)
 
-    # -- state ---------------------------------------------------------------------------
+    def _node_changed(self, info) -> None:
+        name = info.signal.name
+        if name in ("model", "k"):
+            cast = (self.node.model, self.node.model_options())
+            if cast == self._cast:
+                return
+            # drop the casters without waiting for a worker that uses them (see set_volume)
+            self._cast = cast
+            self._caster = None
+            self._preview = None
+            self._splines = {}
+        elif name in ("color_min", "color_max"):
+            self._keep_limits()
+        self._emit("frame" if name in FRAME_PROPERTIES else "appearance")
+
+    def _keep_limits(self) -> None:
+        # a panel moves one end of the manual range past the other for a moment: the map
+        # keeps the last valid range meanwhile
+        lo, hi = self.node.color_min, self.node.color_max
+        if lo < hi:
+            self._limits = (lo, hi)
+
+    # -- state (read from the node) ------------------------------------------------------
+
+    @property
+    def name(self) -> str:
+        return self.node.name
 
     @property
     def volume(self) -> Volume:
@@ -185,16 +218,49 @@ class IsosurfaceLayer:
 
     @property
     def model(self) -> str:
-        return self._model
+        return self.node.model
 
     @property
     def isovalue(self) -> float:
-        return self._isovalue
+        return self.node.isovalue
+
+    @property
+    def color(self) -> tuple:
+        return tuple(self.node.color)
+
+    @property
+    def opacity(self) -> float:
+        return self.node.opacity
+
+    @property
+    def material_name(self) -> str:
+        return self.node.material
+
+    @property
+    def material(self) -> Material:
+        return MATERIALS[self.node.material]
+
+    @property
+    def color_by(self) -> str:
+        return self.node.color_by
+
+    @property
+    def color_map(self) -> str:
+        return self.node.color_map
+
+    @property
+    def color_range(self) -> str:
+        return self.node.color_range
+
+    @property
+    def color_limits(self) -> tuple[float, float]:
+        """The manual ``(lo, hi)`` of the colour map (the last valid one)."""
+        return self._limits
 
     @property
     def state(self) -> tuple:
         """Changes whenever frames of this layer must be recomputed."""
-        return (self._version, self._model, self._isovalue)
+        return (self._version, self.node.model, self.node.isovalue)
 
     def set_volume(self, volume: Volume) -> None:
         """New data (e.g. smoothed); keeps model and isovalue.
@@ -210,24 +276,9 @@ class IsosurfaceLayer:
         self._splines = {}
         self._emit("frame")
 
-    @staticmethod
-    def _check_model(model: str) -> None:
-        if model not in MODELS:
-            raise LayerError(f"unknown spline model {model!r}; choose one of {list(MODELS)}")
-
     def set_model(self, model: str, options: dict | None = None) -> None:
         """Switch the spline model (``options``: its keyword arguments, e.g. ``k``)."""
-        self._check_model(model)
-        options = dict(options or {})
-        if model == self._model and options == self._model_options:
-            return
-        # as in set_volume: drop the casters without waiting for a worker that uses them
-        self._model = model
-        self._model_options = options
-        self._caster = None
-        self._preview = None
-        self._splines = {}
-        self._emit("frame")
+        _layer_call(lambda: self.node.update(model=model, **dict(options or {})))
 
     def set_clip_planes(self, planes) -> None:
         """Clip planes of this layer only (e.g. of its volume), as ``(origin, normal)``
@@ -241,33 +292,16 @@ class IsosurfaceLayer:
         self._emit("frame")
 
     def set_isovalue(self, value) -> None:
-        value = float(value)
-        if not np.isfinite(value):
-            raise LayerError(f"the isovalue must be finite, got {value}")
-        if value == self._isovalue:
-            return
-        self._isovalue = value  # classification happens lazily, in compute()
-        self._emit("frame")
+        _layer_call(lambda: setattr(self.node, "isovalue", value))
 
     def set_color(self, color) -> None:
-        c = tuple(float(v) for v in color)
-        if len(c) != 3 or not all(0.0 <= v <= 1.0 for v in c):
-            raise LayerError(f"a colour is three numbers in [0, 1], got {color!r}")
-        self.color = c
-        self._emit("appearance")
+        _layer_call(lambda: setattr(self.node, "color", color))
 
     def set_opacity(self, opacity) -> None:
-        o = float(opacity)
-        if not 0.0 < o <= 1.0:
-            raise LayerError(f"opacity must be in (0, 1], got {opacity}")
-        self.opacity = o
-        self._emit("appearance")
+        _layer_call(lambda: setattr(self.node, "opacity", opacity))
 
     def set_material(self, name: str) -> None:
-        if name not in MATERIALS:
-            raise LayerError(f"unknown material {name!r}; choose one of {list(MATERIALS)}")
-        self.material_name = name
-        self._emit("appearance")
+        _layer_call(lambda: setattr(self.node, "material", name))
 
     def set_color_by(self, field: str, volume: Volume | None = None,
                      reference: tuple | None = None) -> None:
@@ -277,52 +311,43 @@ class IsosurfaceLayer:
         ``"distance"``: the signed distance to the surface ``reference = (volume, model,
         model_options, isovalue)``, e.g. another model or isovalue of the same data.
         """
-        from splineviz.core.colour_by import FIELDS
-
-        if field not in FIELDS:
-            raise LayerError(f"unknown colour-by field {field!r}; choose one of "
-                             f"{', '.join(FIELDS)}")
+        _layer_call(lambda: setattr(self.node, "color_by", field))
         if reference is not None:
+            from splineviz.core.splines.registry import model_spec
+
             vol, model, options, iso = reference
-            self._check_model(model)
+            try:
+                model_spec(model)
+            except SplinevizError as exc:
+                raise LayerError(str(exc)) from None
             reference = (vol, model, dict(options or {}), float(iso))
         same_ref = (reference is None and self._color_reference is None) or (
             reference is not None and self._color_reference is not None
             and reference[0] is self._color_reference[0]
             and reference[1:] == self._color_reference[1:])
-        if field == self.color_by and volume is self._color_volume and same_ref:
-            return
-        self.color_by = field
-        self._color_volume = volume
-        self._color_reference = reference
-        self._splines.pop("other", None)
-        self._splines.pop("reference", None)
-        self._emit("frame")
+        if volume is not self._color_volume or not same_ref:
+            self._color_volume = volume
+            self._color_reference = reference
+            self._splines.pop("other", None)
+            self._splines.pop("reference", None)
+            self._emit("frame")
 
     def set_color_map(self, name: str | None = None, range_mode: str | None = None,
                       limits=None) -> None:
         """Colour map by name, range mode (``auto``, ``manual``, ``symmetric``) and the
         manual ``(lo, hi)``; only the colouring of shown frames changes, no new ray cast."""
-        from splineviz.core.colour_by import RANGE_MODES
-        from splineviz.render.colormaps import ColormapError, lut
-
+        values = {}
         if name is not None:
-            try:
-                lut(name)
-            except ColormapError as exc:
-                raise LayerError(str(exc)) from None
-            self.color_map = name
+            values["color_map"] = name
         if range_mode is not None:
-            if range_mode not in RANGE_MODES:
-                raise LayerError(f"unknown range mode {range_mode!r}; choose one of "
-                                 f"{', '.join(RANGE_MODES)}")
-            self.color_range = range_mode
+            values["color_range"] = range_mode
         if limits is not None:
-            lo, hi = (float(v) for v in limits)
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-                raise LayerError(f"a colour range needs finite lo < hi, got {limits!r}")
-            self.color_limits = (lo, hi)
-        self._emit("appearance")
+            lo, hi = limits
+            values.update(color_min=lo, color_max=hi)
+            for holds, message in type(self.node).document_rules:
+                if not holds({**self.node.model_dump(), **values}):
+                    raise LayerError(f"{message}, got {tuple(limits)!r}")
+        _layer_call(lambda: self.node.update(values))
 
     def color_range_of(self, scalars) -> tuple[float, float]:
         """The ``(lo, hi)`` the colour map spans for a frame's ``scalars``."""
@@ -343,7 +368,8 @@ class IsosurfaceLayer:
                 self._splines[which] = build_spline(vol, model, **options)
             else:
                 vol = self._volume if which == "own" else self._color_volume
-                self._splines[which] = build_spline(vol, self._model, **self._model_options)
+                model, options = self._cast
+                self._splines[which] = build_spline(vol, model, **options)
         return self._splines[which]
 
     def hit_scalars(self, frame: Frame) -> np.ndarray | None:
@@ -353,30 +379,27 @@ class IsosurfaceLayer:
         has them (``Frame.hessian``), else from the spline evaluated at the hits."""
         from splineviz.core.colour_by import DERIVATIVE_FIELDS, derivative_scalars, hit_scalars
 
-        if self.color_by == "none":
+        color_by = self.color_by
+        if color_by == "none":
             return None
         out = np.full(frame.hit.shape, np.nan)
-        if self.color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
+        if color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
             hit = frame.hit
             grad = frame.normal[hit] * frame.gradient_norm[hit][:, None]
-            out[hit] = derivative_scalars(self.color_by, grad, frame.hessian[hit])
+            out[hit] = derivative_scalars(color_by, grad, frame.hessian[hit])
             return out
         pts = frame.position[frame.hit]
         other, other_iso = None, 0.0
-        if self.color_by == "volume":
+        if color_by == "volume":
             if self._color_volume is None:
                 return out
             other = self._spline("other")
-        elif self.color_by == "distance":
+        elif color_by == "distance":
             if self._color_reference is None:
                 return out
             other, other_iso = self._spline("reference"), self._color_reference[3]
-        out[frame.hit] = hit_scalars(self._spline("own"), pts, self.color_by, other, other_iso)
+        out[frame.hit] = hit_scalars(self._spline("own"), pts, color_by, other, other_iso)
         return out
-
-    @property
-    def material(self) -> Material:
-        return MATERIALS[self.material_name]
 
     def set_visible(self, visible: bool) -> None:
         self.visible = bool(visible)
@@ -400,8 +423,8 @@ class IsosurfaceLayer:
             return exact, fast
         with self._lock:
             if self._caster is None:
-                self._caster = make_caster(self._volume, self._model, self._device,
-                                           self._model_options)
+                model, options = self._cast
+                self._caster = make_caster(self._volume, model, self._device, options)
             if self._caster.stats.get("path") == "bricked" and self._preview is None:
                 # a chunked volume: previews ray cast its coarse level here
                 self._preview = self._caster.preview_caster()
@@ -461,8 +484,9 @@ class IsosurfaceLayer:
             state = self.state
             if rc is not (self._preview if use_fast else self._caster):
                 return None  # the model changed meanwhile
-            if rc.isovalue != self._isovalue:
-                rc.set_isovalue(self._isovalue)
+            isovalue = self.node.isovalue
+            if rc.isovalue != isovalue:
+                rc.set_isovalue(isovalue)
             from splineviz.core.colour_by import DERIVATIVE_FIELDS
 
             # curvature and gradient magnitude from the kernel's derivatives at the hits, when
@@ -496,6 +520,15 @@ class IsosurfaceLayer:
             scalars = self.hit_scalars(frame)
         return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats,
                              scalars=scalars)
+
+
+def _layer_call(write):
+    """Run ``write`` (a change of a node); a value the node refuses is a :class:`LayerError`
+    (the node's own sentence)."""
+    try:
+        return write()
+    except nodes.ModelError as exc:
+        raise LayerError(str(exc)) from None
 
 
 def _is_opencl_error(exc: BaseException) -> bool:

@@ -27,6 +27,8 @@ import numpy as np
 import vtk
 from vtk.util import numpy_support
 
+from splineviz.core.material import BACK_COLOR, DEFAULT_MATERIAL, FRONT_COLOR, MATERIALS, Material
+
 #: largest packed depth code (24 bits)
 DEPTH_CODES = (1 << 24) - 1
 
@@ -191,7 +193,7 @@ class FrameQuad:
         sp.SetFragmentShaderCode(FRAGMENT_SHADER)
         self._uniforms = sp.GetFragmentCustomUniforms()
         self.set_material()
-        self.set_appearance((0.93, 0.78, 0.55), 1.0)
+        self.set_appearance(FRONT_COLOR, 1.0)
         self.set_view_scale(1.0, 1.0)
         self._uniforms.SetUniformf("useColorTex", 0.0)
         self.has_image = False
@@ -213,21 +215,22 @@ class FrameQuad:
         self._poly.GetPointData().SetTCoords(tc)
         self._poly.Modified()
 
-    def set_material(self, ambient=0.15, diffuse=0.75, specular=0.35, shininess=24.0) -> None:
-        """Phong constants (defaults: those of the reference ray caster)."""
+    def set_material(self, material: Material = MATERIALS[DEFAULT_MATERIAL]) -> None:
+        """Phong constants of a :class:`~splineviz.core.material.Material` (default: the
+        ray casters' own)."""
         u = self._uniforms
-        u.SetUniformf("ambientK", float(ambient))
-        u.SetUniformf("diffuseK", float(diffuse))
-        u.SetUniformf("specularK", float(specular))
-        u.SetUniformf("shininess", float(max(shininess, 1.0)))
+        u.SetUniformf("ambientK", float(material.ambient))
+        u.SetUniformf("diffuseK", float(material.diffuse))
+        u.SetUniformf("specularK", float(material.specular))
+        u.SetUniformf("shininess", float(max(material.shininess, 1.0)))
         self.actor.Modified()
 
     def set_appearance(self, color, opacity, back_color=None) -> None:
         """Front colour (RGB in [0, 1]), opacity in [0, 1], optional back-face colour."""
         color = tuple(float(c) for c in color)
         if back_color is None:
-            # the inside seen through a cut: the complementary-ish cool tint, as the reference
-            back_color = (0.45, 0.62, 0.92)
+            # the inside seen through a cut, as the ray casters colour it
+            back_color = BACK_COLOR
         self._uniforms.SetUniform3f("frontColor", color)
         self._uniforms.SetUniform3f("backColor", tuple(float(c) for c in back_color))
         self._uniforms.SetUniformf("surfaceOpacity", float(opacity))

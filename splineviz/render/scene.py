@@ -207,9 +207,8 @@ class SplineScene:
 
     def _apply_appearance(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
         q = lv.quad
-        m = layer.material
         q.set_appearance(layer.color, layer.opacity)
-        q.set_material(m.ambient, m.diffuse, m.specular, m.shininess)
+        q.set_material(layer.material)
         q.actor.SetVisibility(bool(layer.visible and q.has_image))
         self._apply_colors(layer, lv)
 

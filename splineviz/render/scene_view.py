@@ -2,11 +2,12 @@
 
 A :class:`SceneView` shows a :class:`splineviz.model.Scene` in a pyvista plotter (the GUI's
 ``QtInteractor`` or an off-screen ``pyvista.Plotter``). It subscribes to the scene's events
-and keeps a :class:`~splineviz.render.scene.SplineScene` in step: an
-:class:`~splineviz.render.isosurface.IsosurfaceLayer` per isosurface node, an outline per
-volume, points and meshes as VTK props, clip planes per volume or scene-wide, the camera and
-the view settings (background, axes grid with world units). It holds no state of its own
-that a session would need.
+and keeps a :class:`~splineviz.render.scene.SplineScene` in step through one
+:class:`NodeView` per node, of the class :data:`VIEW_CLASSES` names for the node's type: an
+:class:`~splineviz.render.isosurface.IsosurfaceLayer` per isosurface node (reading the
+node), an outline per volume, points and meshes as VTK props, clip planes per volume or
+scene-wide, section curves; and the camera and the view settings (background or gradient,
+axes grid with world units). It holds no state of its own that a session would need.
 
 The window, ``splineviz FILE --screenshot``, ``splineviz render`` and session rendering all
 draw through this class, so a session renders the same headless as in the window.
@@ -64,6 +65,9 @@ class SceneView:
         self.device = device
         self.side = side
         self.spline_scene = SplineScene(plotter, progressive=progressive)
+        #: node id -> what this view shows of it (a :data:`VIEW_CLASSES` object)
+        self.views: dict[str, NodeView] = {}
+        #: isosurface node id -> its layer
         self.layers: dict[str, IsosurfaceLayer] = {}
         self._props: dict[str, str] = {}  # node id -> prop name in the SplineScene
         self._handlers: dict[str, object] = {}
@@ -82,16 +86,7 @@ class SceneView:
     # -- nodes ---------------------------------------------------------------------------
 
     def _inserted(self, node: Node) -> None:
-        if isinstance(node, VolumeNode):
-            self._show_outline(node)
-        elif isinstance(node, IsosurfaceNode):
-            self._add_layer(node)
-        elif isinstance(node, PointsNode | MeshNode):
-            self._show_prop(node)
-        elif isinstance(node, ClipPlaneNode):
-            self._update_planes()
-        elif isinstance(node, SectionNode):
-            self._show_section(node, recompute=node.curves is None)
+        self.views[node.id] = view_class(node)(self, node)
 
         def changed(info, node=node):
             self._node_changed(node, info.signal.name)
@@ -103,82 +98,40 @@ class SceneView:
         handler = self._handlers.pop(node.id, None)
         if handler is not None:
             node.events.disconnect(handler)
-        layer = self.layers.pop(node.id, None)
-        if layer is not None:
-            self.spline_scene.remove_layer(layer)
-        name = self._props.pop(node.id, None)
-        if name is not None and name in self.spline_scene.props:
-            self.spline_scene.remove_prop(name)
-        if isinstance(node, ClipPlaneNode):
-            self._update_planes()
+        view = self.views.pop(node.id, None)
+        if view is not None:
+            view.remove()
         self._update_grid()
 
     def _node_changed(self, node: Node, what: str) -> None:
+        view = self.views.get(node.id)
+        if view is not None:
+            view.changed(what)
+        self._dependents_changed(node, what)
+
+    def _dependents_changed(self, node: Node, what: str) -> None:
+        """What shows other nodes through ``node``: a volume's isosurfaces, the surfaces
+        coloured by their distance to an isosurface, the sections of either."""
         if isinstance(node, VolumeNode):
-            if what in ("data", "smoothed", "sigma"):
-                for iso in self.scene.isosurfaces_of(node):
-                    self.layers[iso.id].set_volume(node.active)
-                if what == "data":
-                    self._show_outline(node)
-            elif what in ("visible", "show_outline"):
-                self._show_outline(node)
-                for iso in self.scene.isosurfaces_of(node):
-                    self.layers[iso.id].set_visible(self._layer_visible(iso))
-        elif isinstance(node, IsosurfaceNode):
-            self._update_layer(node, what)
-        elif isinstance(node, PointsNode | MeshNode):
-            if what in ("visible", "shown_in"):
-                self._prop_visibility(node)
-            else:
-                self._show_prop(node)
-        elif isinstance(node, ClipPlaneNode):
-            self._update_planes()
-        elif isinstance(node, SectionNode):
-            if what != "curves":
-                self._show_section(node, recompute=False)
+            for iso in self.scene.isosurfaces_of(node):
+                layer = self.layers.get(iso.id)
+                if layer is None:
+                    continue
+                if what in ("data", "smoothed", "sigma"):
+                    layer.set_volume(node.active)
+                elif what in ("visible", "show_outline"):
+                    layer.set_visible(self._layer_visible(iso))
+        if isinstance(node, IsosurfaceNode) and what in ("isovalue", "model", "k"):
+            for other in self.scene.isosurfaces:
+                if other.color_isosurface_id == node.id and other.id in self.views:
+                    self.views[other.id].colour_by()
         # the curves follow their inputs: a new isovalue, model, plane position or data
         if what in ("isovalue", "model", "k", "origin", "normal", "data", "smoothed", "sigma"):
             for sec in self.scene.sections:
                 volumes = [self.scene.volume_of(self.scene.get(i)).id for i in sec.inputs
                            if isinstance(self.scene.get(i), IsosurfaceNode)]
-                if node.id in sec.inputs or node.id in volumes:
-                    self._show_section(sec, recompute=True)
-
-    def _show_outline(self, node: VolumeNode) -> None:
-        import pyvista as pv
-
-        name = f"outline:{node.id}"
-        self._props[node.id] = name
-        if node.data is None:
-            return
-        outline = pv.Box(bounds=np.ravel(node.data.bounds)).outline()
-        self.spline_scene.add_mesh(name, outline, kind="outline", color=OUTLINE_COLOR,
-                                   pickable=False)
-        self.spline_scene.set_prop_visible(name, node.visible and node.show_outline)
-        self._update_grid()
-
-    def _show_prop(self, node: PointsNode | MeshNode) -> None:
-        """(Re)create the VTK prop of a point cloud or mesh with the node's display options."""
-        import pyvista as pv
-
-        name = f"{node.kind}:{node.id}"
-        self._props[node.id] = name
-        if isinstance(node, PointsNode):
-            if node.data is None:
-                return
-            data = pv.PolyData(np.asarray(node.data.points, dtype=np.float64))
-            # shaded sprites: a cloud shows its shape, not a flat silhouette
-            opts = dict(color=node.color, point_size=node.point_size, opacity=node.opacity,
-                        render_points_as_spheres=True, style="points")
-        else:
-            if node.vertices is None:
-                return
-            data = node.to_polydata()
-            opts = dict(color=node.color, opacity=node.opacity, show_edges=node.show_edges,
-                        edge_color=(0.2, 0.25, 0.35), smooth_shading=node.has_normals)
-        self.spline_scene.add_mesh(name, data, kind=node.kind, **opts)
-        self._prop_visibility(node)
-        self._update_grid()
+                if (node.id in sec.inputs or node.id in volumes) and sec.id in self.views:
+                    self.views[sec.id].draw(recompute=True)
 
     def _layer_visible(self, node: IsosurfaceNode) -> bool:
         return (node.visible and self.scene.volume_of(node).visible
@@ -194,86 +147,8 @@ class SceneView:
 
     def _sides_changed(self) -> None:
         """The split was turned on or off: every object's visibility in this view again."""
-        for node in self.scene:
-            if isinstance(node, IsosurfaceNode) and node.id in self.layers:
-                self.layers[node.id].set_visible(self._layer_visible(node))
-            elif isinstance(node, PointsNode | MeshNode | SectionNode):
-                self._prop_visibility(node)
-
-    def _show_section(self, node: SectionNode, recompute: bool) -> None:
-        """(Re)draw a section's curves as lines, computing them first if asked."""
-        from splineviz.io.curves import curves_polydata
-        from splineviz.model.analysis import section_curves
-
-        if recompute:
-            section_curves(self.scene, node)
-        name = f"{node.kind}:{node.id}"
-        if not node.curves:
-            self._props.pop(node.id, None)
-            if name in self.spline_scene.props:
-                self.spline_scene.remove_prop(name)
-            return
-        self._props[node.id] = name
-        self.spline_scene.add_mesh(name, curves_polydata(node.curves), kind=node.kind,
-                                   color=node.color, line_width=node.line_width,
-                                   lighting=False)
-        self._prop_visibility(node)
-
-    def _add_layer(self, node: IsosurfaceNode) -> None:
-        vol = self.scene.volume_of(node)
-        layer = IsosurfaceLayer(vol.active, model=node.model, isovalue=node.isovalue,
-                                color=node.color, opacity=node.opacity, name=node.name,
-                                device=self.device, material=node.material,
-                                model_options=node.model_options())
-        layer.set_visible(self._layer_visible(node))
-        layer.set_clip_planes(self._volume_planes(vol.id))
-        self.layers[node.id] = layer
-        self.spline_scene.add_layer(layer)
-        self._apply_colour_by(node, layer)
-
-    def _apply_colour_by(self, node: IsosurfaceNode, layer: IsosurfaceLayer) -> None:
-        other = None
-        if node.color_volume_id is not None and node.color_volume_id in self.scene:
-            other = self.scene.get(node.color_volume_id).active
-        reference = None
-        ref_id = node.color_isosurface_id
-        if node.color_by == "distance" and ref_id is not None and ref_id in self.scene:
-            ref = self.scene.get(ref_id)
-            reference = (self.scene.volume_of(ref).active, ref.model, ref.model_options(),
-                         ref.isovalue)
-        # the manual range while one end is being edited past the other: keep the last valid
-        limits = (node.color_min, node.color_max) if node.color_min < node.color_max else None
-        layer.set_color_map(node.color_map, node.color_range, limits)
-        layer.set_color_by(node.color_by, other, reference)
-
-    def _update_layer(self, node: IsosurfaceNode, what: str) -> None:
-        layer = self.layers[node.id]
-        if what in ("model", "k"):
-            layer.set_model(node.model, node.model_options())
-        elif what == "isovalue":
-            layer.set_isovalue(node.isovalue)
-        elif what == "color":
-            layer.set_color(node.color)
-        elif what == "opacity":
-            layer.set_opacity(node.opacity)
-        elif what == "material":
-            layer.set_material(node.material)
-        elif what in ("visible", "shown_in"):
-            layer.set_visible(self._layer_visible(node))
-            # sections show where one of their isosurfaces does
-            for sec in self.scene.sections:
-                if node.id in sec.inputs:
-                    self._prop_visibility(sec)
-        elif what == "name":
-            layer.name = node.name
-        elif what in ("color_by", "color_volume_id", "color_isosurface_id", "color_map",
-                      "color_range", "color_min", "color_max"):
-            self._apply_colour_by(node, layer)
-        if what in ("isovalue", "model", "k"):
-            # surfaces coloured by their distance to this one follow it
-            for other in self.scene.isosurfaces:
-                if other.color_isosurface_id == node.id and other.id in self.layers:
-                    self._apply_colour_by(other, self.layers[other.id])
+        for view in self.views.values():
+            view.sides_changed()
 
     # -- clip planes ---------------------------------------------------------------------
 
@@ -330,7 +205,11 @@ class SceneView:
         if info is not None and info.signal.name == "split":
             self._sides_changed()
             return
-        self.plotter.set_background(self.scene.view.background)
+        view = self.scene.view
+        if view.background2 is None:
+            self.plotter.set_background(view.background)
+        else:  # a gradient, bottom to top, as ParaView's
+            self.plotter.set_background(view.background, top=view.background2)
         self._update_grid()
 
     def enable_grid(self) -> None:
@@ -371,7 +250,218 @@ class SceneView:
             handler = self._handlers.pop(node.id, None)
             if handler is not None:
                 node.events.disconnect(handler)
+        for layer in self.layers.values():
+            layer.close()
         self.spline_scene.close()
+
+
+class NodeView:
+    """What a :class:`SceneView` shows of one node; one subclass per node type
+    (:data:`VIEW_CLASSES`). It reads the node whenever the node changes and keeps nothing
+    a session would need."""
+
+    def __init__(self, owner: SceneView, node: Node):
+        self.owner = owner
+        self.node = node
+        self.draw()
+
+    def draw(self) -> None:
+        """Show the node as it is now."""
+
+    def changed(self, what: str) -> None:
+        """The node's property ``what`` changed."""
+        self.draw()
+
+    def sides_changed(self) -> None:
+        """The view was split or joined."""
+
+    def remove(self) -> None:
+        """The node left the scene: remove what shows it."""
+        sv = self.owner
+        name = sv._props.pop(self.node.id, None)
+        if name is not None and name in sv.spline_scene.props:
+            sv.spline_scene.remove_prop(name)
+
+
+class OutlineView(NodeView):
+    """A volume's box outline (its data are shown by its isosurfaces' layers)."""
+
+    def draw(self) -> None:
+        import pyvista as pv
+
+        sv, node = self.owner, self.node
+        name = f"outline:{node.id}"
+        sv._props[node.id] = name
+        if node.data is None:
+            return
+        outline = pv.Box(bounds=np.ravel(node.data.bounds)).outline()
+        sv.spline_scene.add_mesh(name, outline, kind="outline", color=OUTLINE_COLOR,
+                                 pickable=False)
+        self._visibility()
+        sv._update_grid()
+
+    def _visibility(self) -> None:
+        sv, node = self.owner, self.node
+        name = sv._props.get(node.id)
+        if name in sv.spline_scene.props:
+            sv.spline_scene.set_prop_visible(name, node.visible and node.show_outline)
+
+    def changed(self, what: str) -> None:
+        if what == "data":
+            self.draw()
+        elif what in ("visible", "show_outline"):
+            self._visibility()
+
+
+class IsosurfaceView(NodeView):
+    """A ray-cast isosurface: an :class:`IsosurfaceLayer` that reads the node."""
+
+    def draw(self) -> None:
+        sv, node = self.owner, self.node
+        vol = sv.scene.volume_of(node)
+        layer = IsosurfaceLayer(vol.active, device=sv.device, node=node)
+        layer.set_visible(sv._layer_visible(node))
+        layer.set_clip_planes(sv._volume_planes(vol.id))
+        sv.layers[node.id] = layer
+        sv.spline_scene.add_layer(layer)
+        self.colour_by()
+
+    def colour_by(self) -> None:
+        """Give the layer the data its colour-by names by id (a volume, a surface)."""
+        sv, node = self.owner, self.node
+        other = None
+        if node.color_volume_id is not None and node.color_volume_id in sv.scene:
+            other = sv.scene.get(node.color_volume_id).active
+        reference = None
+        ref_id = node.color_isosurface_id
+        if node.color_by == "distance" and ref_id is not None and ref_id in sv.scene:
+            ref = sv.scene.get(ref_id)
+            reference = (sv.scene.volume_of(ref).active, ref.model, ref.model_options(),
+                         ref.isovalue)
+        sv.layers[node.id].set_color_by(node.color_by, other, reference)
+
+    def changed(self, what: str) -> None:
+        if what in ("visible", "shown_in"):
+            self.sides_changed()
+        elif what in ("color_by", "color_volume_id", "color_isosurface_id"):
+            self.colour_by()
+        # every other property reaches the layer through the node's events
+
+    def sides_changed(self) -> None:
+        sv, node = self.owner, self.node
+        sv.layers[node.id].set_visible(sv._layer_visible(node))
+        # sections show where one of their isosurfaces does
+        for sec in sv.scene.sections:
+            if node.id in sec.inputs:
+                sv._prop_visibility(sec)
+
+    def remove(self) -> None:
+        sv = self.owner
+        layer = sv.layers.pop(self.node.id)
+        sv.spline_scene.remove_layer(layer)
+        layer.close()
+
+
+class PropView(NodeView):
+    """A point cloud or mesh as a VTK prop, re-made with the node's display options."""
+
+    def draw(self) -> None:
+        import pyvista as pv
+
+        sv, node = self.owner, self.node
+        name = f"{node.kind}:{node.id}"
+        sv._props[node.id] = name
+        if isinstance(node, PointsNode):
+            if node.data is None:
+                return
+            data = pv.PolyData(np.asarray(node.data.points, dtype=np.float64))
+            # shaded sprites: a cloud shows its shape, not a flat silhouette
+            opts = dict(color=node.color, point_size=node.point_size, opacity=node.opacity,
+                        render_points_as_spheres=True, style="points")
+        else:
+            if node.vertices is None:
+                return
+            data = node.to_polydata()
+            opts = dict(color=node.color, opacity=node.opacity, show_edges=node.show_edges,
+                        edge_color=(0.2, 0.25, 0.35), smooth_shading=node.has_normals)
+        sv.spline_scene.add_mesh(name, data, kind=node.kind, **opts)
+        sv._prop_visibility(node)
+        sv._update_grid()
+
+    def changed(self, what: str) -> None:
+        if what in ("visible", "shown_in"):
+            self.owner._prop_visibility(self.node)
+        else:
+            self.draw()
+
+    def sides_changed(self) -> None:
+        self.owner._prop_visibility(self.node)
+
+
+class PlaneView(NodeView):
+    """A clip plane: it cuts the layers of its volume, or the whole view's."""
+
+    def draw(self) -> None:
+        self.owner._update_planes()
+
+    def remove(self) -> None:
+        self.owner._update_planes()
+
+
+class SectionView(NodeView):
+    """A section's curves as lines (computed when the node has none yet)."""
+
+    def __init__(self, owner: SceneView, node: SectionNode):
+        self.owner = owner
+        self.node = node
+        self.draw(recompute=node.curves is None)
+
+    def draw(self, recompute: bool = False) -> None:
+        """(Re)draw the curves, computing them first if asked."""
+        from splineviz.io.curves import curves_polydata
+        from splineviz.model.analysis import section_curves
+
+        sv, node = self.owner, self.node
+        if recompute:
+            section_curves(sv.scene, node)
+        name = f"{node.kind}:{node.id}"
+        if not node.curves:
+            sv._props.pop(node.id, None)
+            if name in sv.spline_scene.props:
+                sv.spline_scene.remove_prop(name)
+            return
+        sv._props[node.id] = name
+        sv.spline_scene.add_mesh(name, curves_polydata(node.curves), kind=node.kind,
+                                 color=node.color, line_width=node.line_width,
+                                 lighting=False)
+        sv._prop_visibility(node)
+
+    def changed(self, what: str) -> None:
+        if what != "curves":
+            self.draw()
+
+    def sides_changed(self) -> None:
+        self.owner._prop_visibility(self.node)
+
+
+#: node type -> the class that shows such nodes (subclasses of a node type find theirs
+#: through their bases)
+VIEW_CLASSES: dict[type, type[NodeView]] = {
+    VolumeNode: OutlineView,
+    IsosurfaceNode: IsosurfaceView,
+    PointsNode: PropView,
+    MeshNode: PropView,
+    ClipPlaneNode: PlaneView,
+    SectionNode: SectionView,
+}
+
+
+def view_class(node: Node) -> type[NodeView]:
+    """The :data:`VIEW_CLASSES` entry of ``node``'s type or of its nearest base."""
+    for cls in type(node).__mro__:
+        if cls in VIEW_CLASSES:
+            return VIEW_CLASSES[cls]
+    return NodeView
 
 
 def smooth_pending(scene: Scene, device=None) -> None:
