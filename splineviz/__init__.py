@@ -3,10 +3,11 @@
 The public API is imported lazily so that ``import splineviz`` stays cheap and never pulls in
 Qt, VTK or OpenCL before they are needed.
 
-This package also installs the plugin loader as the registries' loader hook (models, formats,
-sources: :mod:`splineviz.core.registry`): a registry that misses a name, or lists its entries,
-loads the plugins first, so that ``core``, ``io`` and ``model`` find plugin entries without
-importing :mod:`splineviz.plugins` (an import-linter contract forbids it).
+This package also installs the registries' loader hook (models, formats, sources, session
+object types: :mod:`splineviz.core.registry`): a registry that misses a name, or lists its
+entries, first declares the session object types from the scene nodes
+(:mod:`splineviz.model.schema`) and loads the plugins, so that ``core``, ``io`` and ``model``
+find those entries without importing upwards (import-linter contracts forbid it).
 """
 
 from importlib import import_module
@@ -16,13 +17,14 @@ from splineviz.core import registry as _registry
 __version__ = "0.1.0"
 
 
-def _load_plugins() -> None:
+def _load_extensions() -> None:
     # imported by name, like the lazy public API below: plugin discovery starts on the first
     # registry miss, not on ``import splineviz``
+    import_module("splineviz.model.schema")
     import_module("splineviz.plugins").ensure_loaded()
 
 
-_registry.set_loader(_load_plugins)
+_registry.set_loader(_load_extensions)
 
 # public name -> "module:attribute"
 _LAZY = {

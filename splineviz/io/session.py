@@ -66,6 +66,7 @@ from pydantic import (
     field_validator,
 )
 
+from splineviz.core.registry import load_extensions
 from splineviz.io._util import atomic_write_bytes, confined, outside_allowed
 from splineviz.io.errors import (
     SessionError,
@@ -195,8 +196,10 @@ def register_camera_model(model: type[CameraBase]) -> None:
 def _declared() -> None:
     if not PROPERTIES or not _CAMERA:
         # the scene nodes declare the properties (see the comment above the origins); a
-        # document read before anything imported the scene model needs them all the same
-        import splineviz.model.schema  # noqa: F401
+        # document read before anything imported the scene model needs them all the same,
+        # and the extension hook that ``splineviz`` installs declares them (io never
+        # imports the model layer)
+        load_extensions()
 
 
 def object_types() -> dict[str, type[BaseModel]]:

@@ -53,14 +53,10 @@ def nonzero_normal(v):
 
 
 def _model_name(name: str) -> str:
-    # the spline model registry is the one place that knows the valid names; plugins add
-    # theirs when first asked (a session may name one before anything loaded them)
-    from splineviz.core.splines.registry import MODELS, model_spec
+    # the spline model registry is the one place that knows the valid names; its lookup loads
+    # plugin models on a miss (a session may name one before anything loaded them)
+    from splineviz.core.splines.registry import model_spec
 
-    if name not in MODELS:
-        from splineviz.plugins import ensure_loaded
-
-        ensure_loaded()
     model_spec(name)
     return name
 
