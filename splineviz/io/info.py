@@ -129,7 +129,9 @@ def _run(args) -> int:
     path = Path(os.fspath(args.file))
     listed = describe_series(path) if args.series is None else None
     if listed is not None:  # several DICOM series: list them
-        print(json.dumps(listed, indent=2) if args.json else format_info(listed))
+        rest = format_info({k: v for k, v in listed.items() if k != "series"})
+        print(json.dumps(listed, indent=2) if args.json else "\n".join(
+            [rest, *(f"{'series':>15}: {s}" for s in listed["series"])]))
         return 0
     info = describe(path if args.series is None else series_file(path, args.series),
                     dims=args.dims, dtype=args.dtype,
