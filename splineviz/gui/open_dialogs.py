@@ -76,9 +76,10 @@ def open_chosen(window, path, mode: str = "ask"):
 
     p = Path(path)
     if p.is_dir():
+        # a process: pydicom parses headers in Python, holding the GIL for long stretches
         return window.jobs.run(f"Looking into {p.name}", _several_series, str(p),
                                on_done=lambda found: _folder_looked_into(window, p, found,
-                                                                         mode))
+                                                                         mode), process=True)
     try:
         fmt = find_format(p, "volume").name
     except Exception:  # noqa: BLE001 - unknown or damaged: the reader's own message follows
