@@ -10,10 +10,10 @@ the file alone when it holds several frames.
 Geometry: the image-to-patient affine (LPS millimetres, as ITK) is built from
 ImageOrientationPatient, PixelSpacing and the slice positions (ImagePositionPatient of each
 slice or frame; RT dose: GridFrameOffsetVector along the slice normal) and kept in
-``meta["affine"]``. A grid whose axes lie along the patient axes (any order, any signs) is
-transposed to x, y, z with signed spacings (a negative one is flipped by
-:func:`~splineviz.io.volumes.to_volume` with a warning); an oblique grid is refused with one
-sentence naming its angle, never silently made axis-aligned. Slices spaced unevenly (a
+``meta["affine"]`` and turned into an axis-aligned grid by the rule every reader follows
+(:func:`splineviz.io.geometry.axis_aligned`): axes along the patient axes in any order and
+sign are transposed and flipped into place with a warning; an oblique grid is refused with
+one sentence naming its angle, never silently made axis-aligned. Slices spaced unevenly (a
 missing slice, variable spacing) are resampled to even steps by linear interpolation with a
 warning. Values: RescaleSlope/RescaleIntercept (per frame where given) and DoseGridScaling.
 """
@@ -31,11 +31,10 @@ import numpy as np
 from splineviz.core.errors import SplinevizWarning
 from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, confined
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
+from splineviz.io.geometry import axis_aligned
 from splineviz.io.registry import register_format
+from splineviz.io.volume_data import VolumeData
 
-#: largest angle (degrees) between a grid axis and a patient axis still taken as aligned
-#: (scanners write direction cosines rounded to a few digits)
-OBLIQUE_TOLERANCE_DEG = 0.05
 #: slice steps may differ by this fraction of the median step and count as even
 EVEN_STEP_TOLERANCE = 1e-3
 #: an uneven series is resampled to at most this many times its slice count
@@ -492,9 +491,9 @@ def _read_multiframe(path: Path):
 
 def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     """VolumeData of slices ``stack`` (n, rows, cols) sorted along ``normal`` at positions
-    ``pos`` (n, 3): evenly spaced (resampled if not), axis-aligned (refused if oblique)."""
-    from splineviz.io.volumes import VolumeData
-
+    ``pos`` (n, 3): evenly spaced (resampled if not), axis-aligned by the shared geometry
+    rule (:func:`splineviz.io.geometry.axis_aligned`: transposed and flipped with a warning,
+    refused if oblique)."""
     if len(stack) < MIN_SAMPLES_PER_AXIS:
         raise InvalidDataError(f"{name} holds {len(stack)} slice; a volume needs at least "
                                f"{MIN_SAMPLES_PER_AXIS}")
@@ -515,10 +514,10 @@ def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     affine[:3, 1] = col * spacing_xy[1]
     affine[:3, 2] = normal * dz
     affine[:3, 3] = pos[0]
-    data = np.ascontiguousarray(stack.transpose(2, 1, 0))  # (columns, rows, slices)
+    data = stack.transpose(2, 1, 0)  # (columns, rows, slices)
     meta = {**meta, "affine": affine.tolist(), "space": "LPS"}
-    data, spacing, origin = axis_aligned(data, affine, name)
-    return VolumeData(data, spacing, origin, "dicom", meta)
+    data, orient = axis_aligned(data, affine, name, space="LPS")
+    return VolumeData(np.ascontiguousarray(data), orient.spacing, orient.origin, "dicom", meta)
 
 
 def _check_depths(depth, name: str) -> None:
@@ -552,49 +551,6 @@ def _resample(stack, depth, name: str):
                   f"{steps.max():g} mm); resampled to {n} slices {span / (n - 1):g} mm apart "
                   "by linear interpolation", SplinevizWarning, stacklevel=2)
     return out, span / (n - 1)
-
-
-def axis_aligned(data, affine, name: str):
-    """A grid with a 4x4 index-to-world ``affine`` whose axes lie along the world axes (any
-    order and signs), as (data, spacing, origin) in world axis order; an oblique grid is
-    refused.
-
-    Parameters
-    ----------
-    data : (n0, n1, n2) ndarray
-        Samples by index axes.
-    affine : (4, 4) array
-        World point of index (i, j, k) is ``affine @ (i, j, k, 1)``.
-
-    Returns
-    -------
-    data : (nx, ny, nz) ndarray
-        ``data`` with its axes permuted into x, y, z order.
-    spacing : (3,) tuple of float
-        Signed steps (negative: the index runs against the world axis).
-    origin : (3,) tuple of float
-        World point of index (0, 0, 0).
-    """
-    m = np.asarray(affine, dtype=np.float64)[:3, :3]
-    steps = np.linalg.norm(m, axis=0)
-    if np.any(steps <= 0) or not np.all(np.isfinite(m)):
-        raise CorruptFileError(f"{name} has a degenerate index-to-world matrix")
-    unit = m / steps
-    world = np.argmax(np.abs(unit), axis=0)  # world axis of each index axis
-    if sorted(world.tolist()) != [0, 1, 2]:
-        world = np.array([0, 1, 2])
-    nearest = np.zeros((3, 3))
-    nearest[world, np.arange(3)] = np.sign(unit[world, np.arange(3)])
-    rot = nearest.T @ unit  # the rotation left after the nearest signed permutation
-    angle = float(np.degrees(np.arccos(np.clip((np.trace(rot) - 1) / 2, -1.0, 1.0))))
-    if angle > OBLIQUE_TOLERANCE_DEG:
-        raise InvalidDataError(f"{name} is oblique: its grid is turned {angle:.2f} degrees from "
-                               "the patient axes, and splineviz shows axis-aligned grids only "
-                               "(it does not turn a scan silently)")
-    index_of = np.argsort(world)  # index axis along world axis w
-    spacing = tuple(float(nearest[w, a] * steps[a]) for w, a in enumerate(index_of))
-    origin = tuple(float(v) for v in np.asarray(affine, dtype=np.float64)[:3, 3])
-    return np.transpose(data, index_of), spacing, origin
 
 
 register_format("dicom-file", (".dcm", ".dicom", ".ima"), _read_dicom_file, None,

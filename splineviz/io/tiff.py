@@ -23,8 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, memory_budget
+from splineviz.io.chunked import AxisSource
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
 from splineviz.io.registry import register_format
+from splineviz.io.volume_data import VolumeData
 
 #: environment variable: share of :func:`~splineviz.io._util.memory_budget` above which a
 #: TIFF volume or slice stack is read lazily through the chunked path
@@ -228,8 +230,6 @@ def _read_tiff(path: Path):
     import dask.array as da
     import tifffile
 
-    from splineviz.io.volumes import VolumeData
-
     try:
         tif = tifffile.TiffFile(str(path))
     except tifffile.TiffFileError as exc:
@@ -260,8 +260,6 @@ def _read_tiff(path: Path):
             return VolumeData(data.reshape(stored).transpose(2, 1, 0), spacing, (0.0, 0.0, 0.0),
                               "tiff", meta)
     src = TiffPages(path, 0, stored, dtype, index)
-    from splineviz.io.chunked import AxisSource
-
     volume_src = AxisSource(src, (2, 1, 0))
     lazy = da.from_array(volume_src, chunks=_chunks(stored, dtype), asarray=False)
     return VolumeData(lazy, spacing, (0.0, 0.0, 0.0), "tiff",
@@ -396,8 +394,6 @@ def read_slices(path):
     """
     import dask.array as da
 
-    from splineviz.io.volumes import VolumeData
-
     files = slice_files(path)
     name = Path(os.fspath(path)).name
     if len(files) < MIN_SAMPLES_PER_AXIS:
@@ -422,8 +418,6 @@ def read_slices(path):
         for z in range(1, len(files)):
             data[z] = _checked_slice(files[z], first.shape, first.dtype)
         return VolumeData(data.transpose(2, 1, 0), spacing, (0.0, 0.0, 0.0), "slices", meta)
-    from splineviz.io.chunked import AxisSource
-
     volume_src = AxisSource(src, (2, 1, 0))
     lazy = da.from_array(volume_src, chunks=_chunks(stored, first.dtype), asarray=False)
     return VolumeData(lazy, spacing, (0.0, 0.0, 0.0), "slices",

@@ -218,29 +218,33 @@ def test_a_missing_slice_is_resampled_with_a_warning(tmp_path):
 
 
 def test_orientation_flips_and_permutations_keep_world_positions(tmp_path):
-    # rows run towards -y (anterior): the y step is negative, flipped with a warning
+    # rows run towards -y (anterior), slices along -z: both axes flipped, with a warning
     _write_ct_series(tmp_path / "flip", n=4, iop=(1, 0, 0, 0, -1, 0))
-    vd = load_volume_data(tmp_path / "flip")
-    assert vd.spacing[1] < 0 and vd.spacing[2] < 0  # normal (0, 0, -1): slices along -z
     with pytest.warns(SplinevizWarning, match="flipped"):
-        v = sv.read_volume(tmp_path / "flip")
+        vd = load_volume_data(tmp_path / "flip")
+    assert min(vd.spacing) > 0
     a = np.asarray(vd.meta["affine"])
-    for idx in [(0, 0, 0), (5, 7, 2), (127, 127, 3)]:  # same sample at the same world point
-        world = a @ (*idx, 1)
-        ijk = np.rint((world[:3] - np.array(v.origin)) / np.array(v.spacing)).astype(int)
-        assert v.data[tuple(ijk)] == vd.data[idx]
-    # sagittal: columns along +y, rows along -z, slices along x
+    assert a[1, 1] < 0 and a[2, 2] < 0
+    ds = pydicom.dcmread(str(sorted((tmp_path / "flip").glob("*.dcm"))[0]))
+    first = [float(v) for v in ds.ImagePositionPatient]  # any slice: its samples land right
+    k = int(round((first[2] - a[2, 3]) / a[2, 2]))
+    px = apply_rescale(ds.pixel_array, ds)
+    for row, col in [(0, 0), (7, 5), (127, 127)]:
+        world = a @ (col, row, k, 1)
+        ijk = np.rint((world[:3] - np.array(vd.origin)) / np.array(vd.spacing)).astype(int)
+        assert vd.data[tuple(ijk)] == px[row, col]
+    # sagittal: columns along +y, rows along -z, the slice normal row x column along -x
     _write_ct_series(tmp_path / "sag", n=4, iop=(0, 1, 0, 0, 0, -1))
-    vs = load_volume_data(tmp_path / "sag")
+    with pytest.warns(SplinevizWarning, match="flipped"):
+        vs = load_volume_data(tmp_path / "sag")
     assert vs.data.shape == (4, 128, 128)
-    # the slice normal row x column is -x: slices sorted along it step by -2.5 in x
-    assert vs.spacing[0] == pytest.approx(-2.5) and vs.spacing[1] > 0 and vs.spacing[2] < 0
+    assert vs.spacing == pytest.approx((2.5, 0.661468, 0.661468))
 
 
 def test_an_oblique_series_is_refused_with_its_angle(tmp_path):
     t = np.radians(10)
     _write_ct_series(tmp_path / "obl", n=4, iop=(1, 0, 0, 0, np.cos(t), np.sin(t)))
-    with pytest.raises(InvalidDataError, match=r"oblique: .*turned 10\.00 degrees"):
+    with pytest.raises(InvalidDataError, match=r"oblique scan .*rotated by 10 degrees"):
         load_volume_data(tmp_path / "obl")
 
 
