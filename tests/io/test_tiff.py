@@ -261,3 +261,35 @@ def test_a_2_gb_bigtiff_opens_under_1_gb_peak_rss(tmp_path):
     assert got["chunked"] and got["shape"] == [1024, 1024, 2048]
     assert 0 <= got["range"][0] < got["range"][1] <= 250
     assert got["peak_mib"] < 1000, got
+
+
+def test_a_lazy_stack_pickles_and_renders_in_bricks_as_in_memory(tmp_path, monkeypatch):
+    """Bricks read on dask workers: the region reader pickles (opening the file again in
+    the worker), and the bricked picture is the in-memory one."""
+    import pickle
+
+    from compute.bricked_helpers import assert_same_picture, compare_frames, local_client
+    from compute.helpers import HAVE_CL
+
+    from splineviz.compute.bricked import BrickedRayCaster
+    from splineviz.core.camera import default_camera
+
+    vol = _blob((40, 36, 44))
+    _write_imagej(tmp_path / "s.tif", vol, (0.5, 0.5, 1.0), compression="zlib")
+    monkeypatch.setenv(LAZY_SHARE_ENV, "0")
+    lazy = sv.read_volume(tmp_path / "s.tif")
+    assert isinstance(lazy, ChunkedVolume)
+    copy = pickle.loads(pickle.dumps(lazy.source))
+    np.testing.assert_array_equal(copy[5:9, 0:36, 30:44], vol[5:9, :, 30:44])
+    if not HAVE_CL:
+        pytest.skip("no OpenCL device")
+    mem = sv.Volume(vol, lazy.spacing, lazy.origin)
+    cam = default_camera(lazy.bounds)
+    rc = sv.RayCaster(mem, model="cubic-c1")
+    rc.set_isovalue(200)
+    with local_client(2) as client:
+        brc = BrickedRayCaster(lazy, model="cubic-c1", client=client, brick_size=24)
+        brc.set_isovalue(200)
+        assert brc.stats["bricks"] > 1
+        assert_same_picture(compare_frames(rc.render(cam, (128, 96)),
+                                           brc.render(cam, (128, 96))))
