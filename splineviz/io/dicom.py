@@ -151,11 +151,9 @@ def _scan(folder: Path) -> list[Series]:
     series = []
     for uid, members in groups.items():
         ds = members[0][1]
-        number = ds.get("SeriesNumber")
         series.append(Series(
-            uid, int(number) if isinstance(number, int | float) or str(number or "").strip()
-            .lstrip("-").isdigit() else None,
-            str(ds.get("Modality", "") or ""), str(ds.get("SeriesDescription", "") or ""),
+            uid, _int_or_none(ds.get("SeriesNumber")), str(ds.get("Modality", "") or ""),
+            str(ds.get("SeriesDescription", "") or ""),
             tuple(f for f, _ in members), int(ds.Rows), int(ds.Columns),
             sum(_frames(d) for _, d in members)))
     series.sort(key=lambda s: (s.number is None, s.number or 0, s.uid))
@@ -163,6 +161,13 @@ def _scan(folder: Path) -> list[Series]:
         _scans.pop(next(iter(_scans)))
     _scans[key] = series
     return series
+
+
+def _int_or_none(value) -> int | None:
+    try:
+        return int(value)
+    except (TypeError, ValueError):
+        return None
 
 
 def _frames(ds) -> int:
@@ -311,9 +316,9 @@ def _pixels(path: Path):
         if needs or (ts is not None and getattr(ts, "is_compressed", False)
                      and "missing" in text):
             pkgs = "; or ".join(n.strip() for n in needs) or "pylibjpeg or gdcm"
-            raise FileFormatError(f"{path.name} is compressed as {ts.name if ts else 'an '}"
-                                  f"{'' if ts else 'unknown transfer syntax'}; install a "
-                                  f"pydicom pixel decoder for it: {pkgs}") from None
+            how = ts.name if ts is not None else "an unknown transfer syntax"
+            raise FileFormatError(f"{path.name} is compressed as {how}; install a pydicom "
+                                  f"pixel decoder for it: {pkgs}") from None
         detail = text.splitlines()[0] if text else type(exc).__name__
         raise CorruptFileError(f"cannot decode the pixels of {path.name}: {detail}") from None
 
