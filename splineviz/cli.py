@@ -66,6 +66,8 @@ def _viewer_parser() -> argparse.ArgumentParser:
                         help="spline model (default: the smoothest one with an OpenCL kernel)")
     parser.add_argument("--screenshot", metavar="PNG", help="save the view to PNG and quit")
     parser.add_argument("--size", metavar="WxH", help="window / screenshot size, e.g. 1024x768")
+    parser.add_argument("--series", metavar="UID|INDEX",
+                        help="DICOM folders of several series: the one to open")
     return parser
 
 
@@ -91,6 +93,10 @@ def main(argv: list[str] | None = None) -> int:
                 args = _build_parser().parse_args(argv)
                 return int(args.func(args) or 0)
             args = _viewer_parser().parse_args(argv)
+            if args.series is not None and args.file:
+                from splineviz.io.dicom import series_file
+
+                args.file = str(series_file(args.file, args.series))
             from splineviz.gui.app import run_gui
 
             return int(run_gui(args) or 0)

@@ -10,7 +10,7 @@ from __future__ import annotations
 from PySide6.QtGui import QAction, QIcon, QKeySequence
 from PySide6.QtWidgets import QToolBar
 
-from splineviz.gui import dialogs
+from splineviz.gui import dialogs, open_dialogs
 
 #: (view name, menu text, shortcut, icon name) of the standard views
 STANDARD_VIEW_ACTIONS = (
@@ -54,9 +54,13 @@ def build_actions(window) -> dict[str, QAction]:
     """Fill the window's menu bar and toolbar; returns the actions by name."""
     acts: dict[str, QAction] = {}
     m = window.menuBar().addMenu("&File")
-    acts["open"] = _action(window, "&Open...", lambda: dialogs.open_file(window), menu=m,
+    acts["open"] = _action(window, "&Open...", lambda: open_dialogs.open_file(window), menu=m,
                            shortcut=QKeySequence.StandardKey.Open, icon_name="open",
                            tip="Open a volume, point cloud or session")
+    acts["open folder"] = _action(window, "Open &Folder...",
+                                  lambda: open_dialogs.open_folder(window), menu=m,
+                                  shortcut="Ctrl+Shift+O",
+                                  tip="Open a DICOM series, a folder of slices or a Zarr store")
     window.recent = dialogs.RecentFiles(window, m.addMenu("Open &Recent"))
     _action(window, "Open &default data", lambda: window.commands.open_default(), menu=m,
             tip="The embedded Marschner-Lobb test volume")

@@ -71,10 +71,12 @@ class Commands(QObject):
         return self._add_volume(vol, f"{src.title} {'x'.join(map(str, vol.shape))}", mode,
                                 isovalue=src.isovalue, source=name)
 
-    def open_path(self, path, mode: str = "ask", allow_outside: bool = False, **iso):
+    def open_path(self, path, mode: str = "ask", allow_outside: bool = False, raw=None,
+                  **iso):
         """Open a volume, point cloud or session in a job; returns the job (None if the
         session could not even be parsed: the message is shown). ``allow_outside``: the
-        user confirmed reading a data file outside the folder of the header naming it."""
+        user confirmed reading a data file outside the folder of the header naming it;
+        ``raw``: a raw file's dims, dtype, byteorder and offset (the raw-file dialog's)."""
         from splineviz.io._util import regular_input
 
         path = str(path)
@@ -87,21 +89,24 @@ class Commands(QObject):
             result = self._noted(noted, Path(path).name)
             if isinstance(result, OutsideFolder):
                 self._outside(result, allow_outside,
-                              lambda: self.open_path(path, mode, allow_outside=True, **iso))
+                              lambda: self.open_path(path, mode, allow_outside=True, raw=raw,
+                                                     **iso))
                 return
             kind, data, summaries = result
             for what, value in summaries.items():
                 remember(what, data, value)
             self.opened.emit(path)
             if kind == "volume":
-                self._add_volume(data, Path(path).name, mode, path=path, **iso)
+                self._add_volume(data, Path(path).name, mode, path=path, read_options=raw,
+                                 **iso)
             else:
                 self._add(mode, lambda: self.scene.add_points(data, Path(path).name,
                                                               path=path))
 
         # a process: readers (VTK's, NumPy's text parser) hold the GIL while they parse
         return self.jobs.run(f"Opening {Path(path).name}", noting_warnings, read_file, path,
-                             allow_outside=allow_outside, on_done=done, process=True)
+                             allow_outside=allow_outside, on_done=done, process=True,
+                             **(raw or {}))
 
     def _noted(self, noted, name: str):
         """Show the warnings a read raised (log panel and status bar); its value."""
@@ -163,9 +168,10 @@ class Commands(QObject):
         return node
 
     def _add_volume(self, vol, name, mode, path=None, isovalue=None, model=None,
-                    source=None) -> VolumeNode:
+                    source=None, read_options=None) -> VolumeNode:
         return self._add(mode, lambda: self.scene.add_volume(
-            vol, name, path=path, source=source, isovalue=isovalue, model=model))
+            vol, name, path=path, source=source, read_options=read_options,
+            isovalue=isovalue, model=model))
 
     # -- sessions ------------------------------------------------------------------------
 

@@ -18,6 +18,7 @@ from PySide6.QtWidgets import (
 )
 
 import splineviz
+from splineviz.gui.open_dialogs import open_chosen
 
 #: entries kept in File > Open Recent
 MAX_RECENT = 8
@@ -57,12 +58,6 @@ class ScreenshotDialog(QDialog):
         buttons.accepted.connect(self.accept)
         buttons.rejected.connect(self.reject)
         form.addRow(buttons)
-
-
-def open_file(window) -> None:
-    path, _ = QFileDialog.getOpenFileName(window, "Open volume, point cloud or session")
-    if path:
-        window.open_path(path)
 
 
 def load_session(window) -> None:
@@ -176,7 +171,7 @@ class RecentFiles:
         self.menu.clear()
         for f in self.files():
             a = QAction(f, self.window)
-            a.triggered.connect(lambda _=False, f=f: self.window.open_path(f))
+            a.triggered.connect(lambda _=False, f=f: open_chosen(self.window, f))
             self.menu.addAction(a)
         self.menu.setEnabled(bool(self.files()))
 

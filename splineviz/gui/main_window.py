@@ -29,6 +29,7 @@ from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
 from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
+from splineviz.gui.open_dialogs import open_chosen
 from splineviz.gui.panels import (
     AnalysisPanel,
     ClippingPanel,
@@ -411,7 +412,7 @@ class MainWindow(QMainWindow):
     def dropEvent(self, event):  # noqa: N802
         for url in event.mimeData().urls():
             if url.isLocalFile():
-                self.open_path(url.toLocalFile())
+                open_chosen(self, url.toLocalFile())  # folders: series; raw: its layout
 
     def confirm_discard(self) -> bool:
         """Ask what to do with unsaved changes; False: the user wants to stay."""

@@ -8,7 +8,7 @@ Public entry points: :func:`read_volume`, :func:`read_points`, :func:`write_volu
 :mod:`splineviz.io.errors`.
 """
 
-from splineviz.io import chunked  # noqa: F401  (registers the chunked formats)
+from splineviz.io import chunked, dicom, tiff  # noqa: F401  (register their formats)
 from splineviz.io.errors import (  # noqa: F401
     CorruptFileError,
     DataFileNotFoundError,

@@ -116,13 +116,25 @@ def register(subparsers) -> None:
     p.add_argument("--offset", type=int, default=None, help="raw volumes: header bytes to skip")
     p.add_argument("--allow-outside-data", action="store_true",
                    help="read data files that a header or session names outside its folder")
+    p.add_argument("--series", metavar="UID|INDEX",
+                   help="DICOM folders of several series: the one to describe")
     p.set_defaults(func=_run)
 
 
 def _run(args) -> int:
     import json
 
-    info = describe(Path(os.fspath(args.file)), dims=args.dims, dtype=args.dtype,
+    from splineviz.io.dicom import describe_series, series_file
+
+    path = Path(os.fspath(args.file))
+    listed = describe_series(path) if args.series is None else None
+    if listed is not None:  # several DICOM series: list them
+        rest = format_info({k: v for k, v in listed.items() if k != "series"})
+        print(json.dumps(listed, indent=2) if args.json else "\n".join(
+            [rest, *(f"{'series':>15}: {s}" for s in listed["series"])]))
+        return 0
+    info = describe(path if args.series is None else series_file(path, args.series),
+                    dims=args.dims, dtype=args.dtype,
                     byteorder=args.byteorder, offset=args.offset,
                     allow_outside=args.allow_outside_data)
     print(json.dumps(info, indent=2) if args.json else format_info(info))

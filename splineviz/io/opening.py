@@ -31,7 +31,7 @@ class Opened:
     path: Path
 
 
-def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
+def open_path(path, *, repoint=None, allow_outside: bool = False, **raw) -> Opened:
     """Read ``path`` as a session (``.svs``), else as a volume, else as a point cloud.
 
     Parameters
@@ -42,6 +42,9 @@ def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
     allow_outside : bool
         Read data files that a header or session names outside its own folder (refused by
         default with an :class:`~splineviz.io.errors.OutsideFolderError`).
+    **raw
+        ``dims``, ``dtype``, ``byteorder``, ``offset`` of a headerless raw volume (see
+        :func:`~splineviz.io.volumes.read_volume`).
 
     Raises
     ------
@@ -57,8 +60,12 @@ def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
     if p.suffix.lower() in SESSION_SUFFIXES:
         return Opened("session", load_session(p, repoint=repoint,
                                                     allow_outside=allow_outside), p)
+    from splineviz.io.tiff import has_pattern, read_slice_volume
+
+    if has_pattern(p):  # a glob pattern of numbered slices, e.g. scan/slice_*.tif
+        return Opened("volume", read_slice_volume(p), p)
     try:
-        return Opened("volume", read_volume(p, allow_outside=allow_outside), p)
+        return Opened("volume", read_volume(p, allow_outside=allow_outside, **raw), p)
     except UnknownFormatError:
         pass
     try:

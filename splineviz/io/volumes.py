@@ -16,7 +16,6 @@ import os
 import re
 import warnings
 import zlib
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +35,7 @@ from splineviz.io._util import (
     reader_errors,
     regular_input,
 )
+from splineviz.io.chunked import is_lazy, to_chunked_volume
 from splineviz.io.errors import (
     CorruptFileError,
     DataFileNotFoundError,
@@ -44,28 +44,7 @@ from splineviz.io.errors import (
     InvalidDataError,
 )
 from splineviz.io.registry import find_format, register_format
-
-
-@dataclass
-class VolumeData:
-    """A volume as stored in a file, before conversion to float32.
-
-    Attributes
-    ----------
-    data : (nx, ny, nz) ndarray
-        Samples in the file's dtype (a view may be non-contiguous).
-    spacing, origin : (3,) tuple of float
-    format : str
-        Name of the format that read it.
-    meta : dict
-        Format-specific extras (e.g. ``{"axis_order": "zxy"}`` for MRC).
-    """
-
-    data: np.ndarray
-    spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    format: str = ""
-    meta: dict = field(default_factory=dict)
+from splineviz.io.volume_data import VolumeData
 
 
 # ---------------------------------------------------------------------------- VTK-based
@@ -600,89 +579,6 @@ def _read_mrc(path: Path) -> VolumeData:
     return VolumeData(data, spacing, tuple(float(o) for o in org), "mrc", meta)
 
 
-# ---------------------------------------------------------------------------- DICOM
-def _read_dicom_folder(path: Path) -> VolumeData:
-    """A DICOM series folder with pydicom: slices sorted by their position along the slice
-    normal (ImageOrientationPatient), RescaleSlope/RescaleIntercept applied, spacing from
-    PixelSpacing and the slice positions, origin = ImagePositionPatient of the first slice.
-    Files that are not DICOM are skipped; with several series the largest is read."""
-    import pydicom
-    from pydicom.errors import InvalidDicomError
-
-    headers = []
-    for f in sorted(p for p in path.iterdir() if p.is_file()):
-        # a symbolic link in the series folder must not pull in a file from elsewhere
-        confined(f.name, path / f.name, what="DICOM file", folder=path)
-        try:
-            ds = pydicom.dcmread(str(f), stop_before_pixels=True)
-        except (InvalidDicomError, EOFError, OSError, ValueError, TypeError, KeyError):
-            continue
-        if "Rows" in ds and "Columns" in ds:
-            headers.append((f, ds))
-    if not headers:
-        raise InvalidDataError(f"folder {path.name} holds no DICOM images")
-    series: dict[str, list] = {}
-    for f, ds in headers:
-        series.setdefault(str(ds.get("SeriesInstanceUID", "")), []).append((f, ds))
-    slices = max(series.values(), key=len)
-    if len(slices) < MIN_SAMPLES_PER_AXIS:
-        raise InvalidDataError(
-            f"folder {path.name} holds {len(slices)} DICOM slice; a volume needs at least "
-            f"{MIN_SAMPLES_PER_AXIS}"
-        )
-    rows, cols = int(slices[0][1].Rows), int(slices[0][1].Columns)
-    if any((int(ds.Rows), int(ds.Columns)) != (rows, cols) for _, ds in slices):
-        raise InvalidDataError(f"the DICOM slices in {path.name} differ in size")
-    try:
-        iop = np.asarray(slices[0][1].get("ImageOrientationPatient", [1, 0, 0, 0, 1, 0]), float)
-        normal = np.cross(iop[:3], iop[3:])
-        pos = np.array([np.asarray(ds.get("ImagePositionPatient", [0, 0, i]), float)
-                        for i, (_, ds) in enumerate(slices)])
-    except (ValueError, TypeError) as exc:
-        raise CorruptFileError(f"DICOM geometry in {path.name} is malformed: {exc}") from None
-    depth = pos @ normal
-    order = np.argsort(depth, kind="stable")
-    if np.allclose(depth, depth[0]):  # no usable positions: fall back to InstanceNumber
-        order = np.argsort([int(ds.get("InstanceNumber", i)) for i, (_, ds) in
-                            enumerate(slices)], kind="stable")
-        dz = float(slices[0][1].get("SliceThickness", 1.0) or 1.0)
-    else:
-        steps = np.diff(depth[order])
-        if np.any(steps <= 0):
-            raise InvalidDataError(f"{path.name} holds two DICOM slices at the same position")
-        dz = float(np.median(steps))
-        if np.max(np.abs(steps - dz)) > 1e-3 * max(dz, 1e-12) + 1e-4:
-            raise InvalidDataError(f"the DICOM slices in {path.name} are not evenly spaced")
-    check_volume_size((cols, rows, len(slices)), 4, path.name)
-    out = np.empty((cols, rows, len(slices)), dtype=np.float32)
-    for k, idx in enumerate(order):
-        f = slices[idx][0]
-        try:
-            ds = pydicom.dcmread(str(f))
-            px = ds.pixel_array.astype(np.float32)
-        except Exception as exc:  # noqa: BLE001 - pixel handlers raise many types
-            ts = getattr(getattr(ds, "file_meta", None), "TransferSyntaxUID", None) \
-                if "ds" in locals() else None
-            if ts is not None and getattr(ts, "is_compressed", False):
-                raise FileFormatError(
-                    f"{f.name} uses the compressed transfer syntax {ts.name}; install a "
-                    "pydicom pixel handler for it (e.g. pylibjpeg or gdcm)") from None
-            raise CorruptFileError(f"cannot decode the pixels of {f.name}: {exc}") from None
-        if px.shape != (rows, cols):
-            raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, "
-                                   f"expected {(rows, cols)}")
-        slope = float(ds.get("RescaleSlope", 1.0) or 1.0)
-        inter = float(ds.get("RescaleIntercept", 0.0) or 0.0)
-        out[:, :, k] = (px * slope + inter).T  # pixel_array is [row, column]; x runs along
-    ps = slices[0][1].get("PixelSpacing", [1.0, 1.0])
-    spacing = (float(ps[1]), float(ps[0]), dz)  # PixelSpacing is (row step, column step)
-    origin = tuple(float(v) for v in pos[order[0]])
-    # the volume is axis-aligned; an oblique series keeps its orientation in meta only
-    return VolumeData(out, spacing, origin, "dicom",
-                      {"series": str(slices[0][1].get("SeriesInstanceUID", "")),
-                       "orientation": [float(v) for v in iop]})
-
-
 # ---------------------------------------------------------------------------- NumPy, raw
 def _read_npy(path: Path) -> VolumeData:
     try:
@@ -769,8 +665,6 @@ register_format("nifti", (".nii", ".nii.gz"), _read_nifti, None, kind="volume",
 register_format("mrc", (".mrc", ".map", ".ccp4", ".mrcs"), _read_mrc, None, kind="volume",
                 sniff=lambda h: len(h) >= 212 and h[208:211] == b"MAP",
                 description="MRC/CCP4 map")
-register_format("dicom", (), _read_dicom_folder, None, kind="volume", folder=True,
-                description="DICOM series folder")
 register_format("npy", (".npy",), _read_npy, _write_npy, kind="volume",
                 sniff=lambda h: h.startswith(b"\x93NUMPY"), description="NumPy array")
 register_format("raw", (".raw", ".bin", ".dat"), _read_raw, None, kind="volume",
@@ -844,8 +738,6 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
                           offset=offset, allow_outside=allow_outside)
-    from splineviz.io.chunked import is_lazy, to_chunked_volume
-
     if is_lazy(vd.data):  # OME-Zarr, Zarr, HDF5: a ChunkedVolume, read brick by brick
         validate_volume_data(vd, Path(os.fspath(path)).name)
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,

@@ -38,17 +38,18 @@ def default_scene(scene: Scene | None = None) -> Scene:
     return scene
 
 
-def read_file(path, *, allow_outside: bool = False):
+def read_file(path, *, allow_outside: bool = False, **raw):
     """Read a volume or point cloud file: ``(kind, data, summaries)`` with kind ``"volume"``
     or ``"points"`` and the summaries views show (:mod:`splineviz.model.summaries`: a
     volume's histogram, a cloud's spacing; a volume's range is kept by the volume itself)
     computed here too, so a GUI that reads in a job process pays nothing to show them.
     Hand the summaries to :func:`splineviz.model.summaries.remember` in the receiving
-    process. ``allow_outside`` as in :func:`splineviz.io.opening.open_path`."""
+    process. ``allow_outside`` and ``raw`` (a raw file's dims, dtype, byteorder, offset) as
+    in :func:`splineviz.io.opening.open_path`."""
     from splineviz.io.opening import open_path
     from splineviz.model.summaries import log_histogram, median_spacing, summary_samples
 
-    opened = open_path(path, allow_outside=allow_outside)
+    opened = open_path(path, allow_outside=allow_outside, **raw)
     if opened.kind == "session":
         raise SplinevizError(f"{opened.path.name} is a session; open it as one")
     if opened.kind != "volume":

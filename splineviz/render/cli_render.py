@@ -88,6 +88,10 @@ def run(args) -> int:
     from splineviz.render.scene_view import render_scene
 
     size = parse_size(args.size)
+    if args.series is not None:
+        from splineviz.io.dicom import series_file
+
+        args.volume = str(series_file(args.volume, args.series))
     scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
                             allow_outside=args.allow_outside_data)
     if not scene.isosurfaces:
@@ -139,6 +143,8 @@ def register(subparsers) -> None:
     p.add_argument("--model", default=None,
                    help=" | ".join(MODELS) + " (default: cubic-c1, or the session's)")
     p.add_argument("--size", default="1024x768", help="image size WxH")
+    p.add_argument("--series", metavar="UID|INDEX",
+                   help="DICOM folders of several series: the one to render")
     p.add_argument("--camera", default=None,
                    help="px,py,pz[,fx,fy,fz[,ux,uy,uz]] eye [focal point [view up]] in world units")
     p.add_argument("--view-angle", type=float, default=30.0, help="vertical view angle, degrees")
