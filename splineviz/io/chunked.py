@@ -1,6 +1,6 @@
 """Chunked volume formats, read lazily: OME-Zarr (multiscale), Zarr arrays and HDF5 datasets.
 
-Readers return a :class:`~splineviz.io.volumes.VolumeData` whose ``data`` is a dask array
+Readers return a :class:`~splineviz.io.volume_data.VolumeData` whose ``data`` is a dask array
 (nothing read but metadata) and whose ``meta`` holds the coarser levels and a *source* for
 region reads (the zarr array or HDF5 dataset itself, which reads only the chunks a box
 meets); :func:`splineviz.io.volumes.read_volume` turns it into a
@@ -21,6 +21,7 @@ import numpy as np
 
 from splineviz.io.errors import CorruptFileError, InvalidDataError
 from splineviz.io.registry import register_format
+from splineviz.io.volume_data import VolumeData
 
 #: the first bytes of every HDF5 file (superblock signature at offset 0)
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
@@ -91,8 +92,6 @@ def _triplet(value, default: float) -> tuple[float, float, float]:
 
 
 def _volume_data(dask_array, spacing, origin, fmt, levels=(), source=None, **meta):
-    from splineviz.io.volumes import VolumeData
-
     return VolumeData(dask_array, spacing, origin, fmt,
                       {"levels": tuple(levels), "source": source, **meta})
 

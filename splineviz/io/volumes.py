@@ -16,7 +16,6 @@ import os
 import re
 import warnings
 import zlib
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +35,7 @@ from splineviz.io._util import (
     reader_errors,
     regular_input,
 )
+from splineviz.io.chunked import is_lazy, to_chunked_volume
 from splineviz.io.errors import (
     CorruptFileError,
     DataFileNotFoundError,
@@ -44,28 +44,7 @@ from splineviz.io.errors import (
     InvalidDataError,
 )
 from splineviz.io.registry import find_format, register_format
-
-
-@dataclass
-class VolumeData:
-    """A volume as stored in a file, before conversion to float32.
-
-    Attributes
-    ----------
-    data : (nx, ny, nz) ndarray
-        Samples in the file's dtype (a view may be non-contiguous).
-    spacing, origin : (3,) tuple of float
-    format : str
-        Name of the format that read it.
-    meta : dict
-        Format-specific extras (e.g. ``{"axis_order": "zxy"}`` for MRC).
-    """
-
-    data: np.ndarray
-    spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    format: str = ""
-    meta: dict = field(default_factory=dict)
+from splineviz.io.volume_data import VolumeData
 
 
 # ---------------------------------------------------------------------------- VTK-based
@@ -847,8 +826,6 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
                           offset=offset, allow_outside=allow_outside)
-    from splineviz.io.chunked import is_lazy, to_chunked_volume
-
     if is_lazy(vd.data):  # OME-Zarr, Zarr, HDF5: a ChunkedVolume, read brick by brick
         validate_volume_data(vd, Path(os.fspath(path)).name)
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,

@@ -1,0 +1,252 @@
+"""Grid geometry from an index-to-world affine: spacing, origin, direction and axis flips.
+
+Every format states where its samples lie as a 4x4 affine from array index ``(i, j, k, 1)``
+to world ``(x, y, z, 1)`` (NIfTI qform/sform, MGH, MINC direction cosines, PAR/REC, AFNI,
+MetaImage ``TransformMatrix``/``Offset``, NRRD ``space directions``/``space origin``, DICOM
+``ImageOrientationPatient``/``ImagePositionPatient``). World coordinates stay in the space
+the format uses (RAS+ for the nibabel formats, LPS for DICOM and usually for MetaImage and
+NRRD), so a surface lands where the file's own library and ITK/VTK put it.
+
+A :class:`~splineviz.Volume` is axis-aligned with positive steps. An affine whose directions
+are the world axes up to order and sign (a "signed permutation", the usual RAS/LPS/LAS
+storage of scanners) is turned into one by transposing and flipping the array, so every
+sample keeps its world position and the anatomy shows the right way up; a flip is announced
+with a :class:`~splineviz.core.errors.SplinevizWarning`. An **oblique** affine (a rotated
+scan) has no such exact form and is refused with one sentence naming the file and the
+angle: showing it axis-aligned would put the surface in the wrong place.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from splineviz.core.errors import SplinevizWarning
+from splineviz.io.errors import InvalidDataError
+
+#: largest angle, in degrees, between an axis of the file and the world axis it is taken
+#: along. Scanner headers store directions in float32 (NIfTI quaternions, DICOM decimal
+#: strings), so an axis-aligned scan arrives tilted by up to ~1e-5 degrees; 0.01 degrees
+#: moves no sample of a 4096-sample axis by more than a tenth of a step.
+OBLIQUE_TOLERANCE_DEG = 0.01
+
+#: names of the world spaces formats declare
+SPACES = ("RAS", "LPS", "")
+
+
+@dataclass(frozen=True)
+class Orientation:
+    """How to make an index-to-world affine axis-aligned: a transpose, flips and the grid.
+
+    Attributes
+    ----------
+    perm : (3,) tuple of int
+        ``perm[w]`` is the array axis that runs along world axis ``w``.
+    flips : (3,) tuple of bool
+        ``flips[w]``: world axis ``w`` runs against its array axis (the transposed array is
+        reversed along ``w``).
+    spacing : (3,) tuple of float
+        Positive step along world x, y, z.
+    origin : (3,) tuple of float
+        World position of the first sample of the transposed, flipped array.
+    direction : (3, 3) ndarray
+        Unit world direction of each array axis of the file (columns), before any transpose.
+    angle : float
+        Largest angle in degrees between an array axis and the world axis it is taken along
+        (0 for an axis-aligned file).
+    affine : (4, 4) ndarray
+        The file's index-to-world affine.
+    space : str
+        ``"RAS"``, ``"LPS"`` or ``""`` (unknown): the world the affine maps into.
+    """
+
+    perm: tuple[int, int, int]
+    flips: tuple[bool, bool, bool]
+    spacing: tuple[float, float, float]
+    origin: tuple[float, float, float]
+    direction: np.ndarray
+    angle: float
+    affine: np.ndarray
+    space: str = ""
+
+    @property
+    def oblique(self) -> bool:
+        """Whether the axes are rotated beyond :data:`OBLIQUE_TOLERANCE_DEG`."""
+        return self.angle > OBLIQUE_TOLERANCE_DEG
+
+    @property
+    def identity(self) -> bool:
+        """Whether the array is already in world order with positive steps."""
+        return self.perm == (0, 1, 2) and not any(self.flips)
+
+    def apply(self, data):
+        """The array in world order: its first three axes transposed and flipped.
+
+        Parameters
+        ----------
+        data : (n0, n1, n2, ...) ndarray
+            Samples as the file indexes them; trailing axes (time, channel) are kept.
+
+        Returns
+        -------
+        (nx, ny, nz, ...) ndarray
+            A view where NumPy allows.
+        """
+        if self.identity:
+            return data
+        order = tuple(self.perm) + tuple(range(3, data.ndim))
+        out = np.transpose(data, order)
+        flipped = tuple(w for w in range(3) if self.flips[w])
+        return np.flip(out, axis=flipped) if flipped else out
+
+    def world_shape(self, shape) -> tuple[int, int, int]:
+        """Samples along world x, y, z of an array of ``shape`` (file order)."""
+        return tuple(int(shape[p]) for p in self.perm)
+
+
+def affine_from(spacing, origin, direction=None) -> np.ndarray:
+    """The 4x4 index-to-world affine of a grid.
+
+    Parameters
+    ----------
+    spacing : (3,) float
+        Step along each array axis (a negative step runs against its direction).
+    origin : (3,) float
+        World position of sample ``(0, 0, 0)``.
+    direction : (3, 3) array_like, optional
+        Unit world direction of each array axis, as columns (ITK's ``Direction``, VTK's
+        ``DirectionMatrix``); identity by default.
+
+    Returns
+    -------
+    (4, 4) ndarray
+    """
+    d = np.eye(3) if direction is None else np.asarray(direction, dtype=float).reshape(3, 3)
+    out = np.eye(4)
+    out[:3, :3] = d * np.asarray(spacing, dtype=float)[None, :]
+    out[:3, 3] = np.asarray(origin, dtype=float)
+    return out
+
+
+def orientation(affine, shape, name: str, *, space: str = "") -> Orientation:
+    """Read an index-to-world affine as an axis-aligned grid (see the module notes).
+
+    Parameters
+    ----------
+    affine : (4, 4) array_like
+        Index ``(i, j, k, 1)`` to world ``(x, y, z, 1)``.
+    shape : sequence of int
+        The array's shape; its first three entries are the spatial axes.
+    name : str
+        File name for messages.
+    space : {"RAS", "LPS", ""}
+        The world space the affine maps into (kept for :func:`describe` and the caller).
+
+    Returns
+    -------
+    Orientation
+        Check :attr:`Orientation.oblique` (or use :func:`axis_aligned`, which refuses).
+
+    Raises
+    ------
+    InvalidDataError
+        The affine is not finite or has a zero-length axis.
+    """
+    a = np.asarray(affine, dtype=float)
+    if a.shape != (4, 4) or not np.all(np.isfinite(a)):
+        raise InvalidDataError(f"{name} has a malformed or non-finite index-to-world affine")
+    m = a[:3, :3]
+    steps = np.linalg.norm(m, axis=0)
+    if not np.all(steps > 0):
+        raise InvalidDataError(f"{name} has an index-to-world affine with a zero-length axis "
+                               f"(voxel sizes {', '.join(f'{s:g}' for s in steps)})")
+    direction = m / steps[None, :]
+    world_of = np.argmax(np.abs(direction), axis=0)  # the world axis each array axis is nearest
+    cosines = np.abs(direction[world_of, [0, 1, 2]]).clip(0.0, 1.0)
+    angle = float(np.degrees(np.arccos(cosines)).max())
+    if sorted(world_of.tolist()) != [0, 1, 2]:
+        # two array axes nearest one world axis: a rotation by 45 degrees or more
+        angle = max(angle, 45.0)
+        world_of = np.array([0, 1, 2])
+    perm = [0, 0, 0]
+    flips = [False, False, False]
+    for ax, w in enumerate(world_of.tolist()):
+        perm[w] = ax
+        flips[w] = bool(direction[w, ax] < 0)
+    shape = [int(n) for n in shape[:3]]
+    first = np.array([shape[ax] - 1 if flips[w] else 0 for w, ax in enumerate(perm)], float)
+    index0 = np.zeros(3)
+    for w, ax in enumerate(perm):
+        index0[ax] = first[w]
+    origin = m @ index0 + a[:3, 3]
+    return Orientation(tuple(perm), tuple(flips),
+                       tuple(float(steps[ax]) for ax in perm),
+                       tuple(float(v) for v in origin), direction, angle, a,
+                       space if space in SPACES else "")
+
+
+def axis_aligned(data, affine, name: str, *, space: str = "", warn: bool = True):
+    """The samples, spacing and origin of an axis-aligned grid from a file's affine.
+
+    This is the one rule every reader follows (see the module notes): a signed-permutation
+    direction is transposed and flipped (announced by a warning when ``warn``); an oblique
+    one is refused.
+
+    Parameters
+    ----------
+    data : (n0, n1, n2, ...) ndarray
+        Samples in the file's index order; trailing (time, channel) axes are kept.
+    affine : (4, 4) array_like
+        Index-to-world affine of ``data``.
+    name : str
+        File name for messages.
+    space : {"RAS", "LPS", ""}
+    warn : bool
+        Warn when an axis is flipped.
+
+    Returns
+    -------
+    data : (nx, ny, nz, ...) ndarray
+        A view of ``data`` in world order with positive steps.
+    orient : Orientation
+        Its ``spacing`` and ``origin`` place ``data``; ``direction`` and ``affine`` are the
+        file's.
+
+    Raises
+    ------
+    InvalidDataError
+        An oblique affine, with its angle; a malformed one.
+    """
+    orient = orientation(affine, np.shape(data), name, space=space)
+    refuse_oblique(orient, name)
+    if warn:
+        warn_flips(orient, name)
+    return orient.apply(data), orient
+
+
+def refuse_oblique(orient: Orientation, name: str) -> None:
+    """Raise :class:`InvalidDataError` if ``orient`` is oblique (one sentence, the angle)."""
+    if orient.oblique:
+        raise InvalidDataError(
+            f"{name} is an oblique scan (its axes are rotated by {orient.angle:.3g} degrees "
+            "from the world axes), which splineviz cannot yet show in place; resample it onto "
+            "axis-aligned axes first (e.g. with nibabel.processing.resample_to_output)")
+
+
+def warn_flips(orient: Orientation, name: str, *, stacklevel: int = 3) -> None:
+    """Announce the axes :meth:`Orientation.apply` reverses, as today's negative spacings."""
+    flipped = [w for w in range(3) if orient.flips[w]]
+    if flipped:
+        warnings.warn(f"{name} runs against the world axis along "
+                      f"{', '.join('xyz'[w] for w in flipped)}: the axis is flipped so that "
+                      "every sample keeps its world position", SplinevizWarning,
+                      stacklevel=stacklevel)
+
+
+def format_affine(affine) -> list[str]:
+    """Four rows of a 4x4 affine as text, for ``splineviz info``."""
+    a = np.asarray(affine, dtype=float)
+    return ["[" + " ".join(f"{v: .6g}" for v in row) + "]" for row in a]
+
