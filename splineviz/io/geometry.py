@@ -239,10 +239,10 @@ def warn_flips(orient: Orientation, name: str, *, stacklevel: int = 3) -> None:
     """Announce the axes :meth:`Orientation.apply` reverses, as today's negative spacings."""
     flipped = [w for w in range(3) if orient.flips[w]]
     if flipped:
-        warnings.warn(f"{name} runs against the world axis along "
-                      f"{', '.join('xyz'[w] for w in flipped)}: the axis is flipped so that "
-                      "every sample keeps its world position", SplinevizWarning,
-                      stacklevel=stacklevel)
+        warnings.warn(f"{name} has a negative spacing along "
+                      f"{', '.join('xyz'[w] for w in flipped)} (its grid runs against the "
+                      "world axis): the axis is flipped so that every sample keeps its world "
+                      "position", SplinevizWarning, stacklevel=stacklevel)
 
 
 def format_affine(affine) -> list[str]:

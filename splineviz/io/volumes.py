@@ -16,6 +16,7 @@ import os
 import re
 import warnings
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -43,8 +44,9 @@ from splineviz.io.errors import (
     FileFormatError,
     InvalidDataError,
 )
+from splineviz.io.geometry import affine_from, orientation, refuse_oblique, warn_flips
 from splineviz.io.registry import find_format, register_format
-from splineviz.io.volume_data import VolumeData
+from splineviz.io.volume_data import VolumeData, select_frames
 
 
 # ---------------------------------------------------------------------------- VTK-based
@@ -477,51 +479,6 @@ def _write_vti(path: Path, vol: Volume) -> None:
             raise WriteError(f"cannot write {path.name}: {err or 'the writer failed'}")
 
 
-# ---------------------------------------------------------------------------- NIfTI
-def _read_nifti(path: Path) -> VolumeData:
-    """NIfTI-1/2 with nibabel, reoriented to the closest RAS+ axes so that world axes match
-    array axes; spacing = voxel sizes, origin = the affine's translation. A residual
-    rotation (oblique scans) is recorded in ``meta["affine"]`` but not applied."""
-    import nibabel as nib
-    from nibabel.filebasedimages import ImageFileError
-
-    try:
-        if path.name.lower().endswith((".nii", ".nii.gz")):
-            img = nib.load(str(path))
-        else:  # recognised by content under another name: nibabel goes by the suffix
-            img = _nifti_from_bytes(path)
-    except (ImageFileError, nib.spatialimages.HeaderDataError, ValueError, OSError,
-            EOFError, zlib.error) as exc:
-        raise CorruptFileError(f"{path.name} is not a readable NIfTI file: {exc}") from None
-    shape = tuple(int(n) for n in img.shape)
-    while len(shape) > 3 and shape[-1] == 1:
-        shape = shape[:-1]
-    if len(shape) != 3:
-        raise InvalidDataError(f"{path.name} has shape {tuple(img.shape)}, not a 3-D volume")
-    check_volume_size(shape, img.get_data_dtype().itemsize, path.name)
-    try:
-        img = nib.as_closest_canonical(img)
-        data = np.asanyarray(img.dataobj).reshape(img.shape[:3])
-    except (ValueError, OSError, EOFError, zlib.error) as exc:
-        raise CorruptFileError(f"{path.name} has a damaged or truncated payload: {exc}") from None
-    zooms = tuple(float(z) for z in img.header.get_zooms()[:3])
-    origin = tuple(float(v) for v in img.affine[:3, 3])
-    return VolumeData(data, zooms, origin, "nifti", {"affine": img.affine.tolist()})
-
-
-def _nifti_from_bytes(path: Path):
-    import gzip
-
-    import nibabel as nib
-
-    raw = path.read_bytes()
-    if raw[:2] == b"\x1f\x8b":
-        raw = gzip.decompress(raw)
-    cls = nib.Nifti2Image if 540 in (int.from_bytes(raw[:4], "little"),
-                                     int.from_bytes(raw[:4], "big")) else nib.Nifti1Image
-    return cls.from_bytes(raw)
-
-
 # ---------------------------------------------------------------------------- MRC
 def _mrc_axes(header) -> tuple[int, int, int]:
     """Array axis (of mrcfile's ``data[section, row, column]``) holding world x, y, z.
@@ -714,22 +671,6 @@ def _head(path: Path, n: int) -> bytes:
         return fh.read(n)
 
 
-def _sniff_nifti(head: bytes) -> bool:
-    """NIfTI-1: sizeof_hdr 348 and magic ``n+1``/``ni1`` at byte 344; NIfTI-2: sizeof_hdr 540
-    and magic ``n+2``/``ni2`` at byte 4 (either byte order; gzip streams are peeked into)."""
-    if head[:2] == b"\x1f\x8b":
-        try:
-            head = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(head, 352)
-        except zlib.error:
-            return False
-    if len(head) < 8:
-        return False
-    size = {int.from_bytes(head[:4], "little"), int.from_bytes(head[:4], "big")}
-    if 540 in size and head[4:7] in (b"n+2", b"ni2"):
-        return True
-    return 348 in size and len(head) >= 348 and head[344:347] in (b"n+1", b"ni1")
-
-
 register_format("vti", (".vti",), _read_vti, _write_vti, kind="volume",
                 sniff=lambda h: b"<VTKFile" in h and b"ImageData" in h,
                 description="VTK XML ImageData")
@@ -743,8 +684,6 @@ register_format("metaimage", (".mhd", ".mha"), _read_metaimage, None, kind="volu
                 description="MetaImage")
 register_format("nrrd", (".nrrd", ".nhdr"), _read_nrrd, _write_nrrd, kind="volume",
                 sniff=lambda h: h.startswith(b"NRRD000"), description="NRRD")
-register_format("nifti", (".nii", ".nii.gz"), _read_nifti, None, kind="volume",
-                sniff=_sniff_nifti, description="NIfTI-1/2")
 register_format("mrc", (".mrc", ".map", ".ccp4", ".mrcs"), _read_mrc, None, kind="volume",
                 sniff=lambda h: len(h) >= 212 and h[208:211] == b"MAP",
                 description="MRC/CCP4 map")
@@ -759,8 +698,13 @@ _RAW_OPTIONS = ("dims", "dtype", "byteorder", "offset")
 
 
 def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="little",
-                     offset=0, allow_outside=False) -> VolumeData:
-    """Read a volume file in its own sample type (see :func:`read_volume`)."""
+                     offset=0, allow_outside=False, channel=None, frame=0) -> VolumeData:
+    """Read a volume file in its own sample type (see :func:`read_volume`).
+
+    For a 4-D file, ``data`` is entry ``frame`` of the sequence that
+    :func:`~splineviz.io.volume_data.select_frames` makes with ``channel``; ``frames``
+    still reads any other, and ``meta["frame"]`` holds the file index read.
+    """
     from splineviz.plugins import ensure_loaded
 
     ensure_loaded()
@@ -776,33 +720,56 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
     if not isinstance(vd, VolumeData):
         raise FileFormatError(f"the {fmt.name} reader returned {type(vd).__name__}, "
                               "not VolumeData")
+    selection = select_frames(vd.frames, p.name, channel)
+    if not 0 <= int(frame) < len(selection.indices):
+        raise InvalidDataError(f"{p.name} has {len(selection.indices)} frame(s) along its "
+                               f"{selection.axis.name} axis; frame {frame} is not one")
+    index = selection.indices[int(frame)]
+    if vd.frames is not None:
+        if any(index):
+            with reader_errors(p.name, fmt.name):
+                vd.data = vd.frames.read(index)
+        vd.meta["frame"] = index
     return vd
 
 
 def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little", offset=0,
-                spacing=None, origin=None, nonfinite="error", allow_outside=False) -> Volume:
+                spacing=None, origin=None, nonfinite="error", allow_outside=False,
+                channel=None, complex="error") -> Volume:
     """Read a volume file (or DICOM folder) into a :class:`~splineviz.Volume`.
 
     Parameters
     ----------
     path : path-like
-        VTI, NRRD/NHDR, MHD/MHA, legacy .vtk, SLC, NIfTI, MRC/MAP, DICOM folder, .npy, or raw.
+        VTI, NRRD/NHDR, MHD/MHA, legacy .vtk, SLC, NIfTI, Analyze (.hdr/.img), MGH/MGZ, MINC1/2,
+        PAR/REC, AFNI (BRIK/HEAD), MRC/MAP, DICOM folder, .npy, raw, and the chunked and
+        plugin formats of the registry. A 4-D file gives its first frame, with a
+        :class:`~splineviz.core.errors.SplinevizWarning` that says how many there are
+        (:func:`~splineviz.io.sequence.read_volume_sequence` reads them all).
     format : str, optional
         Force a registered format by name instead of guessing from suffix and content.
     dims, dtype, byteorder, offset
         Raw binaries: (nx, ny, nz) samples x fastest, NumPy dtype, "little"/"big", bytes of
         header to skip. Giving ``dims`` or ``dtype`` selects the raw reader.
     spacing, origin : (3,) float, optional
-        Override the file's geometry (raw files have none: default 1 and 0).
+        Override the file's step along each array axis and the position of its first sample
+        (raw files have none: default 1 and 0); a direction the file states is kept.
     nonfinite : {"error", "fill"}
         What to do with NaN/Inf samples: refuse the file (default), or replace them by the
         smallest finite sample (outside every isosurface above it) with a
-        :class:`~splineviz.core.errors.SplinevizWarning`. A negative spacing flips its axis
-        (samples keep their world positions), also with a warning.
+        :class:`~splineviz.core.errors.SplinevizWarning`. A negative spacing, or a direction
+        matrix that runs against a world axis, flips the axis (samples keep their world
+        positions; :mod:`splineviz.io.geometry`), also with a warning; an oblique one is
+        refused.
     allow_outside : bool
         Read data files that a header (MetaImage ``ElementDataFile``, NRRD ``data file``)
         names outside the header's folder; refused by default with an
         :class:`~splineviz.io.errors.OutsideFolderError`.
+    channel : int, optional
+        For a multi-channel file: the channel to read (see
+        :func:`~splineviz.io.volume_data.select_frames`).
+    complex : {"error", "magnitude"}
+        Complex samples are refused (default) or replaced by their magnitude.
 
     Returns
     -------
@@ -825,24 +792,48 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
-                          offset=offset, allow_outside=allow_outside)
+                          offset=offset, allow_outside=allow_outside, channel=channel)
+    name = Path(os.fspath(path)).name
+    selection = select_frames(vd.frames, name, channel)
+    if len(selection.indices) > 1:
+        warnings.warn(f"{name} holds {len(selection.indices)} frames along its "
+                      f"{selection.axis.name} axis; the first is shown (read_volume_sequence "
+                      "reads them all)", SplinevizWarning, stacklevel=2)
     if is_lazy(vd.data):  # OME-Zarr, Zarr, HDF5: a ChunkedVolume, read brick by brick
         validate_volume_data(vd, Path(os.fspath(path)).name)
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,
                                  origin=origin)
-    return to_volume(vd, Path(os.fspath(path)).name, spacing=spacing, origin=origin,
-                     nonfinite=nonfinite)
+    return to_volume(vd, name, spacing=spacing, origin=origin, nonfinite=nonfinite,
+                     complex=complex)
 
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
-              nonfinite="error") -> Volume:
+              nonfinite="error", complex="error") -> Volume:
     """Validate a :class:`VolumeData` and convert it to a float32 :class:`~splineviz.Volume`
-    (the second half of :func:`read_volume`; use it to keep both the stored dtype and the
-    volume from one read)."""
+    (the second half of :func:`read_volume`, whose parameters these are; use it to keep both
+    the stored dtype and the volume from one read)."""
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
-    validate_volume_data(vd, name)
+    if complex not in ("error", "magnitude"):
+        raise ValueError(f"complex must be 'error' or 'magnitude', got {complex!r}")
     raw = np.asarray(vd.data)
+    if np.issubdtype(raw.dtype, np.complexfloating):
+        if complex == "error":
+            raise InvalidDataError(f"{name} holds complex ({raw.dtype}) samples; read it with "
+                                   "complex='magnitude' to show their magnitude")
+        raw = np.abs(raw)
+        vd = replace(vd, data=raw)
+    validate_volume_data(vd, name)
+    try:
+        sp = as_float_triplet(vd.spacing if spacing is None else spacing, "spacing")
+        og = as_float_triplet(vd.origin if origin is None else origin, "origin")
+    except ValueError as exc:
+        raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+    if not all(s != 0 for s in sp):
+        raise InvalidDataError(f"{name} has unusable geometry: spacing must be finite and "
+                               f"positive, got {sp}")
+    orient = orientation(affine_from(sp, og, vd.direction), raw.shape, name, space=vd.space)
+    refuse_oblique(orient, name)
     if raw.dtype.kind == "f" and raw.dtype.itemsize > 4:
         # checked before the float32 cast, which would turn these into infinities and the
         # message into a false "infinite samples"
@@ -858,7 +849,8 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
     if bad.any():
         count = int(bad.sum())
         if bad.all():
-            raise InvalidDataError(f"{name} has no finite samples")
+            raise InvalidDataError(f"{name} has no finite samples (all {count:,} are NaN or "
+                                   "infinite), so there is nothing to show")
         if nonfinite == "error":
             raise InvalidDataError(
                 f"{name} has {count} NaN or infinite samples "
@@ -868,45 +860,11 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         data = np.where(bad, np.float32(fill), data)
         warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {fill:g}, "
                       "the smallest finite sample", SplinevizWarning, stacklevel=3)
+    warn_flips(orient, name, stacklevel=4)
     try:
-        sp = as_float_triplet(vd.spacing if spacing is None else spacing, "spacing")
-        og = as_float_triplet(vd.origin if origin is None else origin, "origin")
-    except ValueError as exc:
-        raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
-    data, sp, og = _flip_negative_axes(data, sp, og, name)
-    try:
-        return Volume(data, spacing=sp, origin=og)
+        return Volume(orient.apply(data), spacing=orient.spacing, origin=orient.origin)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
-
-
-def _flip_negative_axes(data, spacing, origin, name):
-    """A grid stored with a negative step along an axis, flipped so that the step is positive
-    and every sample keeps its world position (``origin + i * step`` is the same point), with
-    a :class:`SplinevizWarning` saying so. Zero steps are left for :class:`Volume` to refuse.
-
-    Parameters
-    ----------
-    data : (nx, ny, nz) ndarray
-    spacing, origin : (3,) tuple of float
-
-    Returns
-    -------
-    data : (nx, ny, nz) ndarray
-    spacing, origin : (3,) tuple of float
-    """
-    flipped = [a for a in range(3) if spacing[a] < 0]
-    if not flipped:
-        return data, spacing, origin
-    sp, og = list(spacing), list(origin)
-    for a in flipped:
-        og[a] = origin[a] + (data.shape[a] - 1) * spacing[a]
-        sp[a] = -spacing[a]
-    data = np.flip(data, axis=flipped)
-    warnings.warn(f"{name} has a negative spacing along {', '.join('xyz'[a] for a in flipped)}: "
-                  "the axis is flipped so that every sample keeps its world position",
-                  SplinevizWarning, stacklevel=4)
-    return data, tuple(sp), tuple(og)
 
 
 def validate_volume_data(vd: VolumeData, name: str) -> None:
@@ -919,8 +877,10 @@ def validate_volume_data(vd: VolumeData, name: str) -> None:
             f"{name} has {shape} samples; a spline volume needs at least "
             f"{MIN_SAMPLES_PER_AXIS} along each axis"
         )
-    if not (np.issubdtype(vd.data.dtype, np.number) or vd.data.dtype == bool) or \
-            np.issubdtype(vd.data.dtype, np.complexfloating):
+    if np.issubdtype(vd.data.dtype, np.complexfloating):
+        raise InvalidDataError(f"{name} holds complex ({vd.data.dtype}) samples; read it with "
+                               "complex='magnitude' to show their magnitude")
+    if not (np.issubdtype(vd.data.dtype, np.number) or vd.data.dtype == bool):
         raise InvalidDataError(f"{name} holds {vd.data.dtype} samples, not real numbers")
 
 
