@@ -91,12 +91,10 @@ def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
             f"{path.name} announces {tuple(dims)} samples but only {tuple(got)} could be read"
         )
     data = _vtk.image_to_array(image, path.name)
-    meta = {}
-    direction = [image.GetDirectionMatrix().GetElement(i, j) for i in range(3)
-                 for j in range(3)]
-    if not np.allclose(direction, np.eye(3).ravel()):
-        meta["direction"] = direction  # a rotated grid: shown axis-aligned (Volume has none)
-    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt, meta)
+    m = image.GetDirectionMatrix()
+    direction = np.array([[m.GetElement(i, j) for j in range(3)] for i in range(3)])
+    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt, {},
+                      None if np.array_equal(direction, np.eye(3)) else direction)
 
 
 def _read_vti(path: Path) -> VolumeData:
@@ -259,7 +257,32 @@ def _read_metaimage(path: Path) -> VolumeData:
     if len(signs) == 3 and min(signs) < 0:
         # VTK's reader drops the sign of ElementSpacing: keep it, to_volume flips the axis
         vd.spacing = tuple(-s if g < 0 else s for s, g in zip(vd.spacing, signs, strict=True))
+    vd.direction = _metaimage_direction(keys, path.name)
+    vd.space = "LPS"  # MetaIO's (ITK's) patient space
     return vd
+
+
+def _metaimage_direction(keys: dict, name: str):
+    """The direction matrix of a MetaImage header (``TransformMatrix``, or its synonyms
+    ``Rotation``/``Orientation``), or None for the identity.
+
+    As ITK's MetaImageIO reads it, the k-th triple of numbers is the world direction of
+    array axis k, i.e. column k. (VTK 9.7's vtkMetaImageReader returns the transpose, which
+    differs from ITK's reading, and from Slicer's, for a non-symmetric matrix.)
+    """
+    text = next((keys[k] for k in ("transformmatrix", "rotation", "orientation")
+                 if k in keys), None)
+    if text is None:
+        return None
+    try:
+        values = np.array([float(v) for v in text.split()], dtype=float)
+    except ValueError:
+        raise CorruptFileError(f"{name} has a malformed TransformMatrix {text[:60]!r}") from None
+    if values.size != 9 or not np.all(np.isfinite(values)):
+        raise CorruptFileError(f"{name} has a TransformMatrix of {values.size} numbers, not "
+                               "a finite 3x3 matrix")
+    direction = values.reshape(3, 3).T
+    return None if np.array_equal(direction, np.eye(3)) else direction
 
 
 def _check_zlib_stream(payload: Path, need: int) -> None:
@@ -316,18 +339,30 @@ def _read_nrrd(path: Path) -> VolumeData:
         data = _read_nrrd_multifile(path, header, datafile, sizes)
     else:
         data, header = _read_nrrd_single(path, datafile)
-    spacing = (1.0, 1.0, 1.0)
-    if "spacings" in header:
-        spacing = tuple(float(s) for s in header["spacings"])
-    elif "space directions" in header:
+    spacing, direction = (1.0, 1.0, 1.0), None
+    if "space directions" in header:
         dirs = np.asarray(header["space directions"], dtype=float)
-        spacing = tuple(float(v) for v in np.linalg.norm(dirs, axis=1))
-        if dirs.shape == (3, 3) and np.all(dirs[~np.eye(3, dtype=bool)] == 0):
-            # an axis-aligned grid keeps the sign of each step: a negative one (e.g. LPS
-            # scans stored with "-1 0 0") is flipped by to_volume, not silently mirrored
-            spacing = tuple(float(v) for v in np.diag(dirs))
+        if dirs.shape != (3, 3) or not np.all(np.isfinite(dirs)):
+            raise CorruptFileError(f"{path.name} has space directions that are not three "
+                                   "finite 3-vectors")
+        # row a of pynrrd's matrix is the world step of array axis a: the affine's column a
+        steps = np.linalg.norm(dirs, axis=1)
+        if not np.all(steps > 0):
+            raise InvalidDataError(f"{path.name} has a zero space direction")
+        spacing = tuple(float(v) for v in steps)
+        direction = dirs.T / steps[None, :]
+        if np.array_equal(direction, np.eye(3)):
+            direction = None
+    elif "spacings" in header:
+        spacing = tuple(float(s) for s in header["spacings"])
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
-    return VolumeData(data, spacing, origin, "nrrd")
+    return VolumeData(data, spacing, origin, "nrrd", {}, direction,
+                      _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""))
+
+
+#: NRRD ``space`` names of the two patient spaces (their short forms included)
+_NRRD_SPACES = {"left-posterior-superior": "LPS", "lps": "LPS",
+                "right-anterior-superior": "RAS", "ras": "RAS"}
 
 
 #: a printf pattern of slice file names: one integer conversion, at most two digits of
@@ -336,6 +371,16 @@ _NAME_PATTERN = re.compile(r"^(?:[^%]|%%)*%[-+ #0]*(\d{0,2})(?:\.(\d{0,2}))?[diu
                            r"(?:[^%]|%%)*$")
 #: longest slice file name built from a pattern
 MAX_NAME = 4096
+#: most slice files one header may name: ten times the slices of the tallest micro-CT
+#: stacks, and few enough that their names take a few MB (a header announcing 2*10^7 files
+#: grew to 1.4 GB building their names)
+MAX_SLICE_FILES = 65536
+
+
+def _check_slice_count(path: Path, count: int) -> None:
+    if count > MAX_SLICE_FILES:
+        raise DataSizeError(f"{path.name} names {count:,} slice files; splineviz reads at most "
+                            f"{MAX_SLICE_FILES:,} (one file per slice)")
 
 
 def _pattern_names(path: Path, parts: list[str], expected: int) -> list[str]:
@@ -356,6 +401,7 @@ def _pattern_names(path: Path, parts: list[str], expected: int) -> list[str]:
         raise CorruptFileError(f"{path.name} has the empty file-name range {lo} to {hi} by "
                                f"{step}")
     count = len(range(lo, hi + (1 if step > 0 else -1), step))  # O(1), no list
+    _check_slice_count(path, max(count, expected))
     if count != expected:
         raise DataSizeError(f"{path.name} lists {count:,} slice files for {expected} slices")
     return [pattern % i for i in range(lo, hi + (1 if step > 0 else -1), step)]
@@ -371,6 +417,7 @@ def _listed_names(path: Path, marker: bytes) -> list[str]:
     after = re.split(marker, text, maxsplit=1, flags=re.M | re.I)
     if len(after) != 2:
         return []
+    _check_slice_count(path, after[1].count(b"\n") - after[1].count(b"\n\n"))
     return [ln.strip() for ln in after[1].decode("latin-1").splitlines() if ln.strip()]
 
 
@@ -794,17 +841,31 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
                           offset=offset, allow_outside=allow_outside, channel=channel)
     name = Path(os.fspath(path)).name
-    selection = select_frames(vd.frames, name, channel)
-    if len(selection.indices) > 1:
-        warnings.warn(f"{name} holds {len(selection.indices)} frames along its "
-                      f"{selection.axis.name} axis; the first is shown (read_volume_sequence "
-                      "reads them all)", SplinevizWarning, stacklevel=2)
+    notice = frames_notice(name, select_frames(vd.frames, name, channel), channel)
+    if notice:
+        warnings.warn(notice, SplinevizWarning, stacklevel=2)
     if is_lazy(vd.data):  # OME-Zarr, Zarr, HDF5: a ChunkedVolume, read brick by brick
-        validate_volume_data(vd, Path(os.fspath(path)).name)
+        if complex == "magnitude" and np.issubdtype(vd.data.dtype, np.complexfloating):
+            raise InvalidDataError(f"{name} holds complex ({vd.data.dtype}) samples in chunks; "
+                                   "their magnitude is taken only for volumes read whole")
+        validate_volume_data(vd, name)
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,
                                  origin=origin)
     return to_volume(vd, name, spacing=spacing, origin=origin, nonfinite=nonfinite,
                      complex=complex)
+
+
+def frames_notice(name: str, selection, channel=None) -> str | None:
+    """One line saying which frame of a 4-D file is shown and how to choose, or None for a
+    file of one frame (``selection``: :func:`~splineviz.io.volume_data.select_frames`)."""
+    parts = []
+    if len(selection.indices) > 1:
+        parts.append(f"{len(selection.indices)} frames along its {selection.axis.name} axis "
+                     "(the first is shown; read_volume_sequence reads them all)")
+    if channel is None and selection.channels > 1:
+        parts.append(f"{selection.channels} channels (channel 0 is shown; choose another "
+                     "with channel=N or --channel N)")
+    return f"{name} holds {' and '.join(parts)}" if parts else None
 
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
