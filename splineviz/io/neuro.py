@@ -12,6 +12,7 @@ read at a time), each axis named from the file's metadata where it says what the
 
 from __future__ import annotations
 
+import gzip
 import zlib
 from pathlib import Path
 
@@ -89,17 +90,22 @@ def _nibabel_errors():
 
 
 def _load(path: Path, description: str):
-    """``nibabel.load``, or for a NIfTI recognised by content under another name, the image
-    from its bytes (nibabel chooses the class by the file name)."""
+    """``nibabel.load``; a file recognised by its content under a name nibabel does not know
+    (nibabel chooses the class by the file name) is opened with the class its content
+    names."""
     import nibabel as nib
 
     try:
         try:
             return nib.load(str(path))
         except nib.filebasedimages.ImageFileError:
-            if not sniff_nifti(read_head(path)):
+            cls = _class_by_content(read_head(path))
+            if cls is None:
                 raise
-            return _nifti_from_bytes(path)
+            if cls in (nib.Minc1Image, nib.Minc2Image):
+                return cls.from_file_map({"image": nib.FileHolder(filename=str(path))})
+            raw = path.read_bytes()
+            return cls.from_bytes(gzip.decompress(raw) if raw[:2] == b"\x1f\x8b" else raw)
     except FileNotFoundError as exc:
         missing = Path(exc.filename).name if exc.filename else "its data file"
         raise DataFileNotFoundError(f"{path.name} needs {missing}, which is missing") from None
@@ -109,17 +115,33 @@ def _load(path: Path, description: str):
                                f"{detail}") from None
 
 
-def _nifti_from_bytes(path: Path):
-    import gzip
-
+def _class_by_content(head: bytes):
+    """The nibabel image class of a single-file format recognised by its first bytes."""
     import nibabel as nib
 
-    raw = path.read_bytes()
-    if raw[:2] == b"\x1f\x8b":
-        raw = gzip.decompress(raw)
-    cls = nib.Nifti2Image if 540 in (int.from_bytes(raw[:4], "little"),
-                                     int.from_bytes(raw[:4], "big")) else nib.Nifti1Image
-    return cls.from_bytes(raw)
+    if sniff_nifti(head):
+        plain = _gunzip_head(head, 8)
+        two = 540 in (int.from_bytes(plain[:4], "little"), int.from_bytes(plain[:4], "big"))
+        return nib.Nifti2Image if two else nib.Nifti1Image
+    if head[:4] in NETCDF_SIGNATURES:
+        return nib.Minc1Image
+    if is_minc2(head):
+        return nib.Minc2Image
+    if sniff_mgh(head):
+        return nib.MGHImage
+    return None
+
+
+def _reopen_by_name(img) -> None:
+    """nibabel's PAR/REC proxy keeps the REC file open for the life of the image (and
+    leaks it); given the file's name instead it opens the file for each frame it reads and
+    closes it again."""
+    proxy = img.dataobj
+    handle = getattr(proxy, "file_like", None)
+    holder = getattr(img, "file_map", {}).get("image")
+    if hasattr(handle, "close") and holder is not None and holder.filename is not None:
+        handle.close()
+        proxy.file_like = holder.filename
 
 
 def _spatial_axes(img) -> tuple[int, int, int]:
@@ -187,6 +209,7 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
                                                                         None) is None:
         raise InvalidDataError(f"{path.name} is a {type(img).__name__}, not a volume with a "
                                "voxel-to-world affine")
+    _reopen_by_name(img)
     for holder in getattr(img, "file_map", {}).values():
         # a header-only pair (.hdr without its .img): nibabel loads lazily and would fail
         # only when the samples are read
@@ -234,7 +257,8 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
         raise InvalidDataError(f"{path.name} has a degenerate voxel-to-world affine "
                                f"(voxel sizes {', '.join(f'{s:g}' for s in steps)})")
     direction = m / steps[None, :]
-    meta = {"affine": affine.tolist(), "class": type(img).__name__}
+    # spatial_axes: the array axes of the file that i, j, k are (MINC may keep time first)
+    meta = {"affine": affine.tolist(), "class": type(img).__name__, "spatial_axes": spatial}
     return VolumeData(data, tuple(float(s) for s in steps),
                       tuple(float(v) for v in affine[:3, 3]), fmt, meta,
                       None if np.array_equal(direction, np.eye(3)) else direction, "RAS",
