@@ -199,8 +199,6 @@ def _read_metaimage(path: Path) -> VolumeData:
     The header is looked at once before VTK reads it to catch what VTK would silently accept:
     a missing data file and, for uncompressed payloads, a size that does not match DimSize.
     """
-    from vtkmodules.vtkIOImage import vtkMetaImageReader
-
     head = _head(path, 65536)
     keys = {k.decode("latin-1").lower(): v.decode("latin-1")
             for k, v in _MHD_KEY.findall(head.split(b"ElementDataFile")[0] + b"\n")}
@@ -249,6 +247,8 @@ def _read_metaimage(path: Path) -> VolumeData:
                     f"{payload.name} holds {have} bytes but DimSize {tuple(dims)} of {etype} "
                     f"needs {need}"
                 )
+    from vtkmodules.vtkIOImage import vtkMetaImageReader  # after the checks: VTK is ~60 MB
+
     vd = _read_with_vtk(vtkMetaImageReader(), path, "metaimage")
     try:
         signs = [np.sign(float(v)) for v in keys.get("elementspacing", "").split()]

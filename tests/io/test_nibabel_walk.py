@@ -187,3 +187,20 @@ def test_channel_axis_is_chosen(tmp_path):
     nib.save(nib.Nifti1Image(data[..., 0, 0], np.eye(4)), tmp_path / "three.nii")
     with pytest.raises(InvalidDataError, match="no channel axis"):
         read_volume(tmp_path / "three.nii", channel=0)
+
+
+def test_the_gui_read_path_opens_a_4d_file_at_its_first_frame(tmp_path):
+    """The GUI reads through :func:`splineviz.model.opening.read_file` in a job and shows
+    the SplinevizWarnings it notes: a 4-D file opens (first frame) with the notice."""
+    from splineviz.model.opening import noting_warnings, read_file
+
+    data = np.random.default_rng(5).random((6, 5, 4, 3)).astype(np.float32)
+    img = nib.Nifti1Image(data, np.eye(4))
+    img.header.set_xyzt_units("mm", "msec")
+    nib.save(img, tmp_path / "fmri.nii.gz")
+    noted = noting_warnings(read_file, tmp_path / "fmri.nii.gz")
+    kind, vol, _ = noted.value
+    assert kind == "volume"
+    np.testing.assert_array_equal(vol.data, data[..., 0])
+    assert noted.warnings == ["fmri.nii.gz holds 3 frames along its time axis (the first is "
+                              "shown; read_volume_sequence reads them all)"]
