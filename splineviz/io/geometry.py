@@ -231,8 +231,57 @@ def refuse_oblique(orient: Orientation, name: str) -> None:
     if orient.oblique:
         raise InvalidDataError(
             f"{name} is an oblique scan (its axes are rotated by {orient.angle:.3g} degrees "
-            "from the world axes), which splineviz cannot yet show in place; resample it onto "
-            "axis-aligned axes first (e.g. with nibabel.processing.resample_to_output)")
+            "from the world axes), which splineviz cannot show in place unresampled; read it "
+            "with oblique='resample' to resample it onto axis-aligned axes")
+
+
+def resample_axis_aligned(data, orient: Orientation, name: str, *, fill: float):
+    """Trilinear resampling of an oblique grid onto the axis-aligned grid that covers it,
+    every new sample taken at its own world point (nothing is rotated into place).
+
+    The new step along each world axis is the step of the file axis nearest to it, so the
+    sample count grows only by the bounding box's share; points outside the file's grid get
+    ``fill`` (the smallest sample: outside every isosurface above it).
+
+    Parameters
+    ----------
+    data : (n0, n1, n2) ndarray
+        Samples in the file's index order.
+    orient : Orientation
+        From :func:`orientation` of the file's affine.
+    name : str
+        File name for the warning.
+    fill : float
+
+    Returns
+    -------
+    data : (nx, ny, nz) float32 ndarray
+    spacing, origin : (3,) tuple of float
+    """
+    from scipy import ndimage
+
+    from splineviz.io._util import check_volume_size
+
+    a = orient.affine
+    corners = np.array(np.meshgrid(*[[0, n - 1] for n in data.shape[:3]],
+                                   indexing="ij")).reshape(3, -1)
+    world = a[:3, :3] @ corners + a[:3, 3:4]
+    lo, hi = world.min(axis=1), world.max(axis=1)
+    spacing = np.asarray(orient.spacing, dtype=float)
+    shape = tuple(int(np.floor((h - l) / s + 1e-9)) + 1 for l, h, s in zip(lo, hi, spacing,
+                                                                             strict=True))
+    check_volume_size(shape, 4, name)
+    # output index o -> world lo + o * spacing -> file index inv(M) (world - t)
+    inv = np.linalg.inv(a[:3, :3])
+    matrix = inv @ np.diag(spacing)
+    offset = inv @ (lo - a[:3, 3])
+    out = ndimage.affine_transform(np.asarray(data, dtype=np.float32), matrix, offset,
+                                   output_shape=shape, order=1, mode="constant",
+                                   cval=float(fill))
+    warnings.warn(f"{name} is an oblique scan (rotated by {orient.angle:.3g} degrees): it is "
+                  "resampled trilinearly onto axis-aligned axes, each sample at its own world "
+                  "point", SplinevizWarning, stacklevel=4)
+    return out, tuple(float(s) for s in spacing), tuple(float(v) for v in lo)
 
 
 def warn_flips(orient: Orientation, name: str, *, stacklevel: int = 3) -> None:

@@ -78,8 +78,8 @@ class VolumeSequence(Sequence):
 
 
 def read_volume_sequence(path, *, channel=None, format=None, spacing=None, origin=None,
-                         nonfinite="error", complex="error", allow_outside=False,
-                         **raw) -> VolumeSequence:
+                         nonfinite="error", complex="error", oblique="error",
+                         allow_outside=False, **raw) -> VolumeSequence:
     """Open a volume file as a sequence of 3-D volumes, each read when it is indexed.
 
     Parameters
@@ -92,7 +92,7 @@ def read_volume_sequence(path, *, channel=None, format=None, spacing=None, origi
         :func:`~splineviz.io.volume_data.select_frames`): a file with one extra axis gives
         the sequence along it, or with ``channel`` that one channel of it; a 5-D file runs
         along its time axis at ``channel`` (default 0).
-    format, spacing, origin, nonfinite, complex, allow_outside, **raw
+    format, spacing, origin, nonfinite, complex, oblique, allow_outside, **raw
         As for :func:`~splineviz.io.volumes.read_volume` (``raw``: ``dims``, ``dtype``,
         ``byteorder``, ``offset`` of headerless files).
 
@@ -120,5 +120,5 @@ def read_volume_sequence(path, *, channel=None, format=None, spacing=None, origi
     selection = select_frames(vd.frames, name, channel)
     return VolumeSequence(name, vd, selection,
                           {"spacing": spacing, "origin": origin, "nonfinite": nonfinite,
-                           "complex": complex})
+                           "complex": complex, "oblique": oblique})
 

@@ -44,7 +44,13 @@ from splineviz.io.errors import (
     FileFormatError,
     InvalidDataError,
 )
-from splineviz.io.geometry import affine_from, orientation, refuse_oblique, warn_flips
+from splineviz.io.geometry import (
+    affine_from,
+    orientation,
+    refuse_oblique,
+    resample_axis_aligned,
+    warn_flips,
+)
 from splineviz.io.registry import find_format, register_format
 from splineviz.io.volume_data import VolumeData, select_frames
 
@@ -782,7 +788,7 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
 
 def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little", offset=0,
                 spacing=None, origin=None, nonfinite="error", allow_outside=False,
-                channel=None, complex="error") -> Volume:
+                channel=None, complex="error", oblique="error") -> Volume:
     """Read a volume file (or DICOM folder) into a :class:`~splineviz.Volume`.
 
     Parameters
@@ -817,6 +823,11 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         :func:`~splineviz.io.volume_data.select_frames`).
     complex : {"error", "magnitude"}
         Complex samples are refused (default) or replaced by their magnitude.
+    oblique : {"error", "resample"}
+        A grid rotated against the world axes is refused (default: a Volume is
+        axis-aligned, and showing it so would misplace it) or resampled trilinearly onto the
+        axis-aligned grid covering it, with a warning
+        (:func:`~splineviz.io.geometry.resample_axis_aligned`).
 
     Returns
     -------
@@ -852,7 +863,7 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,
                                  origin=origin)
     return to_volume(vd, name, spacing=spacing, origin=origin, nonfinite=nonfinite,
-                     complex=complex)
+                     complex=complex, oblique=oblique)
 
 
 def frames_notice(name: str, selection, channel=None) -> str | None:
@@ -869,7 +880,7 @@ def frames_notice(name: str, selection, channel=None) -> str | None:
 
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
-              nonfinite="error", complex="error") -> Volume:
+              nonfinite="error", complex="error", oblique="error") -> Volume:
     """Validate a :class:`VolumeData` and convert it to a float32 :class:`~splineviz.Volume`
     (the second half of :func:`read_volume`, whose parameters these are; use it to keep both
     the stored dtype and the volume from one read)."""
@@ -877,6 +888,8 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     if complex not in ("error", "magnitude"):
         raise ValueError(f"complex must be 'error' or 'magnitude', got {complex!r}")
+    if oblique not in ("error", "resample"):
+        raise ValueError(f"oblique must be 'error' or 'resample', got {oblique!r}")
     raw = np.asarray(vd.data)
     if np.issubdtype(raw.dtype, np.complexfloating):
         if complex == "error":
@@ -894,7 +907,8 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         raise InvalidDataError(f"{name} has unusable geometry: spacing must be finite and "
                                f"positive, got {sp}")
     orient = orientation(affine_from(sp, og, vd.direction), raw.shape, name, space=vd.space)
-    refuse_oblique(orient, name)
+    if oblique == "error":
+        refuse_oblique(orient, name)
     if raw.dtype.kind == "f" and raw.dtype.itemsize > 4:
         # checked before the float32 cast, which would turn these into infinities and the
         # message into a false "infinite samples"
@@ -921,9 +935,13 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         data = np.where(bad, np.float32(fill), data)
         warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {fill:g}, "
                       "the smallest finite sample", SplinevizWarning, stacklevel=3)
-    warn_flips(orient, name, stacklevel=4)
+    if orient.oblique:
+        data, sp, og = resample_axis_aligned(data, orient, name, fill=float(data.min()))
+    else:
+        warn_flips(orient, name, stacklevel=4)
+        data, sp, og = orient.apply(data), orient.spacing, orient.origin
     try:
-        return Volume(orient.apply(data), spacing=orient.spacing, origin=orient.origin)
+        return Volume(data, spacing=sp, origin=og)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
 

@@ -73,6 +73,9 @@ def test_every_nibabel_test_file_reads_like_nibabel_or_is_refused_in_one_sentenc
             if hasattr(handle, "close"):
                 handle.close()
     assert MUST_READ <= read, sorted(MUST_READ - read)
+    oblique = {"test.mgz", "phantom_varscale.PAR", "phantom_EPI_asc_CLEAR_2_1.PAR",
+               "example4d.nii.gz"}
+    assert {n + " (resampled)" for n in oblique} <= read
     # shipped without its .img: nibabel parses the header, but there are no samples to read
     for pair in ("analyze.hdr", "nifti1.hdr", "nifti2.hdr"):
         if pair in refused:
@@ -110,6 +113,10 @@ def check_one(name, img, read, refused):
         except SplinevizError as exc:
             assert one_sentence(exc), (name, str(exc))
             assert orientation(img.affine, vd.data.shape, name).oblique, (name, str(exc))
+            # on request, resampled in place (tests/io/test_geometry.py checks the values)
+            vol = read_volume(path, nonfinite="fill", oblique="resample")
+            assert np.all(np.isfinite(vol.data)) and min(vol.shape) >= 2, name
+            read.add(name + " (resampled)")
             return
     orient = orientation(img.affine, vd.data.shape, name)
     np.testing.assert_allclose(vol.origin, orient.origin, atol=1e-5, err_msg=name)
