@@ -31,7 +31,7 @@ class Opened:
     path: Path
 
 
-def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
+def open_path(path, *, repoint=None, allow_outside: bool = False, **volume_options) -> Opened:
     """Read ``path`` as a session (``.svs``), else as a volume, else as a point cloud.
 
     Parameters
@@ -42,6 +42,9 @@ def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
     allow_outside : bool
         Read data files that a header or session names outside its own folder (refused by
         default with an :class:`~splineviz.io.errors.OutsideFolderError`).
+    **volume_options
+        Passed to :func:`~splineviz.io.volumes.read_volume` for a volume (``channel``,
+        ``oblique``, ...).
 
     Raises
     ------
@@ -58,7 +61,8 @@ def open_path(path, *, repoint=None, allow_outside: bool = False) -> Opened:
         return Opened("session", load_session(p, repoint=repoint,
                                                     allow_outside=allow_outside), p)
     try:
-        return Opened("volume", read_volume(p, allow_outside=allow_outside), p)
+        return Opened("volume", read_volume(p, allow_outside=allow_outside, **volume_options),
+                      p)
     except UnknownFormatError:
         pass
     try:
