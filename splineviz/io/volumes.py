@@ -52,7 +52,7 @@ from splineviz.io.geometry import (
     warn_flips,
 )
 from splineviz.io.registry import find_format, register_format
-from splineviz.io.volume_data import VolumeData, select_frames
+from splineviz.io.volume_data import FrameAxis, Frames, VolumeData, select_frames
 
 
 # ---------------------------------------------------------------------------- VTK-based
@@ -332,8 +332,7 @@ def _read_nrrd(path: Path) -> VolumeData:
         raise CorruptFileError(f"{path.name} lacks the required NRRD field(s) "
                                f"{', '.join(missing)}")
     sizes = [int(s) for s in np.atleast_1d(header.get("sizes", []))]
-    if len(sizes) != 3:
-        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume")
+    spatial = _nrrd_spatial_axes(path, header, sizes)
     try:
         itemsize = np.dtype(nrrd.reader._determine_datatype(header)).itemsize
     except (KeyError, TypeError, ValueError, nrrd.NRRDError):
@@ -342,15 +341,19 @@ def _read_nrrd(path: Path) -> VolumeData:
     check_volume_size(sizes, itemsize, path.name)
     datafile = str(header.get("data file", header.get("datafile", "")))
     if datafile and (datafile.upper().startswith("LIST") or "%" in datafile):
+        if len(sizes) != 3:
+            raise FileFormatError(f"{path.name} is a {len(sizes)}-D NRRD in several files; "
+                                  "only 3-D multi-file NRRDs are supported")
         data = _read_nrrd_multifile(path, header, datafile, sizes)
     else:
         data, header = _read_nrrd_single(path, datafile)
     spacing, direction = (1.0, 1.0, 1.0), None
     if "space directions" in header:
         dirs = np.asarray(header["space directions"], dtype=float)
-        if dirs.shape != (3, 3) or not np.all(np.isfinite(dirs)):
+        if dirs.shape != (len(sizes), 3) or not np.all(np.isfinite(dirs[spatial])):
             raise CorruptFileError(f"{path.name} has space directions that are not three "
                                    "finite 3-vectors")
+        dirs = dirs[spatial]
         # row a of pynrrd's matrix is the world step of array axis a: the affine's column a
         steps = np.linalg.norm(dirs, axis=1)
         if not np.all(steps > 0):
@@ -360,10 +363,70 @@ def _read_nrrd(path: Path) -> VolumeData:
         if np.array_equal(direction, np.eye(3)):
             direction = None
     elif "spacings" in header:
-        spacing = tuple(float(s) for s in header["spacings"])
+        spacing = tuple(float(np.asarray(header["spacings"], dtype=float)[a]) for a in spatial)
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
+    frames = None
+    if len(sizes) > 3:
+        extra = [a for a in range(len(sizes)) if a not in spatial]
+        order = list(spatial) + extra
+        full = np.transpose(data, order)  # spatial axes first, in file order
+
+        def read(index):
+            return full[(slice(None),) * 3 + tuple(int(i) for i in index)]
+
+        frames = Frames(tuple(_nrrd_frame_axis(header, a, sizes[a]) for a in extra), read)
+        data = read((0,) * len(extra))
     return VolumeData(data, spacing, origin, "nrrd", {}, direction,
-                      _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""))
+                      _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""), frames)
+
+
+#: NRRD kinds whose axis holds the components of one sample: a channel axis
+_NRRD_CHANNEL_KINDS = {"rgb-color", "rgba-color", "hsv-color", "xyz-color", "vector",
+                       "covariant-vector", "normal", "2-vector", "3-vector", "4-vector",
+                       "quaternion", "complex", "2d-symmetric-matrix", "3d-symmetric-matrix",
+                       "3d-matrix", "2d-matrix"}
+
+
+def _nrrd_spatial_axes(path: Path, header, sizes) -> list[int]:
+    """The three axes of an NRRD that are space: those with a space direction (the others
+    say ``none``), else those of kind ``domain``/``space``; a 3-D file's three axes."""
+    if len(sizes) == 3:
+        return [0, 1, 2]
+    if len(sizes) not in (4, 5):
+        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume or a "
+                               "sequence of volumes")
+    if "space directions" in header:
+        dirs = np.asarray(header["space directions"], dtype=float)
+        axes = [a for a in range(len(sizes)) if np.all(np.isfinite(dirs[a]))]
+    else:
+        kinds = [str(k).lower() for k in header.get("kinds", [])]
+        axes = [a for a, k in enumerate(kinds) if k in ("domain", "space")]
+    if len(axes) != 3:
+        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD whose space directions "
+                               "or kinds do not say which three axes are space")
+    return axes
+
+
+def _nrrd_frame_axis(header, axis: int, size: int) -> FrameAxis:
+    """Name, coordinates and unit of a non-spatial NRRD axis, from its ``kinds``,
+    ``labels``, ``axis mins``, ``spacings`` and ``units``."""
+    def field(key):
+        values = header.get(key)
+        return None if values is None or len(values) <= axis else values[axis]
+
+    kind = str(field("kinds") or "").lower()
+    name = "channel" if kind in _NRRD_CHANNEL_KINDS else (kind if kind not in (
+        "", "none", "???") else str(field("labels") or "frame"))
+    values = None
+    start, step = field("axis mins"), field("spacings")
+    try:
+        if step is not None and np.isfinite(float(step)):
+            first = float(start) if start is not None and np.isfinite(float(start)) else 0.0
+            values = tuple(first + i * float(step) for i in range(size))
+    except (TypeError, ValueError):
+        values = None
+    unit = str(field("units") or "")
+    return FrameAxis(name, size, values, "" if unit in ("none", "???") else unit)
 
 
 #: NRRD ``space`` names of the two patient spaces (their short forms included)
@@ -678,10 +741,18 @@ def _read_npy(path: Path) -> VolumeData:
         arr = np.load(str(path), mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
         raise CorruptFileError(f"{path.name} is not a valid .npy array: {exc}") from None
-    if arr.ndim != 3:
+    if arr.ndim not in (3, 4, 5):
         raise InvalidDataError(f"{path.name} holds a {arr.ndim}-D array, not a volume")
-    check_volume_size(arr.shape, arr.dtype.itemsize, path.name)
-    return VolumeData(np.array(arr), format="npy")
+    check_volume_size(arr.shape[:3], arr.dtype.itemsize, path.name)
+    if arr.ndim == 3:
+        return VolumeData(np.array(arr), format="npy")
+    # x, y, z first as in 3-D files; the trailing axes say nothing of what they are. The
+    # file stays mapped: each frame is copied out when it is read.
+    def read(index):
+        return np.array(arr[(slice(None),) * 3 + tuple(int(i) for i in index)])
+
+    frames = Frames(tuple(FrameAxis("frame", int(n)) for n in arr.shape[3:]), read)
+    return VolumeData(read((0,) * (arr.ndim - 3)), format="npy", frames=frames)
 
 
 def _write_npy(path: Path, vol: Volume) -> None:
