@@ -101,10 +101,6 @@ class Orientation:
         flipped = tuple(w for w in range(3) if self.flips[w])
         return np.flip(out, axis=flipped) if flipped else out
 
-    def world_shape(self, shape) -> tuple[int, int, int]:
-        """Samples along world x, y, z of an array of ``shape`` (file order)."""
-        return tuple(int(shape[p]) for p in self.perm)
-
 
 def affine_from(spacing, origin, direction=None) -> np.ndarray:
     """The 4x4 index-to-world affine of a grid.
@@ -292,10 +288,3 @@ def warn_flips(orient: Orientation, name: str, *, stacklevel: int = 3) -> None:
                       f"{', '.join('xyz'[w] for w in flipped)} (its grid runs against the "
                       "world axis): the axis is flipped so that every sample keeps its world "
                       "position", SplinevizWarning, stacklevel=stacklevel)
-
-
-def format_affine(affine) -> list[str]:
-    """Four rows of a 4x4 affine as text, for ``splineviz info``."""
-    a = np.asarray(affine, dtype=float)
-    return ["[" + " ".join(f"{v: .6g}" for v in row) + "]" for row in a]
-

@@ -26,7 +26,7 @@ from splineviz.io.errors import (
     InvalidDataError,
 )
 from splineviz.io.registry import read_head, register_format
-from splineviz.io.volume_data import FrameAxis, Frames, VolumeData
+from splineviz.io.volume_data import FrameAxis, Frames, VolumeData, check_frame_count
 
 #: the group every MINC2 file has at its root; HDF5 keeps root names near the start
 MINC2_MARK = b"minc-2.0"
@@ -225,6 +225,13 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
     if len(extra) > 2:
         raise InvalidDataError(f"{path.name} has shape {shape}: more than two non-spatial "
                                "axes (a volume sequence has time and at most channels)")
+    check_frame_count([shape[a] for a in extra], path.name)
+    affine = np.asarray(img.affine, dtype=float)
+    m = affine[:3, :3]
+    steps = np.linalg.norm(m, axis=0)
+    if not np.all(np.isfinite(affine)) or not np.all(steps > 0):
+        raise InvalidDataError(f"{path.name} has a degenerate voxel-to-world affine "
+                               f"(voxel sizes {', '.join(f'{s:g}' for s in steps)})")
     proxy = img.dataobj
     # nibabel scales to float64 (MINC always, others when a slope or intercept applies):
     # the budget is checked for that, before any sample is read
@@ -250,15 +257,9 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
     if extra:
         frames = Frames(_frame_axes(img, extra), read)
     data = read((0,) * len(extra))
-    affine = np.asarray(img.affine, dtype=float)
-    m = affine[:3, :3]
-    steps = np.linalg.norm(m, axis=0)
-    if not np.all(np.isfinite(affine)) or not np.all(steps > 0):
-        raise InvalidDataError(f"{path.name} has a degenerate voxel-to-world affine "
-                               f"(voxel sizes {', '.join(f'{s:g}' for s in steps)})")
     direction = m / steps[None, :]
     # spatial_axes: the array axes of the file that i, j, k are (MINC may keep time first)
-    meta = {"affine": affine.tolist(), "class": type(img).__name__, "spatial_axes": spatial}
+    meta = {"class": type(img).__name__, "spatial_axes": spatial}
     return VolumeData(data, tuple(float(s) for s in steps),
                       tuple(float(v) for v in affine[:3, 3]), fmt, meta,
                       None if np.array_equal(direction, np.eye(3)) else direction, "RAS",

@@ -15,6 +15,21 @@ import numpy as np
 from splineviz.io.errors import InvalidDataError
 from splineviz.io.geometry import affine_from
 
+#: most frames one file may hold: ten times the longest fMRI runs; a header announcing more
+#: (NIfTI-2 allows 2^63 per axis) is refused before frame names or times are built
+MAX_FRAMES = 100_000
+
+
+def check_frame_count(shape, name: str) -> None:
+    """Refuse a file whose non-spatial axes (``shape``) hold more than :data:`MAX_FRAMES`
+    frames, before anything is built per frame."""
+    count = 1
+    for n in shape:
+        count *= int(n)  # Python ints: no overflow for absurd headers
+    if count > MAX_FRAMES:
+        raise InvalidDataError(f"{name} announces {count:,} frames {tuple(int(n) for n in shape)}"
+                               f"; splineviz reads at most {MAX_FRAMES:,}")
+
 
 @dataclass(frozen=True)
 class FrameAxis:

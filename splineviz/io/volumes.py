@@ -52,7 +52,13 @@ from splineviz.io.geometry import (
     warn_flips,
 )
 from splineviz.io.registry import find_format, register_format
-from splineviz.io.volume_data import FrameAxis, Frames, VolumeData, select_frames
+from splineviz.io.volume_data import (
+    FrameAxis,
+    Frames,
+    VolumeData,
+    check_frame_count,
+    select_frames,
+)
 
 
 # ---------------------------------------------------------------------------- VTK-based
@@ -333,6 +339,7 @@ def _read_nrrd(path: Path) -> VolumeData:
                                f"{', '.join(missing)}")
     sizes = [int(s) for s in np.atleast_1d(header.get("sizes", []))]
     spatial = _nrrd_spatial_axes(path, header, sizes)
+    check_frame_count([n for a, n in enumerate(sizes) if a not in spatial], path.name)
     try:
         itemsize = np.dtype(nrrd.reader._determine_datatype(header)).itemsize
     except (KeyError, TypeError, ValueError, nrrd.NRRDError):
@@ -744,6 +751,7 @@ def _read_npy(path: Path) -> VolumeData:
     if arr.ndim not in (3, 4, 5):
         raise InvalidDataError(f"{path.name} holds a {arr.ndim}-D array, not a volume")
     check_volume_size(arr.shape[:3], arr.dtype.itemsize, path.name)
+    check_frame_count(arr.shape[3:], path.name)
     if arr.ndim == 3:
         return VolumeData(np.array(arr), format="npy")
     # x, y, z first as in 3-D files; the trailing axes say nothing of what they are. The
@@ -844,6 +852,8 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
     if not isinstance(vd, VolumeData):
         raise FileFormatError(f"the {fmt.name} reader returned {type(vd).__name__}, "
                               "not VolumeData")
+    if vd.frames is not None:  # a plugin's reader too
+        check_frame_count(vd.frames.shape, p.name)
     selection = select_frames(vd.frames, p.name, channel)
     if not 0 <= int(frame) < len(selection.indices):
         raise InvalidDataError(f"{p.name} has {len(selection.indices)} frame(s) along its "

@@ -106,3 +106,20 @@ def test_volume_without_a_finite_sample_is_refused_when_read(tmp_path, value):
         for nonfinite in ("error", "fill"):
             with pytest.raises(InvalidDataError, match="no finite samples"):
                 sv.read_volume(tmp_path / name, nonfinite=nonfinite)
+
+
+def test_header_announcing_a_billion_frames_is_refused_fast_and_small(tmp_path):
+    """NIfTI-2 counts frames in 64 bits: nothing may be built per frame before the count is
+    checked."""
+    import nibabel as nib
+
+    header = nib.Nifti2Header()
+    header.set_data_dtype(np.uint8)
+    header.set_data_shape((2, 2, 2, 10**9))
+    header["vox_offset"] = 544
+    (tmp_path / "frames.nii").write_bytes(header.binaryblock + bytes(4) + bytes(64))
+    got = probe(tmp_path / "frames.nii")
+    assert got["error"] is not None and got["error"][0] == "InvalidDataError", got
+    assert "1,000,000,000 frames" in got["error"][1]
+    assert got["grown"] < 100 * 2**20, got
+    assert got["seconds"] < 1.0, got
