@@ -1,13 +1,16 @@
 """Volume readers and writers.
 
-Convention: every reader returns a :class:`VolumeData` whose ``data`` is indexed
-``data[i, j, k]`` at world point ``origin + (i*sx, j*sy, k*sz)`` (x fastest in the file),
-in the file's own sample type; :func:`read_volume` turns it into a float32
-:class:`~splineviz.Volume`. Readers are built on VTK (VTI, legacy VTK, MetaImage,
-multi-file NRRD), pynrrd (NRRD/NHDR), nibabel (NIfTI), mrcfile (MRC/CCP4) and pydicom (DICOM
-series); SLC is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header
-is checked against the memory budget *before* the payload is allocated, and against the
-payload size where the payload is uncompressed.
+Convention: every reader returns a :class:`~splineviz.io.volume_data.VolumeData` whose
+``data`` is indexed ``data[i, j, k]`` at world point ``origin + D @ ((i, j, k) * spacing)``
+(x fastest in the file; ``D`` its direction matrix, the identity unless the file states
+one), in the file's own sample type; :func:`read_volume` turns it into a float32
+:class:`~splineviz.Volume`, axis-aligned by the rule of :mod:`splineviz.io.geometry`.
+Readers are built on VTK (VTI, legacy VTK, MetaImage, multi-file NRRD), pynrrd (NRRD/NHDR),
+mrcfile (MRC/CCP4) and pydicom (DICOM series); the nibabel formats live in
+:mod:`splineviz.io.neuro`, 4-D files read as sequences in :mod:`splineviz.io.sequence`. SLC
+is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header is checked
+against the memory budget *before* the payload is allocated, and against the payload size
+where the payload is uncompressed.
 """
 
 from __future__ import annotations
