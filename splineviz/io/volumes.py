@@ -496,7 +496,7 @@ def _listed_names(path: Path, marker: bytes) -> list[str]:
     after = re.split(marker, text, maxsplit=1, flags=re.M | re.I)
     if len(after) != 2:
         return []
-    _check_slice_count(path, after[1].count(b"\n") - after[1].count(b"\n\n"))
+    _check_slice_count(path, after[1].count(b"\n"))  # lines, before any name is decoded
     return [ln.strip() for ln in after[1].decode("latin-1").splitlines() if ln.strip()]
 
 
