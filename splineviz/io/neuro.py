@@ -176,8 +176,15 @@ def _frame_axes(img, extra: list[int]) -> tuple[FrameAxis, ...]:
         elif kind.startswith("Nifti") and ax == 4:
             name = "channel"  # NIfTI's fifth dimension holds vector components
         elif kind.startswith("Minc"):
-            dim = img.dataobj.minc_file._dim_names[ax]
-            name = "time" if dim == "time" else str(dim)
+            minc = img.dataobj.minc_file
+            name = str(minc._dim_names[ax])
+            var = minc._dims[ax]  # a MINC dimension variable: regular start and step
+            start, step = getattr(var, "start", None), getattr(var, "step", None)
+            if name == "time" and start is not None and step is not None:
+                values = tuple(float(start) + i * float(step) for i in range(size))
+                raw_unit = getattr(var, "units", b"")
+                unit = raw_unit.decode("latin-1") if isinstance(raw_unit, bytes) else \
+                    str(raw_unit)
         elif kind == "MGHImage":
             tr = float(header["tr"])
             if tr > 0:

@@ -164,6 +164,7 @@ def test_4d_nifti_is_a_sequence_of_volumes_with_its_times():
 def test_4d_minc_names_its_time_axis_from_the_file():
     seq = read_volume_sequence(DATA / "minc1_4d.mnc")
     assert (len(seq), seq.axis.name) == (2, "time")
+    assert seq.times == (0.0, 1.0)  # the time dimension's start and step
     img = nib.load(str(DATA / "minc1_4d.mnc"))
     np.testing.assert_allclose(seq[1].data, np.asanyarray(img.dataobj)[1].transpose(2, 1, 0),
                                rtol=1e-6)
