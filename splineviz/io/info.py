@@ -83,6 +83,7 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
 def _geometry(vd, name: str, channel) -> dict:
     """The index-to-world affine, its space, the world bounds of the grid's corners (the
     affine may reorder and reverse axes), and the frames of a 4-D file."""
+    from splineviz.io.geometry import orientation
     from splineviz.io.volume_data import select_frames
 
     shape = vd.data.shape[:3]
@@ -93,6 +94,10 @@ def _geometry(vd, name: str, channel) -> dict:
            "affine": [[float(v) for v in row] for row in vd.affine]}
     if vd.space:
         out["space"] = vd.space
+    orient = orientation(vd.affine, shape, name)
+    if orient.oblique:
+        out["oblique"] = (f"rotated by {orient.angle:.3g} degrees (render with --oblique "
+                          "resample)")
     if vd.frames is not None:
         sel = select_frames(vd.frames, name, channel)
         unit = f" ({sel.axis.unit})" if sel.axis.unit else ""

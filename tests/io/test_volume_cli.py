@@ -63,3 +63,5 @@ def test_render_oblique_scan_only_when_asked(tmp_path, capsys):
     assert "20 degrees" in capsys.readouterr().err
     assert main([*args, "--oblique", "resample"]) == 0
     assert "resampled" in capsys.readouterr().err
+    assert main(["info", str(tmp_path / "tilted.nii")]) == 0
+    assert "oblique: rotated by 20 degrees" in capsys.readouterr().out
