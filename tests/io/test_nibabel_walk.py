@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from splineviz.core.errors import SplinevizError, SplinevizWarning
-from splineviz.io import load_volume_data, read_volume, read_volume_sequence
+from splineviz.io import describe, load_volume_data, read_volume, read_volume_sequence
 from splineviz.io.errors import DataFileNotFoundError, InvalidDataError
 from splineviz.io.geometry import orientation
 
@@ -97,6 +97,8 @@ def check_one(name, img, read, refused):
     read.add(name)
     np.testing.assert_allclose(vd.affine, img.affine, rtol=1e-6, atol=1e-6,
                                err_msg=name)
+    np.testing.assert_allclose(describe(path)["affine"], img.affine, rtol=1e-6, atol=1e-6,
+                               err_msg=name)  # what `splineviz info` prints
     spatial = vd.meta.get("spatial_axes", (0, 1, 2))
     want = frame_of(img, spatial, ())
     assert vd.data.shape == want.shape, name
