@@ -40,6 +40,7 @@ _LAZY = {
     "RayCaster": "splineviz.compute.raycast:RayCaster",
     "Frame": "splineviz.core.raycast_reference:Frame",
     "read_volume": "splineviz.io.volumes:read_volume",
+    "read_volume_sequence": "splineviz.io.sequence:read_volume_sequence",
     "write_volume": "splineviz.io.volumes:write_volume",
     "read_points": "splineviz.io.points:read_points",
     "read_mesh": "splineviz.io.meshes:read_mesh",

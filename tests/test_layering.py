@@ -25,12 +25,6 @@ def test_core_imports_without_qt_vtk_opencl():
     assert result.returncode == 0, result.stdout + result.stderr
 
 
-#: Import cycles still allowed, each an unordered pair of modules that import each other. The
-#: io pair is cut on another branch (VolumeData moves to a leaf module); delete this constant,
-#: and its use below, once that branch is merged.
-CYCLES_BEING_CUT_ELSEWHERE = {frozenset({"splineviz.io.volumes", "splineviz.io.chunked"})}
-
-
 def _import_cycles(graph) -> list[list[str]]:
     """Strongly connected groups of more than one module (Tarjan's algorithm, iterative)."""
     index, low, on_stack, stack, groups = {}, {}, set(), [], []
@@ -84,12 +78,6 @@ def test_no_import_cycles_between_modules():
     import grimp
 
     graph = grimp.build_graph("splineviz", exclude_type_checking_imports=True, cache_dir=None)
-    for pair in CYCLES_BEING_CUT_ELSEWHERE:
-        a, b = sorted(pair)
-        if graph.direct_import_exists(importer=a, imported=b) and \
-                graph.direct_import_exists(importer=b, imported=a):
-            graph.remove_import(importer=a, imported=b)
-            graph.remove_import(importer=b, imported=a)
     cycles = _import_cycles(graph)
     lines = []
     for group in cycles:

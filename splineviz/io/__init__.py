@@ -1,6 +1,7 @@
 """Readers, writers and session files (no Qt, no rendering).
 
-Public entry points: :func:`read_volume`, :func:`read_points`, :func:`write_volume`,
+Public entry points: :func:`read_volume`, :func:`read_volume_sequence` (4-D files),
+:func:`read_points`, :func:`write_volume`,
 :func:`write_mesh`, :func:`read_mesh`, :func:`write_screenshot`, :func:`describe`,
 :func:`open_path` (session, volume or points, whichever the file is), and the session API
 :func:`load_session` / :func:`save_session` / :func:`migrate`. Formats live in a registry
@@ -8,7 +9,7 @@ Public entry points: :func:`read_volume`, :func:`read_points`, :func:`write_volu
 :mod:`splineviz.io.errors`.
 """
 
-from splineviz.io import chunked, dicom, tiff  # noqa: F401  (register their formats)
+from splineviz.io import chunked, dicom, neuro, tiff  # noqa: F401  (register their formats)
 from splineviz.io.errors import (  # noqa: F401
     CorruptFileError,
     DataFileNotFoundError,
@@ -33,6 +34,7 @@ from splineviz.io.meshes import (  # noqa: F401
 from splineviz.io.opening import Opened, open_path  # noqa: F401
 from splineviz.io.points import PointData, load_point_data, read_points  # noqa: F401
 from splineviz.io.registry import FORMATS, Format, find_format, register_format  # noqa: F401
+from splineviz.io.sequence import VolumeSequence, read_volume_sequence  # noqa: F401
 from splineviz.io.session import Session, load_session, migrate, save_session  # noqa: F401
 from splineviz.io.volumes import (  # noqa: F401
     VolumeData,

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.io.errors import CorruptFileError, InvalidDataError
-from splineviz.io.registry import register_format
+from splineviz.io.registry import formats, register_format
 from splineviz.io.volume_data import VolumeData
 
 #: the first bytes of every HDF5 file (superblock signature at offset 0)
@@ -236,6 +236,14 @@ def _read_hdf5(path: Path):
                         dataset=name)
 
 
+def _bare_hdf5(head: bytes) -> bool:
+    """An HDF5 file that no other volume format claims by its content (MINC2 is HDF5 too):
+    only then is it read as a bare dataset."""
+    return head.startswith(HDF5_SIGNATURE) and not any(
+        f.sniff(head) for f in formats("volume")
+        if f.name != "hdf5" and f.sniff is not None and not f.folder)
+
+
 register_format("ome-zarr", (".ome.zarr", ".zarr"), _read_zarr, None, kind="volume",
                 folder=True, sniff=_is_zarr_folder,
                 description="OME-Zarr image or Zarr array (folder; read lazily)")
@@ -245,7 +253,7 @@ register_format("zarr-metadata", (".json", ".zgroup", ".zattrs", ".zarray"),
                 description="the metadata file of a Zarr/OME-Zarr folder (opens the folder: "
                 "file dialogs pick files)")
 register_format("hdf5", (".h5", ".hdf5", ".hdf", ".he5"), _read_hdf5, None, kind="volume",
-                sniff=lambda h: h.startswith(HDF5_SIGNATURE),
+                sniff=_bare_hdf5,
                 description="HDF5 3-D dataset (read lazily)")
 
 

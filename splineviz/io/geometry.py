@@ -101,10 +101,6 @@ class Orientation:
         flipped = tuple(w for w in range(3) if self.flips[w])
         return np.flip(out, axis=flipped) if flipped else out
 
-    def world_shape(self, shape) -> tuple[int, int, int]:
-        """Samples along world x, y, z of an array of ``shape`` (file order)."""
-        return tuple(int(shape[p]) for p in self.perm)
-
 
 def affine_from(spacing, origin, direction=None) -> np.ndarray:
     """The 4x4 index-to-world affine of a grid.
@@ -231,22 +227,64 @@ def refuse_oblique(orient: Orientation, name: str) -> None:
     if orient.oblique:
         raise InvalidDataError(
             f"{name} is an oblique scan (its axes are rotated by {orient.angle:.3g} degrees "
-            "from the world axes), which splineviz cannot yet show in place; resample it onto "
-            "axis-aligned axes first (e.g. with nibabel.processing.resample_to_output)")
+            "from the world axes), which splineviz cannot show in place unresampled; read it "
+            "with oblique='resample' to resample it onto axis-aligned axes")
+
+
+def resample_axis_aligned(data, orient: Orientation, name: str, *, fill: float):
+    """Trilinear resampling of an oblique grid onto the axis-aligned grid that covers it,
+    every new sample taken at its own world point (nothing is rotated into place).
+
+    The new step along each world axis is the step of the file axis nearest to it, so the
+    sample count grows only by the bounding box's share; points outside the file's grid get
+    ``fill`` (the smallest sample: outside every isosurface above it).
+
+    Parameters
+    ----------
+    data : (n0, n1, n2) ndarray
+        Samples in the file's index order.
+    orient : Orientation
+        From :func:`orientation` of the file's affine.
+    name : str
+        File name for the warning.
+    fill : float
+
+    Returns
+    -------
+    data : (nx, ny, nz) float32 ndarray
+    spacing, origin : (3,) tuple of float
+    """
+    from scipy import ndimage
+
+    from splineviz.io._util import check_volume_size
+
+    a = orient.affine
+    corners = np.array(np.meshgrid(*[[0, n - 1] for n in data.shape[:3]],
+                                   indexing="ij")).reshape(3, -1)
+    world = a[:3, :3] @ corners + a[:3, 3:4]
+    lo, hi = world.min(axis=1), world.max(axis=1)
+    spacing = np.asarray(orient.spacing, dtype=float)
+    shape = tuple(int(np.floor((h - l) / s + 1e-9)) + 1 for l, h, s in zip(lo, hi, spacing,
+                                                                             strict=True))
+    check_volume_size(shape, 4, name)
+    # output index o -> world lo + o * spacing -> file index inv(M) (world - t)
+    inv = np.linalg.inv(a[:3, :3])
+    matrix = inv @ np.diag(spacing)
+    offset = inv @ (lo - a[:3, 3])
+    out = ndimage.affine_transform(np.asarray(data, dtype=np.float32), matrix, offset,
+                                   output_shape=shape, order=1, mode="constant",
+                                   cval=float(fill))
+    warnings.warn(f"{name} is an oblique scan (rotated by {orient.angle:.3g} degrees): it is "
+                  "resampled trilinearly onto axis-aligned axes, each sample at its own world "
+                  "point", SplinevizWarning, stacklevel=4)
+    return out, tuple(float(s) for s in spacing), tuple(float(v) for v in lo)
 
 
 def warn_flips(orient: Orientation, name: str, *, stacklevel: int = 3) -> None:
     """Announce the axes :meth:`Orientation.apply` reverses, as today's negative spacings."""
     flipped = [w for w in range(3) if orient.flips[w]]
     if flipped:
-        warnings.warn(f"{name} runs against the world axis along "
-                      f"{', '.join('xyz'[w] for w in flipped)}: the axis is flipped so that "
-                      "every sample keeps its world position", SplinevizWarning,
-                      stacklevel=stacklevel)
-
-
-def format_affine(affine) -> list[str]:
-    """Four rows of a 4x4 affine as text, for ``splineviz info``."""
-    a = np.asarray(affine, dtype=float)
-    return ["[" + " ".join(f"{v: .6g}" for v in row) + "]" for row in a]
-
+        warnings.warn(f"{name} has a negative spacing along "
+                      f"{', '.join('xyz'[w] for w in flipped)} (its grid runs against the "
+                      "world axis): the axis is flipped so that every sample keeps its world "
+                      "position", SplinevizWarning, stacklevel=stacklevel)

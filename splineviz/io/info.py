@@ -10,7 +10,7 @@ import numpy as np
 from splineviz.io.errors import UnknownFormatError
 
 
-def describe(path, *, allow_outside: bool = False, **raw) -> dict:
+def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     """Summary of a file: kind, format and geometry.
 
     Parameters
@@ -18,13 +18,17 @@ def describe(path, *, allow_outside: bool = False, **raw) -> dict:
     path : path-like
     allow_outside : bool
         Accept data files that a header or session names outside its own folder.
+    channel : int, optional
+        The channel of a multi-channel volume file to describe.
     **raw
         ``dims``, ``dtype``, ``byteorder``, ``offset`` for headerless raw volumes.
 
     Returns
     -------
     dict
-        For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds``; for points:
+        For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds, affine``
+        (index to world, the file's own axes; with ``space`` and ``frames`` where the file has
+        them); for points:
         ``kind, format, points, normals, colors, bounds``; for sessions: ``kind,
         schema_version, objects, views``.
     """
@@ -40,7 +44,7 @@ def describe(path, *, allow_outside: bool = False, **raw) -> dict:
                 "objects": [f"{o.id} ({o.type})" for o in s.objects],
                 "views": [v.id for v in s.views]}
     try:
-        vd = load_volume_data(p, allow_outside=allow_outside,
+        vd = load_volume_data(p, allow_outside=allow_outside, channel=channel,
                               **{k: v for k, v in raw.items() if v is not None})
     except UnknownFormatError:
         try:
@@ -61,7 +65,7 @@ def describe(path, *, allow_outside: bool = False, **raw) -> dict:
     from splineviz.io.chunked import is_lazy
 
     if is_lazy(vd.data):
-        return _describe_chunked(vd, p)
+        return {**_describe_chunked(vd, p), **_geometry(vd, p.name, channel)}
     data = np.asarray(vd.data)
     finite = np.isfinite(data) if data.dtype.kind == "f" else None
     vals = data[finite] if finite is not None else data
@@ -72,7 +76,35 @@ def describe(path, *, allow_outside: bool = False, **raw) -> dict:
             "nonfinite": int(data.size - finite.sum()) if finite is not None else 0,
             "spacing": [float(s) for s in vd.spacing], "origin": [float(o) for o in vd.origin],
             "bounds": [[o, o + (n - 1) * s] for o, n, s in zip(vd.origin, shape, vd.spacing,
-                                                              strict=True)]}
+                                                              strict=True)],
+            **_geometry(vd, p.name, channel)}
+
+
+def _geometry(vd, name: str, channel) -> dict:
+    """The index-to-world affine, its space, the world bounds of the grid's corners (the
+    affine may reorder and reverse axes), and the frames of a 4-D file."""
+    from splineviz.io.geometry import orientation
+    from splineviz.io.volume_data import select_frames
+
+    shape = vd.data.shape[:3]
+    corners = np.array(np.meshgrid(*[[0, n - 1] for n in shape], indexing="ij")).reshape(3, -1)
+    world = vd.affine[:3, :3] @ corners + vd.affine[:3, 3:4]
+    out = {"bounds": [[float(lo), float(hi)] for lo, hi in zip(world.min(axis=1),
+                                                               world.max(axis=1), strict=True)],
+           "affine": [[float(v) for v in row] for row in vd.affine]}
+    if vd.space:
+        out["space"] = vd.space
+    orient = orientation(vd.affine, shape, name)
+    if orient.oblique:
+        out["oblique"] = (f"rotated by {orient.angle:.3g} degrees (render with --oblique "
+                          "resample)")
+    if vd.frames is not None:
+        sel = select_frames(vd.frames, name, channel)
+        unit = f" ({sel.axis.unit})" if sel.axis.unit else ""
+        out["frames"] = f"{len(sel.indices)} along {sel.axis.name}{unit}"
+        if sel.channels:
+            out["channel"] = f"{sel.channel} of {sel.channels}"
+    return out
 
 
 def _describe_chunked(vd, p) -> dict:
@@ -93,7 +125,9 @@ def format_info(info: dict) -> str:
     """Human-readable lines for :func:`describe`'s dict."""
     lines = []
     for key, val in info.items():
-        if isinstance(val, list) and val and isinstance(val[0], list):
+        if isinstance(val, list) and val and isinstance(val[0], list) and len(val[0]) != 2:
+            val = "  ".join("[" + " ".join(f"{v:g}" for v in row) + "]" for row in val)
+        elif isinstance(val, list) and val and isinstance(val[0], list):
             val = "  ".join(f"[{a:g}, {b:g}]" for a, b in val)
         elif isinstance(val, list) and val and isinstance(val[0], float):
             val = " ".join(f"{v:g}" for v in val)
@@ -118,6 +152,8 @@ def register(subparsers) -> None:
                    help="read data files that a header or session names outside its folder")
     p.add_argument("--series", metavar="UID|INDEX",
                    help="DICOM folders of several series: the one to describe")
+    p.add_argument("--channel", type=int, default=None,
+                   help="multi-channel volumes: the channel to describe (from 0)")
     p.set_defaults(func=_run)
 
 
@@ -136,6 +172,6 @@ def _run(args) -> int:
     info = describe(path if args.series is None else series_file(path, args.series),
                     dims=args.dims, dtype=args.dtype,
                     byteorder=args.byteorder, offset=args.offset,
-                    allow_outside=args.allow_outside_data)
+                    allow_outside=args.allow_outside_data, channel=args.channel)
     print(json.dumps(info, indent=2) if args.json else format_info(info))
     return 0

@@ -31,7 +31,7 @@ class Opened:
     path: Path
 
 
-def open_path(path, *, repoint=None, allow_outside: bool = False, **raw) -> Opened:
+def open_path(path, *, repoint=None, allow_outside: bool = False, **volume_options) -> Opened:
     """Read ``path`` as a session (``.svs``), else as a volume, else as a point cloud.
 
     Parameters
@@ -42,9 +42,10 @@ def open_path(path, *, repoint=None, allow_outside: bool = False, **raw) -> Open
     allow_outside : bool
         Read data files that a header or session names outside its own folder (refused by
         default with an :class:`~splineviz.io.errors.OutsideFolderError`).
-    **raw
-        ``dims``, ``dtype``, ``byteorder``, ``offset`` of a headerless raw volume (see
-        :func:`~splineviz.io.volumes.read_volume`).
+    **volume_options
+        Passed to :func:`~splineviz.io.volumes.read_volume` for a volume (``channel``,
+        ``oblique``; ``dims``, ``dtype``, ``byteorder``, ``offset`` of a headerless raw
+        volume, ...).
 
     Raises
     ------
@@ -65,7 +66,8 @@ def open_path(path, *, repoint=None, allow_outside: bool = False, **raw) -> Open
     if has_pattern(p):  # a glob pattern of numbered slices, e.g. scan/slice_*.tif
         return Opened("volume", read_slice_volume(p), p)
     try:
-        return Opened("volume", read_volume(p, allow_outside=allow_outside, **raw), p)
+        return Opened("volume", read_volume(p, allow_outside=allow_outside, **volume_options),
+                      p)
     except UnknownFormatError:
         pass
     try:

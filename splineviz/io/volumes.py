@@ -1,13 +1,16 @@
 """Volume readers and writers.
 
-Convention: every reader returns a :class:`VolumeData` whose ``data`` is indexed
-``data[i, j, k]`` at world point ``origin + (i*sx, j*sy, k*sz)`` (x fastest in the file),
-in the file's own sample type; :func:`read_volume` turns it into a float32
-:class:`~splineviz.Volume`. Readers are built on VTK (VTI, legacy VTK, MetaImage,
-multi-file NRRD), pynrrd (NRRD/NHDR), nibabel (NIfTI), mrcfile (MRC/CCP4) and pydicom (DICOM
-series); SLC is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header
-is checked against the memory budget *before* the payload is allocated, and against the
-payload size where the payload is uncompressed.
+Convention: every reader returns a :class:`~splineviz.io.volume_data.VolumeData` whose
+``data`` is indexed ``data[i, j, k]`` at world point ``origin + D @ ((i, j, k) * spacing)``
+(x fastest in the file; ``D`` its direction matrix, the identity unless the file states
+one), in the file's own sample type; :func:`read_volume` turns it into a float32
+:class:`~splineviz.Volume`, axis-aligned by the rule of :mod:`splineviz.io.geometry`.
+Readers are built on VTK (VTI, legacy VTK, MetaImage, multi-file NRRD), pynrrd (NRRD/NHDR),
+mrcfile (MRC/CCP4) and pydicom (DICOM series); the nibabel formats live in
+:mod:`splineviz.io.neuro`, 4-D files read as sequences in :mod:`splineviz.io.sequence`. SLC
+is decoded with NumPy (VTK's reader leaves samples uninitialised). Every header is checked
+against the memory budget *before* the payload is allocated, and against the payload size
+where the payload is uncompressed.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ import os
 import re
 import warnings
 import zlib
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -43,8 +47,21 @@ from splineviz.io.errors import (
     FileFormatError,
     InvalidDataError,
 )
+from splineviz.io.geometry import (
+    affine_from,
+    orientation,
+    refuse_oblique,
+    resample_axis_aligned,
+    warn_flips,
+)
 from splineviz.io.registry import find_format, register_format
-from splineviz.io.volume_data import VolumeData
+from splineviz.io.volume_data import (
+    FrameAxis,
+    Frames,
+    VolumeData,
+    check_frame_count,
+    select_frames,
+)
 
 
 # ---------------------------------------------------------------------------- VTK-based
@@ -89,12 +106,10 @@ def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
             f"{path.name} announces {tuple(dims)} samples but only {tuple(got)} could be read"
         )
     data = _vtk.image_to_array(image, path.name)
-    meta = {}
-    direction = [image.GetDirectionMatrix().GetElement(i, j) for i in range(3)
-                 for j in range(3)]
-    if not np.allclose(direction, np.eye(3).ravel()):
-        meta["direction"] = direction  # a rotated grid: shown axis-aligned (Volume has none)
-    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt, meta)
+    m = image.GetDirectionMatrix()
+    direction = np.array([[m.GetElement(i, j) for j in range(3)] for i in range(3)])
+    return VolumeData(data, tuple(image.GetSpacing()), tuple(image.GetOrigin()), fmt, {},
+                      None if np.array_equal(direction, np.eye(3)) else direction)
 
 
 def _read_vti(path: Path) -> VolumeData:
@@ -199,8 +214,6 @@ def _read_metaimage(path: Path) -> VolumeData:
     The header is looked at once before VTK reads it to catch what VTK would silently accept:
     a missing data file and, for uncompressed payloads, a size that does not match DimSize.
     """
-    from vtkmodules.vtkIOImage import vtkMetaImageReader
-
     head = _head(path, 65536)
     keys = {k.decode("latin-1").lower(): v.decode("latin-1")
             for k, v in _MHD_KEY.findall(head.split(b"ElementDataFile")[0] + b"\n")}
@@ -249,6 +262,8 @@ def _read_metaimage(path: Path) -> VolumeData:
                     f"{payload.name} holds {have} bytes but DimSize {tuple(dims)} of {etype} "
                     f"needs {need}"
                 )
+    from vtkmodules.vtkIOImage import vtkMetaImageReader  # after the checks: VTK is ~60 MB
+
     vd = _read_with_vtk(vtkMetaImageReader(), path, "metaimage")
     try:
         signs = [np.sign(float(v)) for v in keys.get("elementspacing", "").split()]
@@ -257,7 +272,32 @@ def _read_metaimage(path: Path) -> VolumeData:
     if len(signs) == 3 and min(signs) < 0:
         # VTK's reader drops the sign of ElementSpacing: keep it, to_volume flips the axis
         vd.spacing = tuple(-s if g < 0 else s for s, g in zip(vd.spacing, signs, strict=True))
+    vd.direction = _metaimage_direction(keys, path.name)
+    vd.space = "LPS"  # MetaIO's (ITK's) patient space
     return vd
+
+
+def _metaimage_direction(keys: dict, name: str):
+    """The direction matrix of a MetaImage header (``TransformMatrix``, or its synonyms
+    ``Rotation``/``Orientation``), or None for the identity.
+
+    As ITK's MetaImageIO reads it, the k-th triple of numbers is the world direction of
+    array axis k, i.e. column k. (VTK 9.7's vtkMetaImageReader returns the transpose, which
+    differs from ITK's reading, and from Slicer's, for a non-symmetric matrix.)
+    """
+    text = next((keys[k] for k in ("transformmatrix", "rotation", "orientation")
+                 if k in keys), None)
+    if text is None:
+        return None
+    try:
+        values = np.array([float(v) for v in text.split()], dtype=float)
+    except ValueError:
+        raise CorruptFileError(f"{name} has a malformed TransformMatrix {text[:60]!r}") from None
+    if values.size != 9 or not np.all(np.isfinite(values)):
+        raise CorruptFileError(f"{name} has a TransformMatrix of {values.size} numbers, not "
+                               "a finite 3x3 matrix")
+    direction = values.reshape(3, 3).T
+    return None if np.array_equal(direction, np.eye(3)) else direction
 
 
 def _check_zlib_stream(payload: Path, need: int) -> None:
@@ -301,8 +341,8 @@ def _read_nrrd(path: Path) -> VolumeData:
         raise CorruptFileError(f"{path.name} lacks the required NRRD field(s) "
                                f"{', '.join(missing)}")
     sizes = [int(s) for s in np.atleast_1d(header.get("sizes", []))]
-    if len(sizes) != 3:
-        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume")
+    spatial = _nrrd_spatial_axes(path, header, sizes)
+    check_frame_count([n for a, n in enumerate(sizes) if a not in spatial], path.name)
     try:
         itemsize = np.dtype(nrrd.reader._determine_datatype(header)).itemsize
     except (KeyError, TypeError, ValueError, nrrd.NRRDError):
@@ -311,21 +351,97 @@ def _read_nrrd(path: Path) -> VolumeData:
     check_volume_size(sizes, itemsize, path.name)
     datafile = str(header.get("data file", header.get("datafile", "")))
     if datafile and (datafile.upper().startswith("LIST") or "%" in datafile):
+        if len(sizes) != 3:
+            raise FileFormatError(f"{path.name} is a {len(sizes)}-D NRRD in several files; "
+                                  "only 3-D multi-file NRRDs are supported")
         data = _read_nrrd_multifile(path, header, datafile, sizes)
     else:
         data, header = _read_nrrd_single(path, datafile)
-    spacing = (1.0, 1.0, 1.0)
-    if "spacings" in header:
-        spacing = tuple(float(s) for s in header["spacings"])
-    elif "space directions" in header:
+    spacing, direction = (1.0, 1.0, 1.0), None
+    if "space directions" in header:
         dirs = np.asarray(header["space directions"], dtype=float)
-        spacing = tuple(float(v) for v in np.linalg.norm(dirs, axis=1))
-        if dirs.shape == (3, 3) and np.all(dirs[~np.eye(3, dtype=bool)] == 0):
-            # an axis-aligned grid keeps the sign of each step: a negative one (e.g. LPS
-            # scans stored with "-1 0 0") is flipped by to_volume, not silently mirrored
-            spacing = tuple(float(v) for v in np.diag(dirs))
+        if dirs.shape != (len(sizes), 3) or not np.all(np.isfinite(dirs[spatial])):
+            raise CorruptFileError(f"{path.name} has space directions that are not three "
+                                   "finite 3-vectors")
+        dirs = dirs[spatial]
+        # row a of pynrrd's matrix is the world step of array axis a: the affine's column a
+        steps = np.linalg.norm(dirs, axis=1)
+        if not np.all(steps > 0):
+            raise InvalidDataError(f"{path.name} has a zero space direction")
+        spacing = tuple(float(v) for v in steps)
+        direction = dirs.T / steps[None, :]
+        if np.array_equal(direction, np.eye(3)):
+            direction = None
+    elif "spacings" in header:
+        spacing = tuple(float(np.asarray(header["spacings"], dtype=float)[a]) for a in spatial)
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
-    return VolumeData(data, spacing, origin, "nrrd")
+    frames = None
+    if len(sizes) > 3:
+        extra = [a for a in range(len(sizes)) if a not in spatial]
+        order = list(spatial) + extra
+        full = np.transpose(data, order)  # spatial axes first, in file order
+
+        def read(index):
+            return full[(slice(None),) * 3 + tuple(int(i) for i in index)]
+
+        frames = Frames(tuple(_nrrd_frame_axis(header, a, sizes[a]) for a in extra), read)
+        data = read((0,) * len(extra))
+    return VolumeData(data, spacing, origin, "nrrd", {}, direction,
+                      _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""), frames)
+
+
+#: NRRD kinds whose axis holds the components of one sample: a channel axis
+_NRRD_CHANNEL_KINDS = {"rgb-color", "rgba-color", "hsv-color", "xyz-color", "vector",
+                       "covariant-vector", "normal", "2-vector", "3-vector", "4-vector",
+                       "quaternion", "complex", "2d-symmetric-matrix", "3d-symmetric-matrix",
+                       "3d-matrix", "2d-matrix"}
+
+
+def _nrrd_spatial_axes(path: Path, header, sizes) -> list[int]:
+    """The three axes of an NRRD that are space: those with a space direction (the others
+    say ``none``), else those of kind ``domain``/``space``; a 3-D file's three axes."""
+    if len(sizes) == 3:
+        return [0, 1, 2]
+    if len(sizes) not in (4, 5):
+        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD, not a volume or a "
+                               "sequence of volumes")
+    if "space directions" in header:
+        dirs = np.asarray(header["space directions"], dtype=float)
+        axes = [a for a in range(len(sizes)) if np.all(np.isfinite(dirs[a]))]
+    else:
+        kinds = [str(k).lower() for k in header.get("kinds", [])]
+        axes = [a for a, k in enumerate(kinds) if k in ("domain", "space")]
+    if len(axes) != 3:
+        raise InvalidDataError(f"{path.name} is a {len(sizes)}-D NRRD whose space directions "
+                               "or kinds do not say which three axes are space")
+    return axes
+
+
+def _nrrd_frame_axis(header, axis: int, size: int) -> FrameAxis:
+    """Name, coordinates and unit of a non-spatial NRRD axis, from its ``kinds``,
+    ``labels``, ``axis mins``, ``spacings`` and ``units``."""
+    def field(key):
+        values = header.get(key)
+        return None if values is None or len(values) <= axis else values[axis]
+
+    kind = str(field("kinds") or "").lower()
+    name = "channel" if kind in _NRRD_CHANNEL_KINDS else (kind if kind not in (
+        "", "none", "???") else str(field("labels") or "frame"))
+    values = None
+    start, step = field("axis mins"), field("spacings")
+    try:
+        if step is not None and np.isfinite(float(step)):
+            first = float(start) if start is not None and np.isfinite(float(start)) else 0.0
+            values = tuple(first + i * float(step) for i in range(size))
+    except (TypeError, ValueError):
+        values = None
+    unit = str(field("units") or "")
+    return FrameAxis(name, size, values, "" if unit in ("none", "???") else unit)
+
+
+#: NRRD ``space`` names of the two patient spaces (their short forms included)
+_NRRD_SPACES = {"left-posterior-superior": "LPS", "lps": "LPS",
+                "right-anterior-superior": "RAS", "ras": "RAS"}
 
 
 #: a printf pattern of slice file names: one integer conversion, at most two digits of
@@ -334,6 +450,16 @@ _NAME_PATTERN = re.compile(r"^(?:[^%]|%%)*%[-+ #0]*(\d{0,2})(?:\.(\d{0,2}))?[diu
                            r"(?:[^%]|%%)*$")
 #: longest slice file name built from a pattern
 MAX_NAME = 4096
+#: most slice files one header may name: ten times the slices of the tallest micro-CT
+#: stacks, and few enough that their names take a few MB (a header announcing 2*10^7 files
+#: grew to 1.4 GB building their names)
+MAX_SLICE_FILES = 65536
+
+
+def _check_slice_count(path: Path, count: int) -> None:
+    if count > MAX_SLICE_FILES:
+        raise DataSizeError(f"{path.name} names {count:,} slice files; splineviz reads at most "
+                            f"{MAX_SLICE_FILES:,} (one file per slice)")
 
 
 def _pattern_names(path: Path, parts: list[str], expected: int) -> list[str]:
@@ -354,6 +480,7 @@ def _pattern_names(path: Path, parts: list[str], expected: int) -> list[str]:
         raise CorruptFileError(f"{path.name} has the empty file-name range {lo} to {hi} by "
                                f"{step}")
     count = len(range(lo, hi + (1 if step > 0 else -1), step))  # O(1), no list
+    _check_slice_count(path, max(count, expected))
     if count != expected:
         raise DataSizeError(f"{path.name} lists {count:,} slice files for {expected} slices")
     return [pattern % i for i in range(lo, hi + (1 if step > 0 else -1), step)]
@@ -369,6 +496,7 @@ def _listed_names(path: Path, marker: bytes) -> list[str]:
     after = re.split(marker, text, maxsplit=1, flags=re.M | re.I)
     if len(after) != 2:
         return []
+    _check_slice_count(path, after[1].count(b"\n"))  # lines, before any name is decoded
     return [ln.strip() for ln in after[1].decode("latin-1").splitlines() if ln.strip()]
 
 
@@ -477,51 +605,6 @@ def _write_vti(path: Path, vol: Volume) -> None:
             raise WriteError(f"cannot write {path.name}: {err or 'the writer failed'}")
 
 
-# ---------------------------------------------------------------------------- NIfTI
-def _read_nifti(path: Path) -> VolumeData:
-    """NIfTI-1/2 with nibabel, reoriented to the closest RAS+ axes so that world axes match
-    array axes; spacing = voxel sizes, origin = the affine's translation. A residual
-    rotation (oblique scans) is recorded in ``meta["affine"]`` but not applied."""
-    import nibabel as nib
-    from nibabel.filebasedimages import ImageFileError
-
-    try:
-        if path.name.lower().endswith((".nii", ".nii.gz")):
-            img = nib.load(str(path))
-        else:  # recognised by content under another name: nibabel goes by the suffix
-            img = _nifti_from_bytes(path)
-    except (ImageFileError, nib.spatialimages.HeaderDataError, ValueError, OSError,
-            EOFError, zlib.error) as exc:
-        raise CorruptFileError(f"{path.name} is not a readable NIfTI file: {exc}") from None
-    shape = tuple(int(n) for n in img.shape)
-    while len(shape) > 3 and shape[-1] == 1:
-        shape = shape[:-1]
-    if len(shape) != 3:
-        raise InvalidDataError(f"{path.name} has shape {tuple(img.shape)}, not a 3-D volume")
-    check_volume_size(shape, img.get_data_dtype().itemsize, path.name)
-    try:
-        img = nib.as_closest_canonical(img)
-        data = np.asanyarray(img.dataobj).reshape(img.shape[:3])
-    except (ValueError, OSError, EOFError, zlib.error) as exc:
-        raise CorruptFileError(f"{path.name} has a damaged or truncated payload: {exc}") from None
-    zooms = tuple(float(z) for z in img.header.get_zooms()[:3])
-    origin = tuple(float(v) for v in img.affine[:3, 3])
-    return VolumeData(data, zooms, origin, "nifti", {"affine": img.affine.tolist()})
-
-
-def _nifti_from_bytes(path: Path):
-    import gzip
-
-    import nibabel as nib
-
-    raw = path.read_bytes()
-    if raw[:2] == b"\x1f\x8b":
-        raw = gzip.decompress(raw)
-    cls = nib.Nifti2Image if 540 in (int.from_bytes(raw[:4], "little"),
-                                     int.from_bytes(raw[:4], "big")) else nib.Nifti1Image
-    return cls.from_bytes(raw)
-
-
 # ---------------------------------------------------------------------------- MRC
 def _mrc_axes(header) -> tuple[int, int, int]:
     """Array axis (of mrcfile's ``data[section, row, column]``) holding world x, y, z.
@@ -585,10 +668,19 @@ def _read_npy(path: Path) -> VolumeData:
         arr = np.load(str(path), mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError) as exc:
         raise CorruptFileError(f"{path.name} is not a valid .npy array: {exc}") from None
-    if arr.ndim != 3:
+    if arr.ndim not in (3, 4, 5):
         raise InvalidDataError(f"{path.name} holds a {arr.ndim}-D array, not a volume")
-    check_volume_size(arr.shape, arr.dtype.itemsize, path.name)
-    return VolumeData(np.array(arr), format="npy")
+    check_volume_size(arr.shape[:3], arr.dtype.itemsize, path.name)
+    check_frame_count(arr.shape[3:], path.name)
+    if arr.ndim == 3:
+        return VolumeData(np.array(arr), format="npy")
+    # x, y, z first as in 3-D files; the trailing axes say nothing of what they are. The
+    # file stays mapped: each frame is copied out when it is read.
+    def read(index):
+        return np.array(arr[(slice(None),) * 3 + tuple(int(i) for i in index)])
+
+    frames = Frames(tuple(FrameAxis("frame", int(n)) for n in arr.shape[3:]), read)
+    return VolumeData(read((0,) * (arr.ndim - 3)), format="npy", frames=frames)
 
 
 def _write_npy(path: Path, vol: Volume) -> None:
@@ -631,22 +723,6 @@ def _head(path: Path, n: int) -> bytes:
         return fh.read(n)
 
 
-def _sniff_nifti(head: bytes) -> bool:
-    """NIfTI-1: sizeof_hdr 348 and magic ``n+1``/``ni1`` at byte 344; NIfTI-2: sizeof_hdr 540
-    and magic ``n+2``/``ni2`` at byte 4 (either byte order; gzip streams are peeked into)."""
-    if head[:2] == b"\x1f\x8b":
-        try:
-            head = zlib.decompressobj(16 + zlib.MAX_WBITS).decompress(head, 352)
-        except zlib.error:
-            return False
-    if len(head) < 8:
-        return False
-    size = {int.from_bytes(head[:4], "little"), int.from_bytes(head[:4], "big")}
-    if 540 in size and head[4:7] in (b"n+2", b"ni2"):
-        return True
-    return 348 in size and len(head) >= 348 and head[344:347] in (b"n+1", b"ni1")
-
-
 register_format("vti", (".vti",), _read_vti, _write_vti, kind="volume",
                 sniff=lambda h: b"<VTKFile" in h and b"ImageData" in h,
                 description="VTK XML ImageData")
@@ -660,8 +736,6 @@ register_format("metaimage", (".mhd", ".mha"), _read_metaimage, None, kind="volu
                 description="MetaImage")
 register_format("nrrd", (".nrrd", ".nhdr"), _read_nrrd, _write_nrrd, kind="volume",
                 sniff=lambda h: h.startswith(b"NRRD000"), description="NRRD")
-register_format("nifti", (".nii", ".nii.gz"), _read_nifti, None, kind="volume",
-                sniff=_sniff_nifti, description="NIfTI-1/2")
 register_format("mrc", (".mrc", ".map", ".ccp4", ".mrcs"), _read_mrc, None, kind="volume",
                 sniff=lambda h: len(h) >= 212 and h[208:211] == b"MAP",
                 description="MRC/CCP4 map")
@@ -674,8 +748,13 @@ _RAW_OPTIONS = ("dims", "dtype", "byteorder", "offset")
 
 
 def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="little",
-                     offset=0, allow_outside=False) -> VolumeData:
-    """Read a volume file in its own sample type (see :func:`read_volume`)."""
+                     offset=0, allow_outside=False, channel=None, frame=0) -> VolumeData:
+    """Read a volume file in its own sample type (see :func:`read_volume`).
+
+    For a 4-D file, ``data`` is entry ``frame`` of the sequence that
+    :func:`~splineviz.io.volume_data.select_frames` makes with ``channel``; ``frames``
+    still reads any other, and ``meta["frame"]`` holds the file index read.
+    """
     p = regular_input(path, allow_dir=True)
     if dims is not None or dtype is not None:
         format = format or "raw"
@@ -688,33 +767,63 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
     if not isinstance(vd, VolumeData):
         raise FileFormatError(f"the {fmt.name} reader returned {type(vd).__name__}, "
                               "not VolumeData")
+    if vd.frames is not None:  # a plugin's reader too
+        check_frame_count(vd.frames.shape, p.name)
+    selection = select_frames(vd.frames, p.name, channel)
+    if not 0 <= int(frame) < len(selection.indices):
+        raise InvalidDataError(f"{p.name} has {len(selection.indices)} frame(s) along its "
+                               f"{selection.axis.name} axis; frame {frame} is not one")
+    index = selection.indices[int(frame)]
+    if vd.frames is not None:
+        if any(index):
+            with reader_errors(p.name, fmt.name):
+                vd.data = vd.frames.read(index)
+        vd.meta["frame"] = index
     return vd
 
 
 def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little", offset=0,
-                spacing=None, origin=None, nonfinite="error", allow_outside=False) -> Volume:
+                spacing=None, origin=None, nonfinite="error", allow_outside=False,
+                channel=None, complex="error", oblique="error") -> Volume:
     """Read a volume file (or DICOM folder) into a :class:`~splineviz.Volume`.
 
     Parameters
     ----------
     path : path-like
-        VTI, NRRD/NHDR, MHD/MHA, legacy .vtk, SLC, NIfTI, MRC/MAP, DICOM folder, .npy, or raw.
+        VTI, NRRD/NHDR, MHD/MHA, legacy .vtk, SLC, NIfTI, Analyze (.hdr/.img), MGH/MGZ, MINC1/2,
+        PAR/REC, AFNI (BRIK/HEAD), MRC/MAP, DICOM folder, .npy, raw, and the chunked and
+        plugin formats of the registry. A 4-D file gives its first frame, with a
+        :class:`~splineviz.core.errors.SplinevizWarning` that says how many there are
+        (:func:`~splineviz.io.sequence.read_volume_sequence` reads them all).
     format : str, optional
         Force a registered format by name instead of guessing from suffix and content.
     dims, dtype, byteorder, offset
         Raw binaries: (nx, ny, nz) samples x fastest, NumPy dtype, "little"/"big", bytes of
         header to skip. Giving ``dims`` or ``dtype`` selects the raw reader.
     spacing, origin : (3,) float, optional
-        Override the file's geometry (raw files have none: default 1 and 0).
+        Override the file's step along each array axis and the position of its first sample
+        (raw files have none: default 1 and 0); a direction the file states is kept.
     nonfinite : {"error", "fill"}
         What to do with NaN/Inf samples: refuse the file (default), or replace them by the
         smallest finite sample (outside every isosurface above it) with a
-        :class:`~splineviz.core.errors.SplinevizWarning`. A negative spacing flips its axis
-        (samples keep their world positions), also with a warning.
+        :class:`~splineviz.core.errors.SplinevizWarning`. A negative spacing, or a direction
+        matrix that runs against a world axis, flips the axis (samples keep their world
+        positions; :mod:`splineviz.io.geometry`), also with a warning; an oblique one is
+        refused.
     allow_outside : bool
         Read data files that a header (MetaImage ``ElementDataFile``, NRRD ``data file``)
         names outside the header's folder; refused by default with an
         :class:`~splineviz.io.errors.OutsideFolderError`.
+    channel : int, optional
+        For a multi-channel file: the channel to read (see
+        :func:`~splineviz.io.volume_data.select_frames`).
+    complex : {"error", "magnitude"}
+        Complex samples are refused (default) or replaced by their magnitude.
+    oblique : {"error", "resample"}
+        A grid rotated against the world axes is refused (default: a Volume is
+        axis-aligned, and showing it so would misplace it) or resampled trilinearly onto the
+        axis-aligned grid covering it, with a warning
+        (:func:`~splineviz.io.geometry.resample_axis_aligned`).
 
     Returns
     -------
@@ -737,24 +846,65 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     vd = load_volume_data(path, format=format, dims=dims, dtype=dtype, byteorder=byteorder,
-                          offset=offset, allow_outside=allow_outside)
+                          offset=offset, allow_outside=allow_outside, channel=channel)
+    name = Path(os.fspath(path)).name
+    notice = frames_notice(name, select_frames(vd.frames, name, channel), channel)
+    if notice:
+        warnings.warn(notice, SplinevizWarning, stacklevel=2)
     if is_lazy(vd.data):  # OME-Zarr, Zarr, HDF5: a ChunkedVolume, read brick by brick
-        validate_volume_data(vd, Path(os.fspath(path)).name)
+        if complex == "magnitude" and np.issubdtype(vd.data.dtype, np.complexfloating):
+            raise InvalidDataError(f"{name} holds complex ({vd.data.dtype}) samples in chunks; "
+                                   "their magnitude is taken only for volumes read whole")
+        validate_volume_data(vd, name)
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,
                                  origin=origin)
-    return to_volume(vd, Path(os.fspath(path)).name, spacing=spacing, origin=origin,
-                     nonfinite=nonfinite)
+    return to_volume(vd, name, spacing=spacing, origin=origin, nonfinite=nonfinite,
+                     complex=complex, oblique=oblique)
+
+
+def frames_notice(name: str, selection, channel=None) -> str | None:
+    """One line saying which frame of a 4-D file is shown and how to choose, or None for a
+    file of one frame (``selection``: :func:`~splineviz.io.volume_data.select_frames`)."""
+    parts = []
+    if len(selection.indices) > 1:
+        parts.append(f"{len(selection.indices)} frames along its {selection.axis.name} axis "
+                     "(the first is shown; read_volume_sequence reads them all)")
+    if channel is None and selection.channels > 1:
+        parts.append(f"{selection.channels} channels (channel 0 is shown; choose another "
+                     "with channel=N or --channel N)")
+    return f"{name} holds {' and '.join(parts)}" if parts else None
 
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
-              nonfinite="error") -> Volume:
+              nonfinite="error", complex="error", oblique="error") -> Volume:
     """Validate a :class:`VolumeData` and convert it to a float32 :class:`~splineviz.Volume`
-    (the second half of :func:`read_volume`; use it to keep both the stored dtype and the
-    volume from one read)."""
+    (the second half of :func:`read_volume`, whose parameters these are; use it to keep both
+    the stored dtype and the volume from one read)."""
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
-    validate_volume_data(vd, name)
+    if complex not in ("error", "magnitude"):
+        raise ValueError(f"complex must be 'error' or 'magnitude', got {complex!r}")
+    if oblique not in ("error", "resample"):
+        raise ValueError(f"oblique must be 'error' or 'resample', got {oblique!r}")
     raw = np.asarray(vd.data)
+    if np.issubdtype(raw.dtype, np.complexfloating):
+        if complex == "error":
+            raise InvalidDataError(f"{name} holds complex ({raw.dtype}) samples; read it with "
+                                   "complex='magnitude' to show their magnitude")
+        raw = np.abs(raw)
+        vd = replace(vd, data=raw)
+    validate_volume_data(vd, name)
+    try:
+        sp = as_float_triplet(vd.spacing if spacing is None else spacing, "spacing")
+        og = as_float_triplet(vd.origin if origin is None else origin, "origin")
+    except ValueError as exc:
+        raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+    if not all(s != 0 for s in sp):
+        raise InvalidDataError(f"{name} has unusable geometry: spacing must be finite and "
+                               f"positive, got {sp}")
+    orient = orientation(affine_from(sp, og, vd.direction), raw.shape, name, space=vd.space)
+    if oblique == "error":
+        refuse_oblique(orient, name)
     if raw.dtype.kind == "f" and raw.dtype.itemsize > 4:
         # checked before the float32 cast, which would turn these into infinities and the
         # message into a false "infinite samples"
@@ -770,7 +920,8 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
     if bad.any():
         count = int(bad.sum())
         if bad.all():
-            raise InvalidDataError(f"{name} has no finite samples")
+            raise InvalidDataError(f"{name} has no finite samples (all {count:,} are NaN or "
+                                   "infinite), so there is nothing to show")
         if nonfinite == "error":
             raise InvalidDataError(
                 f"{name} has {count} NaN or infinite samples "
@@ -780,45 +931,15 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         data = np.where(bad, np.float32(fill), data)
         warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {fill:g}, "
                       "the smallest finite sample", SplinevizWarning, stacklevel=3)
-    try:
-        sp = as_float_triplet(vd.spacing if spacing is None else spacing, "spacing")
-        og = as_float_triplet(vd.origin if origin is None else origin, "origin")
-    except ValueError as exc:
-        raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
-    data, sp, og = _flip_negative_axes(data, sp, og, name)
+    if orient.oblique:
+        data, sp, og = resample_axis_aligned(data, orient, name, fill=float(data.min()))
+    else:
+        warn_flips(orient, name, stacklevel=4)
+        data, sp, og = orient.apply(data), orient.spacing, orient.origin
     try:
         return Volume(data, spacing=sp, origin=og)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
-
-
-def _flip_negative_axes(data, spacing, origin, name):
-    """A grid stored with a negative step along an axis, flipped so that the step is positive
-    and every sample keeps its world position (``origin + i * step`` is the same point), with
-    a :class:`SplinevizWarning` saying so. Zero steps are left for :class:`Volume` to refuse.
-
-    Parameters
-    ----------
-    data : (nx, ny, nz) ndarray
-    spacing, origin : (3,) tuple of float
-
-    Returns
-    -------
-    data : (nx, ny, nz) ndarray
-    spacing, origin : (3,) tuple of float
-    """
-    flipped = [a for a in range(3) if spacing[a] < 0]
-    if not flipped:
-        return data, spacing, origin
-    sp, og = list(spacing), list(origin)
-    for a in flipped:
-        og[a] = origin[a] + (data.shape[a] - 1) * spacing[a]
-        sp[a] = -spacing[a]
-    data = np.flip(data, axis=flipped)
-    warnings.warn(f"{name} has a negative spacing along {', '.join('xyz'[a] for a in flipped)}: "
-                  "the axis is flipped so that every sample keeps its world position",
-                  SplinevizWarning, stacklevel=4)
-    return data, tuple(sp), tuple(og)
 
 
 def validate_volume_data(vd: VolumeData, name: str) -> None:
@@ -831,8 +952,10 @@ def validate_volume_data(vd: VolumeData, name: str) -> None:
             f"{name} has {shape} samples; a spline volume needs at least "
             f"{MIN_SAMPLES_PER_AXIS} along each axis"
         )
-    if not (np.issubdtype(vd.data.dtype, np.number) or vd.data.dtype == bool) or \
-            np.issubdtype(vd.data.dtype, np.complexfloating):
+    if np.issubdtype(vd.data.dtype, np.complexfloating):
+        raise InvalidDataError(f"{name} holds complex ({vd.data.dtype}) samples; read it with "
+                               "complex='magnitude' to show their magnitude")
+    if not (np.issubdtype(vd.data.dtype, np.number) or vd.data.dtype == bool):
         raise InvalidDataError(f"{name} holds {vd.data.dtype} samples, not real numbers")
 
 

@@ -127,13 +127,14 @@ def noting_warnings(func, *args, **kwargs) -> Noted:
 
 
 def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
-                    allow_outside: bool = False) -> Scene:
+                    allow_outside: bool = False, **volume_options) -> Scene:
     """Read a session, volume or point cloud into a new scene, framed isometrically
     (a session keeps its own camera). ``isovalue``/``model`` override every isosurface;
-    ``allow_outside`` lets headers and sessions name data outside their folders."""
+    ``allow_outside`` lets headers and sessions name data outside their folders;
+    ``volume_options`` (``channel``, ``oblique``) go to the volume reader."""
     from splineviz.io.opening import open_path
 
-    opened = open_path(path, repoint=repoint, allow_outside=allow_outside)
+    opened = open_path(path, repoint=repoint, allow_outside=allow_outside, **volume_options)
     scene = Scene()
     if opened.kind == "session":
         apply_session(scene, opened.value,

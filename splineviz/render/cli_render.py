@@ -93,7 +93,9 @@ def run(args) -> int:
 
         args.volume = str(series_file(args.volume, args.series))
     scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
-                            allow_outside=args.allow_outside_data)
+                            allow_outside=args.allow_outside_data,
+                            **{k: v for k, v in (("channel", args.channel),
+                                                 ("oblique", args.oblique)) if v is not None})
     if not scene.isosurfaces:
         raise RenderArgumentError(f"{args.volume} holds no volume to render")
     for vol in scene.volumes:
@@ -161,4 +163,9 @@ def register(subparsers) -> None:
     p.add_argument("-o", "--output", required=True, help="output PNG")
     p.add_argument("--allow-outside-data", action="store_true",
                    help="read data files that a header or session names outside its folder")
+    p.add_argument("--channel", type=int, default=None,
+                   help="multi-channel volumes: the channel to render (from 0)")
+    p.add_argument("--oblique", choices=("error", "resample"), default=None,
+                   help="a scan rotated against the world axes: refuse it (default) or "
+                   "resample it trilinearly onto axis-aligned axes")
     p.set_defaults(func=run)

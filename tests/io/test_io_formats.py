@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 import splineviz as sv
+from splineviz.core.errors import SplinevizWarning
 from splineviz.io import errors, load_point_data, load_volume_data, read_image
 
 RNG = np.random.default_rng(7)
@@ -35,7 +36,8 @@ def test_nifti_spacing_origin_and_orientation(tmp_path, field):
     flipped = affine.copy()
     flipped[0, 0] = -0.5
     nib.save(nib.Nifti1Image(field, flipped), tmp_path / "f.nii")
-    vol = sv.read_volume(tmp_path / "f.nii")
+    with pytest.warns(SplinevizWarning, match="negative spacing along x"):
+        vol = sv.read_volume(tmp_path / "f.nii")
     np.testing.assert_array_equal(vol.data, field[::-1])
     assert vol.origin[0] == pytest.approx(10.0 - 0.5 * 4)
 
