@@ -1,48 +1,10 @@
-"""OpenCL ray casting of spline isosurfaces (thesis §6.1.1, §6.2; DESIGN.md ``RayCaster``).
+"""The ray caster's facade: :class:`RayCaster` (DESIGN.md ``RayCaster``).
 
-Pipeline on the device, without a CPU round trip of the volume:
-
-* on a data change (isovalue-independent, thesis §6.1.1, §6.2.1): the samples (padded with
-  ghost layers where the model needs them, written straight into a device buffer) and a
-  min-max octree of conservative value bounds, stored from level 1 (bricks of 2^3 cells);
-* on an isovalue change: nothing but a new cache epoch (constant time, nothing uploaded).
-  The work the picture needs is done by the rays that need it (§6.2.3): the skip index of a
-  cell comes from the octree when a ray reaches the cell, and the relevance of a candidate
-  cell's tetrahedra (its tet code, §6.1.1) is computed by the first ray that reaches it and
-  cached per brick for later frames at the same isovalue (visible-first classification; only
-  the bricks the rays reach take memory). :meth:`RayCaster.classify_all` classifies every
-  cell at once (prefix-scan compaction of the candidates, Fig. 6.3) for counts and checks;
-* per frame: one work-item per pixel; macro-cell leaping with the Heaviside plane choice,
-  cell traversal, the exact restriction of the model to the ray in each candidate cell, first
-  root, gradient, Phong headlight shading and OpenGL window depth.
-
-Models with an OpenCL kernel:
-
-* ``"trilinear"``: cells between samples; the restriction to the ray in a cell is an exact
-  cubic (split at its critical points, so no root is missed).
-* ``"cubic-c1"``, ``"super-quadratic"`` (type-6, §4.4): cubes centred at the samples. Cube
-  bounds from the 27-point stencil (every coefficient is an affine combination of it, widened
-  by the negative weight mass). A cube's tet code comes from its determining set and the
-  averaging rules (§5.1-5.2). The ray part inside each relevant tet comes from the tet's four
-  barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
-  model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
-  root by the same monotone-piece cubic solver, the gradient from the last de Casteljau step.
-  Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
-  the neighbour table (same result, no special cases at cube faces).
-* ``"to-quadratic"`` (truncated octahedra, §5.2): unit cells of the grid with per-parity-class
-  tables of the (TO, tet) pieces meeting a cell; a cell's relevance bit set computes each
-  distinct B-net point of its pieces once, and the ray tests only the relevant pieces of the
-  subcells (5^3 per cell) its segment crosses. Each classified cell's range (the min/max of
-  its points, 2 bytes) is kept while the data stay, so a later isovalue outside it skips the
-  cell without its sums (isovalue-independent work once per data change, thesis §6.1.1).
-
-A brick of a bigger volume (:mod:`splineviz.compute.bricked`) is cast by the same kernel,
-compiled with ``BRICKS``, in the whole volume's coordinates and over a window of the frame
-(``RayCaster.render(placement=..., window=...)``): its hits are those of one cast of the
-whole volume, bit for bit.
-
-Other models render through the NumPy reference ray caster
-(:mod:`splineviz.core.raycast_reference`); ``stats["path"]`` says which path made the frame.
+What every kernel family shares lives here: the device, the device samples (their type and
+ghost layers come from the family), the min-max octree, the classification cache's slots and
+pool, the frame buffers and the launch of the ray kernel; the model-specific tables, buffers,
+defines and kernel arguments come from the model's :class:`~splineviz.compute.raycast.family.
+KernelFamily` (see :mod:`splineviz.compute.raycast` for the pipeline).
 """
 
 from __future__ import annotations
@@ -52,50 +14,78 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from splineviz.compute.device import get_device, try_get_device
+from splineviz.compute.device import try_get_device
 from splineviz.compute.program import get_kernel
+from splineviz.compute.raycast.errors import RayCastError
+from splineviz.compute.raycast.family import SKIP_ACTIVE, family_class
+from splineviz.compute.raycast.octree import octree_levels, octree_nodes
+from splineviz.compute.raycast.samples import numpy_cell_bounds
 from splineviz.core import raycast_reference as ref
 from splineviz.core.bricks import Placement
 from splineviz.core.camera import Camera, parse_size
-from splineviz.core.errors import SplinevizError
-from splineviz.core.splines.registry import KERNEL_FAMILIES, MODELS
+from splineviz.core.splines.registry import MODELS
 from splineviz.core.volume import Volume
 
 #: work-group size of the ray-casting kernel (pixels): fixed so the kernel is compiled once
 RAY_GROUP = (8, 8)
-#: most samples (ghost layers included) one ray caster's kernels address with 32-bit ints
+#: most samples (ghost layers included) the kernels address with 32-bit offsets; past it they
+#: are compiled with ``OFFSET64`` (64-bit sample offsets), when the device holds the volume
 MAX_SAMPLES = 2**31 - 1
-#: ghost layers of the padded samples per kernel family (the registry's, per family define)
-GHOSTS = {define: max((s.ghost_layers for s in MODELS.values() if s.kernel_define == define),
-                      default=0) for define in KERNEL_FAMILIES.values()}
-
-
-def kernel_define(model: str) -> str | None:
-    """The ``-D`` define of the OpenCL kernel family that ray casts ``model`` (from the model
-    registry), or None when only the NumPy reference renders it."""
-    spec = MODELS.get(model)
-    return None if spec is None else spec.kernel_define
-#: 32-bit words of a cell's bit set of relevant (TO, tet) pieces (<= 144 per cell)
-TO_WORDS = 5
-#: slack of the barycentric inside test of a tetrahedron (rays on shared faces)
-TET_SLACK = 1e-6
-#: skip code of a candidate cell (raycast.cl skip_codes)
-SKIP_ACTIVE = 255
 #: epochs of the per-cell classification caches: 8 bits beside 24 bits of code or pool
 #: index, 0 = never valid
 MAX_EPOCH = 255
 #: largest pool of the classification cache (24-bit entry indices beside the epoch; the
 #: largest index marks a slot being allocated)
 MAX_POOL = 2**24 - 2
-#: families whose per-cell classification the rays cache
-CACHED = ("MODEL_TYPE6", "MODEL_TO")
+#: share of the device's global memory the kept buffers may take (the frame buffers and the
+#: compaction of classify_all need room beside them)
+MEMORY_SHARE = 0.8
 
 
-class RayCastError(SplinevizError, ValueError):
-    """Bad ray-casting input (unknown model, volume too small or too big, no isovalue set)."""
+@dataclass(frozen=True)
+class Limits:
+    """What a volume needs of the device and what the device offers
+    (:meth:`RayCaster.limits`).
+
+    Attributes
+    ----------
+    shape : (3,) samples per axis
+    samples : int
+        Device samples of the volume, ghost layers included.
+    need : dict
+        Device bytes of the kept buffers, per buffer name (:meth:`RayCaster.device_bytes`).
+    max_samples_32 : int
+        Most samples the kernels address with 32-bit offsets (:data:`MAX_SAMPLES`).
+    device_bytes : int
+        Bytes the kept buffers may take on the device (:data:`MEMORY_SHARE` of its memory).
+    max_buffer_bytes : int
+        Largest single buffer the device allocates.
+    """
+
+    shape: tuple
+    samples: int
+    need: dict
+    max_samples_32: int
+    device_bytes: int
+    max_buffer_bytes: int
+
+    @property
+    def total(self) -> int:
+        """Device bytes of all kept buffers."""
+        return int(sum(self.need.values()))
+
+    @property
+    def fits(self) -> bool:
+        """Whether the device holds the kept buffers."""
+        return (self.total <= self.device_bytes
+                and max(self.need.values()) <= self.max_buffer_bytes)
+
+    @property
+    def offsets_64(self) -> bool:
+        """Whether the kernels need 64-bit sample offsets (``OFFSET64``) for this volume."""
+        return self.samples > self.max_samples_32
 
 
-@dataclass
 class Classification:
     """Every cell classified at once (:meth:`RayCaster.classify_all`).
 
@@ -131,111 +121,6 @@ def _shading_defines() -> dict:
     for ch, v in zip("RGB", ref.BACKGROUND, strict=True):
         d[f"BG_{ch}"] = int(round(v * 255))
     return d
-
-
-def _octree_levels(cells: tuple[int, int, int]) -> list[tuple[int, int, int, int]]:
-    """(offset, nx, ny, nz) of the stored min-max octree levels 1, 2, ... (nodes of 2^L
-    cells; level 0, the cells, is not stored: see classify.cl)."""
-    levels = []
-    off = 0
-    dims = tuple(cells)
-    while True:
-        dims = tuple((n + 1) // 2 for n in dims)
-        levels.append((off, *dims))
-        off += int(np.prod(dims))
-        if max(dims) == 1:
-            return levels
-
-
-def _octree_nodes(levels) -> int:
-    """Nodes of all stored octree levels."""
-    return levels[-1][0] + int(np.prod(levels[-1][1:]))
-
-
-#: device sample types tried in order (numpy type, OpenCL C type) for integer-valued data
-SAMPLE_TYPES = ((np.uint8, "uchar"), (np.int16, "short"), (np.uint16, "ushort"))
-
-
-def sample_type_for(data: np.ndarray, ghost: int) -> tuple[type, str]:
-    """The device type of the samples: the smallest integer type that holds them exactly with
-    ``ghost`` linearly extrapolated layers (uint8/uint16 data, which :class:`Volume` keeps as
-    float32: 4x/2x less device memory and bandwidth), else float32.
-
-    Parameters
-    ----------
-    data : (nx, ny, nz) float32
-    ghost : ghost layers (each axis' extrapolation widens the value range by ``2 ghost``
-        times its width, and integers stay integers)
-
-    Returns
-    -------
-    (numpy type, OpenCL C type name)
-    """
-    flat = data.reshape(len(data), -1)
-    step = max(1, 2**24 // flat.shape[1])  # slabs of about 16 M samples: no big temporaries
-    lo, hi = np.inf, -np.inf
-    for i in range(0, len(flat), step):
-        s = flat[i:i + step]
-        if not np.array_equal(s, np.rint(s)):  # fractions, NaN or inf
-            return np.float32, "float"
-        lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
-    grow = (hi - lo) * ghost * sum((1 + 2 * ghost) ** a for a in range(3))
-    for np_type, cl_type in SAMPLE_TYPES:
-        info = np.iinfo(np_type)
-        if info.min <= lo - grow and hi + grow <= info.max:
-            return np_type, cl_type
-    return np.float32, "float"
-
-
-def pad_linear_into(data: np.ndarray, layers: int, out: np.ndarray) -> None:
-    """:func:`splineviz.core.splines.boundary.pad_linear` written into a smaller array type.
-
-    The ghost samples are computed one slab at a time in float64 (as the core does, up to a
-    rounding of the ghosts of earlier axes), so no float64 copy of the volume is made.
-
-    Parameters
-    ----------
-    data : (nx, ny, nz) array
-    layers : int >= 1
-    out : (nx + 2 layers, ny + 2 layers, nz + 2 layers), written; float32, or an integer
-        type that holds the padded values exactly (:func:`sample_type_for`)
-    """
-    g = layers
-    n = data.shape
-    out[g:g + n[0], g:g + n[1], g:g + n[2]] = data
-    for axis in range(3):
-        # as the core: axes before `axis` are already padded, the later ones not yet
-        region = [slice(None) if ax < axis else slice(g, g + n[ax]) for ax in range(3)]
-
-        def at(i, region=region, axis=axis):
-            r = list(region)
-            r[axis] = i
-            return tuple(r)
-
-        lo = out[at(g)].astype(np.float64), out[at(g + min(1, n[axis] - 1))].astype(np.float64)
-        hi = (out[at(g + n[axis] - 1)].astype(np.float64),
-              out[at(g + max(n[axis] - 2, 0))].astype(np.float64))
-        for m in range(1, g + 1):
-            # a single sample is repeated (its "neighbour" is itself, so the slope is 0)
-            out[at(g - m)] = (1 + m) * lo[0] - m * lo[1]
-            out[at(g + n[axis] - 1 + m)] = (1 + m) * hi[0] - m * hi[1]
-
-
-def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per-cell (min, max) of the 8 corner samples: the trilinear model's value bounds.
-
-    Parameters
-    ----------
-    data : (nx, ny, nz) float
-
-    Returns
-    -------
-    vmin, vmax : (nx-1, ny-1, nz-1) float32
-    """
-    d = np.asarray(data, dtype=np.float32)
-    corners = [d[i:d.shape[0] - 1 + i, j:d.shape[1] - 1 + j, k:d.shape[2] - 1 + k]
-               for i in (0, 1) for j in (0, 1) for k in (0, 1)]
-    return np.minimum.reduce(corners), np.maximum.reduce(corners)
 
 
 class RayCaster:
@@ -280,10 +165,13 @@ class RayCaster:
             raise RayCastError(f"unknown spline model {model!r}; choose one of "
                                f"{', '.join(MODELS)}")
         self.model = model
-        self._family = kernel_define(model)
         self._model_kwargs = model_kwargs
+        family = family_class(model)
+        #: the model's kernel family (None: only the NumPy reference renders it)
+        self.family = None if family is None else family(model, model_kwargs)
         self._device = None
-        if self._family is not None:
+        self._offsets_64 = False
+        if self.family is not None:
             self._device = try_get_device(device)
         self._isovalue = None
         self._spline = None
@@ -325,13 +213,13 @@ class RayCaster:
             volume = Volume(volume)
         if min(volume.shape) < 2:
             raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
-        # trilinear and TO: unit cells between samples; type-6: cubes centred at the samples
-        shift = 1 if self._family == "MODEL_TYPE6" else 0
-        cells = tuple(n - 1 + shift for n in volume.shape)
+        cells = self._grid(volume.shape)
         if self._device is not None:
-            sample_type = sample_type_for(volume.data, self._ghost())
-            self._check_device_memory(volume.shape, cells, np.dtype(sample_type[0]).itemsize)
+            sample_type = self.family.sample_type(volume.data)
+            limits = self.limits(volume.shape, np.dtype(sample_type[0]).itemsize)
+            self._check_limits(limits)
             self._sample_type = sample_type
+            self._offsets_64 = limits.offsets_64
         self._volume = volume
         self._spline = None
         self._cells = cells
@@ -342,7 +230,13 @@ class RayCaster:
 
     def _ghost(self) -> int:
         """Ghost layers of the device samples."""
-        return GHOSTS.get(self._family, 0)
+        return 0 if self.family is None else self.family.ghost_layers
+
+    def _grid(self, shape) -> tuple[int, int, int]:
+        """Cells of the traversal grid of ``shape`` samples: unit cells between samples, or
+        cubes centred at the samples (one more per axis)."""
+        shift = int(self.family is not None and self.family.centred)
+        return tuple(int(n) - 1 + shift for n in shape)
 
     def device_bytes(self, shape, cells, itemsize: int = 4) -> dict:
         """Bytes of the device buffers kept for a volume of ``shape`` (per buffer name).
@@ -354,48 +248,68 @@ class RayCaster:
         itemsize : bytes per device sample (see :func:`sample_type_for`)
         """
         ghost = self._ghost()
-        levels = _octree_levels(cells)
+        levels = octree_levels(cells)
+        bricks = int(np.prod(levels[0][1:]))
         out = {"samples": itemsize * int(np.prod([n + 2 * ghost for n in shape])),
-               "octree": 8 * _octree_nodes(levels)}
-        if self._family in CACHED:
-            bricks = int(np.prod(levels[0][1:]))
+               "octree": 8 * octree_nodes(levels)}
+        if self._cached():
             out["classification cache"] = 4 * (bricks + self._entry_words()
                                                * _initial_pool(bricks))
-        if self._family == "MODEL_TO":
-            out["cell ranges"] = 2 * 8 * int(np.prod(levels[0][1:]))
+        if self.family is not None:
+            out.update(self.family.extra_bytes(bricks))
         return out
 
+    def _cached(self) -> bool:
+        """Whether the rays cache the per-cell classification of this model."""
+        return self.family is not None and self.family.cache_words > 0
+
     def _entry_words(self) -> int:
-        """32-bit words of a pool entry of the classification cache (8 cells of a brick):
-        type-6 one tet code per cell, TO a bit set and a written flag per cell."""
-        return 8 * (1 if self._family == "MODEL_TYPE6" else TO_WORDS + 1)
+        """32-bit words of a pool entry of the classification cache (8 cells of a brick)."""
+        return 8 * self.family.cache_words
+
+    def limits(self, shape=None, itemsize: int | None = None, cells=None) -> Limits:
+        """What a volume of ``shape`` samples needs of this caster's device and what the
+        device offers (OpenCL path): tests and front ends ask here instead of reading the
+        device's memory themselves.
+
+        Parameters
+        ----------
+        shape : (3,) samples per axis; default the current volume's
+        itemsize : bytes per device sample; default the current volume's
+        cells : (3,) cells of the traversal grid; default those of ``shape``
+        """
+        if self._device is None:
+            raise RayCastError("device limits exist on the OpenCL path")
+        shape = tuple(int(n) for n in (self._volume.shape if shape is None else shape))
+        if itemsize is None:
+            itemsize = np.dtype(self._sample_type[0]).itemsize
+        dev = self._device.device
+        samples = int(np.prod([n + 2 * self._ghost() for n in shape]))
+        cells = self._grid(shape) if cells is None else tuple(cells)
+        return Limits(shape, samples, self.device_bytes(shape, cells, itemsize),
+                      MAX_SAMPLES, int(MEMORY_SHARE * dev.global_mem_size),
+                      int(dev.max_mem_alloc_size))
 
     def _check_device_memory(self, shape, cells, itemsize: int = 4) -> None:
-        """Refuse, before allocating anything, a volume the device cannot hold or the kernels
-        cannot address."""
+        """Refuse, before allocating anything, a volume the device cannot hold (``cells``:
+        of the traversal grid, as :meth:`device_bytes` takes them)."""
+        self._check_limits(self.limits(shape, itemsize, cells))
+
+    def _check_limits(self, limits: Limits) -> None:
+        """Refuse a volume whose buffers the device cannot hold; one past 2^31 samples is
+        cast with 64-bit sample offsets (``OFFSET64``) when it fits."""
+        if limits.fits:
+            return
+        need, gib = limits.need, 2.0**30
+        big = max(need, key=need.get)
         dev = self._device.device
-        need = self.device_bytes(shape, cells, itemsize)
-        gib = 2.0**30
-        total = sum(need.values())
-        # the frame buffers and the compaction of classify_all need room beside the volume
-        if total > 0.8 * dev.global_mem_size or max(need.values()) > dev.max_mem_alloc_size:
-            big = max(need, key=need.get)
-            raise RayCastError(
-                f"a {'x'.join(map(str, shape))} volume with the {self.model} model needs "
-                f"{total / gib:.2f} GiB of device memory ({big}: {need[big] / gib:.2f} GiB), "
-                f"but {self._device.name} has {dev.global_mem_size / gib:.2f} GiB (at most "
-                f"{dev.max_mem_alloc_size / gib:.2f} GiB per buffer); use a smaller or "
-                f"downsampled volume")
-        samples = int(np.prod([n + 2 * self._ghost() for n in shape]))
-        if samples > MAX_SAMPLES:
-            # the kernels index samples with 32-bit ints (64-bit index arithmetic costs every
-            # sample fetch); past this the offsets wrap (seen on an H200 at 1536^3: a wrong
-            # picture for trilinear, a kernel fault for super-quadratic)
-            raise RayCastError(
-                f"a {'x'.join(map(str, shape))} volume has {samples:,} device samples with the "
-                f"{self.model} model, more than one ray caster addresses ({MAX_SAMPLES:,}); "
-                f"open it as a chunked volume (Zarr, HDF5 or sv.Volume.from_dask), which is "
-                f"rendered in bricks, or downsample it")
+        raise RayCastError(
+            f"a {'x'.join(map(str, limits.shape))} volume with the {self.model} "
+            f"model needs {limits.total / gib:.2f} GiB of device memory ({big}: "
+            f"{need[big] / gib:.2f} GiB), but {self._device.name} has "
+            f"{dev.global_mem_size / gib:.2f} GiB (at most {dev.max_mem_alloc_size / gib:.2f} "
+            f"GiB per buffer); open it as a chunked volume (Zarr, HDF5 or sv.Volume.from_dask), "
+            f"which is rendered in bricks, or downsample it")
 
     #: device bytes per pixel of the frame buffers of _render_cl: hit flag, position and
     #: normal (float4 each), depth, RGBA colour; the largest single buffer is a float4
@@ -414,46 +328,42 @@ class RayCaster:
                 f"{dev.max_mem_alloc_size / 2**30:.2f} GiB per buffer); render a smaller image")
 
     def _defines(self) -> dict:
-        """-D options of this model's programs."""
-        d = {self._family: 1, "DATA_T": self._sample_type[1], **_shading_defines()}
-        if self._family == "MODEL_TYPE6":
-            d.update(DEGREE=self.spline.degree, TET_SLACK=TET_SLACK,
-                     NPOINTS=len(self.spline.scheme.cube_points))
-        elif self._family == "MODEL_TO":
-            d.update(DEGREE=2, TET_SLACK=TET_SLACK, GHOST=GHOSTS["MODEL_TO"], NWORDS=TO_WORDS,
-                     NUNION=self._nunion, TO_STENCIL=self._to_stencil)
+        """-D options of this model's ray-casting programs."""
+        d = {self.family.define: 1, "DATA_T": self._sample_type[1], **_shading_defines(),
+             **self.family.defines(self)}
+        if self._offsets_64:
+            d["OFFSET64"] = 1
         return d
 
     def _ray_kernel(self, kernel: str, bricks: bool = False):
         """Kernel ``kernel`` of raycast.cl for this model (its defines and generated prelude);
         ``bricks``: the variant that casts a brick of a bigger volume (``BRICKS``)."""
         defines = {**self._defines(), "BRICKS": 1} if bricks else self._defines()
-        return get_kernel(self._device.context, "raycast", kernel, defines, self._prelude)
+        return get_kernel(self._device.context, "raycast", kernel, defines, self._prelude())
+
+    def _prelude(self) -> str:
+        """The family's generated source, after the sample offset type it may use."""
+        if not self.family.prelude:
+            return ""
+        return f"#define offset_t {'long' if self._offsets_64 else 'int'}\n{self.family.prelude}"
 
     def _upload(self):
-        """Samples, min-max octree and the cleared classification cache on the device."""
+        """Samples and tables (the family's), min-max octree and the cleared classification
+        cache on the device."""
         import pyopencl.array as cla
 
         dev = self._device
-        self._prelude = ""
         q = dev.queue
         ctx = dev.context
-        levels = _octree_levels(self._cells)
+        levels = octree_levels(self._cells)
         self._levels = levels
         self._levels_buf = cla.to_device(q, np.array(levels, dtype=np.int32).reshape(-1, 4))
         # float2 (lo, hi) per node
-        self._bounds = cla.empty(q, 2 * _octree_nodes(levels), np.float32)
-        if self.model == "trilinear":
-            tables = {}
-            samples = self._volume.data.astype(self._sample_type[0], copy=False)
-            self._data = cla.to_device(q, samples)
-            self._strides = self._volume.shape[1:]
-            self._negmass = 0.0
-        elif self._family == "MODEL_TO":
-            tables = self._to_tables()
-        else:
-            tables = self._type6_tables()
+        self._bounds = cla.empty(q, 2 * octree_nodes(levels), np.float32)
+        tables = self.family.upload(self)
         self._cls_defines = {**tables, "DATA_T": self._sample_type[1]}
+        if self._offsets_64:
+            self._cls_defines["OFFSET64"] = 1
         get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
             q, levels[0][:0:-1], None, *self._cell_args(), self._bounds.data)
         k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
@@ -461,7 +371,7 @@ class RayCaster:
             k_reduce(q, (dz, dy, dx), None, self._bounds.data,
                      *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
         self._epoch = 0
-        if self._family in CACHED:
+        if self._cached():
             # the classification cache (raycast.cl): per level-1 brick a slot, (epoch << 24) |
             # pool entry; counts: cells and tets classified at this epoch, entries asked for
             bricks = int(np.prod(levels[0][1:]))
@@ -469,146 +379,15 @@ class RayCaster:
             self._counts = cla.zeros(q, 3, np.int32)
             self._pool_cap = _initial_pool(bricks)
             self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
-        if self._family == "MODEL_TO":
-            # isovalue-independent cell ranges (raycast.cl), all (0, 255): "not known yet"
-            self._ranges = cla.empty(q, 8 * int(np.prod(levels[0][1:])), np.uint16)
-            self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
+        self.family.allocate(self)
         q.finish()
 
     def _cell_args(self) -> list:
         """Leading arguments of the per-cell kernels of classify.cl: data, strides, cells,
-        negative mass (and the TO class tables)."""
-        args = [self._data.data, *(np.int32(v) for v in self._strides),
-                *(np.int32(c) for c in self._cells), np.float32(self._negmass)]
-        if self._family == "MODEL_TO":
-            args += [self._cls_start.data, self._cls_offsets.data]
-        return args
-
-    def _padded_samples(self, ghost: int):
-        """The samples with ``ghost`` linearly extrapolated layers in their device type,
-        written straight into a device buffer (no host copy of the padded volume).
-
-        Returns
-        -------
-        pyopencl.array.Array of shape (nx + 2 ghost, ny + 2 ghost, nz + 2 ghost)
-        """
-        import pyopencl as cl
-        import pyopencl.array as cla
-
-        q = self._device.queue
-        shape = tuple(n + 2 * ghost for n in self._volume.shape)
-        dtype = np.dtype(self._sample_type[0])
-        mf = cl.mem_flags
-        buf = cl.Buffer(self._device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
-                        dtype.itemsize * int(np.prod(shape)))
-        host, _ = cl.enqueue_map_buffer(q, buf, cl.map_flags.WRITE_INVALIDATE_REGION, 0,
-                                        shape, dtype)
-        pad_linear_into(self._volume.data, ghost, host)
-        host.base.release(q)
-        return cla.Array(q, shape, dtype, data=buf)
-
-    def _to_tables(self) -> dict:
-        """Upload the padded samples and the tables of the truncated-octahedral model.
-
-        From the core model: the 144 x 10 coefficient stencils of Q_k (dense: each tet's 28
-        data offsets from its TO's base data point, flattened with the padded strides, and
-        (144, 28, 16) weights, zero-padded), barycentric matrices
-        (144, 4, 4); from :mod:`splineviz.compute.to_tables`: the (TO, tet) pieces per cell
-        parity class and the union of the data each class reads (for the cell bounds).
-        """
-        import pyopencl.array as cla
-
-        from splineviz.compute import to_program, to_tables
-        from splineviz.compute.to_tables import cell_classes
-        from splineviz.core.partitions import truncated_octahedra as to
-        from splineviz.core.splines import to_quadratic
-
-        q = self._device.queue
-        k = _to_k(self._model_kwargs)  # the core spline itself is not built (a float64 copy)
-        ghost = GHOSTS["MODEL_TO"]
-        if ghost != to_quadratic.GHOST_LAYERS:
-            raise AssertionError("TO ghost layers differ from the core model")  # a bug
-        self._data = self._padded_samples(ghost)
-        _, py, pz = self._data.shape
-        strides = np.array([py * pz, pz, 1], dtype=np.int64)
-        self._strides = (py, pz)
-        tables = to_tables.stencils(k)
-        self._to_stencil = tables[0][0].shape[0]
-        if any(o.shape[0] != self._to_stencil for o, _ in tables):
-            raise AssertionError("TO stencils of different sizes")  # a bug: all read 28
-        # dense (144, K, 16): per tet, per data value, its weights in the 10 coefficients
-        # (a float16 of the kernel)
-        self._to_dense = [
-            cla.to_device(q, np.stack([o @ strides for o, _ in tables]).astype(np.int32)),
-            cla.to_device(q, _padded_rows(np.stack([w.T for _, w in tables]), 16))]
-        self._negmass = float(max(np.sum(np.clip(-w, 0, None), axis=1).max()
-                                  for _, w in tables))
-        start, centre, tet = cell_classes()
-        # base data point of each piece's TO relative to the cell corner: centre - 1/2
-        base_off = np.rint(centre.astype(np.float64) - 0.5).astype(np.int64)
-        self._ent = {
-            "start": cla.to_device(q, start),
-            "centre": cla.to_device(q, np.c_[centre, np.zeros(len(centre))].astype(np.float32)),
-            "base": cla.to_device(q, (base_off @ strides).astype(np.int32)),
-            "tet": cla.to_device(q, tet),
-        }
-        if np.diff(start).max() > 32 * TO_WORDS:
-            raise AssertionError("more pieces per cell than the bit set holds")  # a bug
-        # the data each class reads (its union: the conservative cell bounds and the private
-        # copy the generated relevance test sums, see splineviz.compute.to_program)
-        pts = to_tables.class_points(k, TO_WORDS)
-        self._nunion = int(np.diff(pts["union_start"]).max())
-        self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
-        self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
-        self._prelude = (to_program.relevance_source(k, TO_WORDS)
-                         + to_program.subcell_source(TO_WORDS))
-        self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
-        self._red = cla.to_device(
-            q, np.concatenate([_reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
-        return {"MODEL_TO": 1, "NCOEF": 10, "GHOST": ghost, "NWORDS": TO_WORDS,
-                "NUNION": self._nunion, "SKIP_ACTIVE": SKIP_ACTIVE}
-
-    def _type6_tables(self) -> dict:
-        """Upload the padded samples and the constant tables of a type-6 model.
-
-        All tables come from the core model (``self.spline.scheme``), so the kernel computes
-        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), per cube point
-        the tets whose B-net holds it (from ``tet_points``, (24, n_d)), barycentric matrices
-        (24, 4, 4) and the de Casteljau reduction tables of :mod:`splineviz.core.bform`.
-        """
-        import pyopencl.array as cla
-
-        from splineviz.core import bform
-        from splineviz.core.partitions import type6
-        from splineviz.core.splines import type6_rules
-
-        q = self._device.queue
-        spline = self.spline
-        scheme = spline.scheme
-        ghost = 1
-        self._data = self._padded_samples(ghost)
-        _, py, pz = self._data.shape
-        self._strides = (py, pz)
-        stencil = (type6_rules.OFFSETS @ np.array([py * pz, pz, 1])).astype(np.int32)
-        self._stencil = cla.to_device(q, stencil)
-        # dense tet masks (24, 27, NCHUNK * 8): per tet and stencil value, its weights in the
-        # tet's coefficients (whole float8s of the kernel)
-        self._tet_dense = cla.to_device(q, _padded_rows(scheme.tet_masks.transpose(0, 2, 1), 8))
-        self._cube_program, order = _cube_program(scheme)
-        self._cube_program = [cla.to_device(q, a) for a in self._cube_program]
-        # per program row (cube point), the bit set of the tets whose B-net holds it
-        point_tets = np.zeros(len(scheme.cube_points), np.uint32)
-        for t, points in enumerate(scheme.tet_points):
-            point_tets[points] |= np.uint32(1 << t)
-        self._point_tets = cla.to_device(q, point_tets[order])
-        self._bary = cla.to_device(
-            q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
-        red = [_reduction_table(k) for k in range(scheme.degree, 0, -1)]
-        self._red = cla.to_device(q, np.concatenate([r.ravel() for r in red]).astype(np.int32))
-        # largest negative weight mass of any coefficient (bounds of stencil_bounds)
-        self._negmass = float(np.max(np.sum(np.clip(-scheme.cube_masks, 0, None), axis=1)))
-        return {"MODEL_TYPE6": 1, "NCOEF": bform.n_coefficients(scheme.degree),
-                "NPOINTS": len(scheme.cube_points), "SKIP_ACTIVE": SKIP_ACTIVE}
+        negative mass (and the family's)."""
+        return [self._data.data, *(np.int32(v) for v in self._strides),
+                *(np.int32(c) for c in self._cells), np.float32(self._negmass),
+                *self.family.cell_args()]
 
     # -- classification ------------------------------------------------------------------
 
@@ -632,14 +411,12 @@ class RayCaster:
 
     def _new_epoch(self) -> None:
         """Invalidate every cached classification (new isovalue or new data)."""
-        visible = 0 if self._family in CACHED else None
+        visible = 0 if self._cached() else None
         if self._device is None:
             visible = None
-            if self.model == "trilinear":
-                vmin, vmax = numpy_cell_bounds(self._volume.data)
-                iso = np.float32(self._isovalue)
-                visible = int(np.count_nonzero((vmin <= iso) & (iso <= vmax)))
-        elif self._family in CACHED:
+            if self.family is not None:
+                visible = self.family.numpy_candidates(self._volume, self._isovalue)
+        elif self._cached():
             q = self._device.queue
             self._epoch += 1
             if self._epoch > MAX_EPOCH:
@@ -648,7 +425,7 @@ class RayCaster:
                 self._epoch = 1
             self._counts.fill(np.int32(0), queue=q)  # the pool is refilled from entry 0
         self.stats.update(active_cells=visible, active_tets=visible, classified="visible")
-        if self.model == "trilinear":
+        if self.family is not None and not self.family.counts_tets:
             self.stats["active_tets"] = None
 
     def classify_all(self) -> Classification:
@@ -678,42 +455,7 @@ class RayCaster:
         del flags
         n = int(count.get(queue=q)[0])
         cells = listed[:n].get(queue=q) if n else np.zeros(0, np.int32)
-        relevant = codes = None
-        if self._family == "MODEL_TYPE6":
-            relevant, codes = np.zeros(n, np.int32), np.zeros(n, np.uint32)
-            if n:
-                nrel = cla.empty(q, n, np.int32)
-                code_buf = cla.empty(q, n, np.uint32)
-                _, ny, nz = self._volume.shape
-                # room in the pool for every candidate brick, and their entries taken
-                ijk = np.stack(np.unravel_index(cells, self._cells))
-                bricks = np.unique(np.ravel_multi_index(ijk >> 1, self._levels[0][1:]))
-                self._grow_pool(int(self._counts[2:3].get(queue=q)[0]) + len(bricks))
-                self._ray_kernel("brick_entries")(
-                    q, (len(bricks),), None, cla.to_device(q, bricks.astype(np.int32)).data,
-                    *self._cache_args()[:-1])
-                self._ray_kernel("tet_codes")(
-                    q, (n,), None, self._data.data, np.int32(self._strides[0]),
-                    np.int32(self._strides[1]), np.int32(ny), np.int32(nz), listed.data,
-                    self._stencil.data, *(a.data for a in self._cube_program),
-                    self._point_tets.data, np.float32(self._negmass), iso,
-                    *self._cache_args()[:-1], code_buf.data, nrel.data)
-                relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
-            # the cache is complete: later frames count nothing new
-            self._counts[:2].set(
-                np.array([np.count_nonzero(relevant), relevant.sum()], np.int32), queue=q)
-        elif self._family == "MODEL_TO":
-            relevant, codes = np.zeros(n, np.int32), np.zeros((n, TO_WORDS), np.uint32)
-            if n:
-                nrel = cla.empty(q, n, np.int32)
-                bits = cla.empty(q, n * TO_WORDS, np.uint32)
-                _, cy, cz = self._cells
-                self._ray_kernel("to_codes")(
-                    q, (n,), None, self._data.data, np.int32(self._strides[0]),
-                    np.int32(self._strides[1]), np.int32(cy), np.int32(cz), listed.data,
-                    self._cls_start.data, self._cls_offsets.data, np.float32(self._negmass), iso,
-                    bits.data, nrel.data)
-                relevant, codes = nrel.get(queue=q), bits.get(queue=q).reshape(n, TO_WORDS)
+        relevant, codes = self.family.classify(self, listed, cells, iso)
         if relevant is None:
             self.stats.update(active_cells=n, active_tets=None)
         else:
@@ -826,7 +568,7 @@ class RayCaster:
 
     def _check_placement(self, placement: Placement) -> None:
         """Refuse a placement that does not fit this caster's volume and model."""
-        if placement.centred != (self._family == "MODEL_TYPE6"):
+        if placement.centred != self.family.centred:
             raise RayCastError(f"the brick's cells do not match the {self.model} model's "
                                f"({'centred' if placement.centred else 'unit'} cells)")
         for a in range(3):
@@ -896,7 +638,7 @@ class RayCaster:
             camera = self._whole_clipping(camera, placement)
             origin = np.asarray(placement.origin, dtype=np.float64)
             shape = placement.shape
-            grid = tuple(n - 1 + (self._family == "MODEL_TYPE6") for n in shape)
+            grid = self._grid(shape)
             lo, hi = zip(*placement.cells, strict=True)
             off = placement.offset
         spacing = np.asarray(vol.spacing, dtype=np.float64)
@@ -928,18 +670,9 @@ class RayCaster:
         # one float8 per pixel only when asked for (32 bytes a pixel otherwise unused)
         hess = cla.empty(q, (n if hessian else 1, 8), np.float32)
         nx, ny, nz = shape
-        model_args = []
-        if self._family == "MODEL_TYPE6":
-            model_args = [*self._cache_args(), self._stencil.data, self._tet_dense.data,
-                          *(a.data for a in self._cube_program), self._point_tets.data,
-                          self._bary.data, self._red.data]
-        elif self._family == "MODEL_TO":
-            e = self._ent
-            model_args = [*self._cache_args(), self._ranges.data, self._cls_start.data,
-                          self._cls_offsets.data, e["start"].data, e["centre"].data,
-                          e["base"].data, e["tet"].data,
-                          *(a.data for a in self._to_dense), self._bary.data, self._red.data]
-        shift = 0.5 if self._family == "MODEL_TYPE6" else 0.0
+        model_args = [*self._cache_args()] if self._cached() else []
+        model_args += self.family.ray_args(self)
+        shift = 0.5 if self.family.centred else 0.0
         # a fixed work-group size, the launch padded to whole groups: PoCL compiles a kernel
         # per work-group size, and one chosen from each frame size made every new preview
         # size a 0.2-0.5 s compile in the middle of a drag
@@ -955,7 +688,7 @@ class RayCaster:
               np.float32(depth_b), hit.data, pos.data, nor.data, depth.data, color.data,
               np.int32(bool(hessian)), hess.data, np.int32(w), np.int32(h), np.int32(c0),
               np.int32(r0), np.int32(ww), np.int32(wh))
-        if self._family in CACHED:
+        if self._cached():
             cells, tets, asked = (int(v) for v in self._counts.get(queue=q))
             if self.stats.get("classified") == "visible":
                 self.stats.update(active_cells=cells, active_tets=tets)
@@ -975,6 +708,7 @@ class RayCaster:
             hess_w, grad_norm = _world_hessian(hess.get(queue=q).reshape(wh, ww, 8))
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(wh, ww),
                          color.get(queue=q).reshape(wh, ww, 4), hess_w, grad_norm)
+
 
 
 def _world_hessian(hv: np.ndarray):
@@ -1009,88 +743,13 @@ def _crop(frame: ref.Frame, window) -> ref.Frame:
         frame.gradient_norm)))
 
 
-def _to_k(model_kwargs: dict) -> float:
-    """The ``k`` of Q_k from the model options, with the core model's default and check."""
-    import inspect
-
-    from splineviz.core.splines.to_quadratic import TOQuadraticSpline
-
-    default = inspect.signature(TOQuadraticSpline).parameters["k"].default
-    k = float(model_kwargs.get("k", default))
-    if not k >= 1:
-        raise RayCastError(f"Q_k needs k >= 1, got {k}")
-    return k
-
 
 def _initial_pool(bricks: int) -> int:
     """Entries of a new pool: enough for a view of a typical surface; it grows on demand."""
     return int(min(MAX_POOL, max(4096, bricks // 32)))
 
 
-def _reduction_table(degree: int) -> np.ndarray:
-    """(n_{degree-1}, 4) positions of alpha + e_m among the degree-``degree`` multi-indices
-    (the de Casteljau step of :mod:`splineviz.core.bform`, as a table for the kernel)."""
-    from splineviz.core import bform
 
-    pos = bform.index_map(degree)
-    lower = bform.multi_indices(degree - 1)
-    out = np.empty((len(lower), 4), dtype=np.int32)
-    for a, alpha in enumerate(lower):
-        for m in range(4):
-            beta = [int(v) for v in alpha]
-            beta[m] += 1
-            out[a, m] = pos[tuple(beta)]
-    return out
-
-
-def _cube_program(scheme):
-    """All cube coefficients of a type-6 scheme as one ordered sparse program (thesis §5.1-5.2).
-
-    Row r computes cube point ``order[r]``: the determining set first, from the 27 stencil
-    values (columns 0..26, weights of ``scheme.determining_masks``), then every other point by
-    its averaging rule in application order, from points of earlier rows (column 27 + row);
-    the same values as :func:`splineviz.core.splines.type6_rules.apply_rules`, with about
-    40 % of the multiply-adds of the full cube masks for cubic-c1 (840 instead of 2061).
-
-    Returns
-    -------
-    (row_ptr int32 (P+1,), cols int32, weights float32), order (P,) int
-    """
-    order = [int(p) for p in scheme.determining] + [int(t) for t, _, _ in scheme.rules]
-    if sorted(order) != list(range(len(scheme.cube_points))):
-        raise AssertionError("the rules do not give every cube point once")  # a bug
-    row = {p: r for r, p in enumerate(order)}
-    rows = [(np.flatnonzero(m), m[m != 0]) for m in scheme.determining_masks]
-    for target, src, w in scheme.rules:
-        if max(row[int(p)] for p in src) >= row[int(target)]:
-            raise AssertionError("a rule reads a point computed after it")  # a bug
-        rows.append((27 + np.array([row[int(p)] for p in src]), np.asarray(w, float)))
-    row_ptr = np.concatenate([[0], np.cumsum([len(c) for c, _ in rows])]).astype(np.int32)
-    cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
-    weights = np.concatenate([w for _, w in rows]).astype(np.float32)
-    return (row_ptr, cols, weights), np.array(order)
-
-
-def _padded_rows(weights: np.ndarray, width: int) -> np.ndarray:
-    """Dense coefficient weights ``(T, K, C)`` as float32, the last axis zero-padded to a
-    multiple of ``width`` (whole vectors of the ray kernel): ``(T, K, width * ceil(C /
-    width))``."""
-    t, k, c = weights.shape
-    out = np.zeros((t, k, width * -(-c // width)), np.float32)
-    out[..., :c] = weights
-    return out
-
-
-def cla_sum(arr, queue) -> float:
-    import pyopencl.array as cla
-
-    return cla.sum(arr, queue=queue).get()
-
-
-def cla_count_nonzero(arr, queue) -> int:
-    import pyopencl.array as cla
-
-    return int(cla.sum((arr != 0).astype(np.int32), queue=queue).get())
 
 
 _scan_cache: dict = {}
@@ -1116,7 +775,3 @@ def _compaction_kernel(context):
         _scan_cache[key] = knl
     return knl
 
-
-def get_raycast_device(preference=None):
-    """The device the ray caster would use (raises NoDeviceError when there is none)."""
-    return get_device(preference)
