@@ -180,27 +180,36 @@ class CustomKernelFamily(KernelFamily):
 
     1. Write ``mykernel.cl`` beside the plugin's module, defining::
 
-           float custom_cell_root(__global const float *data, offset_t base, int SY, int SZ,
+           float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int SZ,
                                   float3 p, float3 d, float len, float iso, float3 *grad,
                                   int want_hess, float *hess);
 
-       the first root of ``s(cell + p + r d) = iso`` for ``r`` in ``[0, len]`` (-1 if none)
-       on the unit cell whose device sample ``(cell + (ghost, ghost, ghost))`` is
-       ``data[base]`` (``data[base + (a * SY + b) * SZ + c]`` is sample ``+ (a, b, c)``; the
-       cell reads at most ``reach`` samples past ``base`` per axis, and ``offset_t`` is
-       ``int``, or ``long`` for volumes past 2^31 samples); ``*grad`` receives the index-space
-       gradient at the root and, when ``want_hess``, ``hess[0..5]`` its Hessian (xx, yy, zz,
-       xy, xz, yz). It must find the FIRST root (no fixed-step sampling).
-    2. Subclass this class: ``name`` (the family's registry key), ``define`` (an unused
-       ``-D`` name, e.g. ``"MODEL_MYSPLINE"``), ``source = ("my_package", "mykernel.cl")``,
-       ``reach`` and ``ghost_layers``, ``negmass`` if the spline on a cell is not within the
-       min/max of the samples it reads, ``bricks = False`` if a brick's samples do not carry
-       the same spline, and :meth:`device_samples`.
-    3. In ``register(api)``: ``api.add_model(name, target, ..., kernel_family=MyFamily)``.
+       the first root ``r`` in ``[0, len]`` (-1 if none) of ``s(cell + p + r d) = iso`` on
+       the unit cell ``[i, i+1] x [j, j+1] x [k, k+1]`` of index space (``p``: the ray's
+       point relative to the cell's corner, ``d``: its index-space direction). ``data`` holds
+       the family's device samples (``DATA_T`` is ``float``); ``data[base]`` is device sample
+       ``(i, j, k)`` (with ``ghost_layers`` g, the volume's sample ``(i, j, k)`` is device
+       sample ``(i + g, j + g, k + g)``), ``data[base + (a * SY + b) * SZ + c]`` is device
+       sample ``(i + a, j + b, k + c)``, and the cell may read ``a, b, c`` up to ``reach``.
+       ``offset_t`` is ``int``, or ``long`` for volumes past 2^31 device samples (compute
+       offsets in it). ``*grad`` receives the index-space gradient at the root and, when
+       ``want_hess``, ``hess[0..5]`` the index-space Hessian (xx, yy, zz, xy, xz, yz). It
+       must find the FIRST root exactly (e.g. Bernstein subdivision; no fixed-step sampling,
+       which misses thin features). The source is prepended to ``kernels/raycast.cl``, which
+       calls it from the ray kernel (``MODEL_CUSTOM``).
+    2. Subclass this class: ``name`` (the family's registry key, usually the model's name),
+       ``source = ("my_package", "mykernel.cl")``, ``ghost_layers`` and ``reach``,
+       ``negmass`` if the spline on a cell is not within the min/max of the device samples
+       the cell reads, ``bricks = False`` if a brick's samples do not carry the same spline
+       (a global prefilter), and :meth:`device_samples`.
+    3. In ``register(api)``: ``api.add_model(name, target, ..., kernel_family=MyFamily)``;
+       :class:`~splineviz.RayCaster` then renders the model on the OpenCL device, and every
+       front end (GUI, CLI, sessions) lists it as a kernel model.
 
-    The value bounds of a cell (octree, empty-space leaping) are the min/max of the samples
-    ``base .. base + reach`` per axis, widened by ``negmass`` times their range: they must
-    hold the spline on the cell.
+    The value bounds of a cell (octree, empty-space leaping) are the min/max of the device
+    samples ``base .. base + reach`` per axis, widened by ``negmass`` times their range: they
+    must hold the spline on the cell. The cells are unit cells between samples; their
+    classification is not cached (``stats["active_cells"]`` stays None).
     """
 
     define = "MODEL_CUSTOM"
