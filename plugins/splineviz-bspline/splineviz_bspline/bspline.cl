@@ -35,21 +35,20 @@ __constant float bs_power[4][4] = {
 __constant float bs_binom9[10] = {1.0f, 9.0f, 36.0f, 84.0f, 126.0f, 126.0f, 84.0f, 36.0f,
                                   9.0f, 1.0f};
 
-// Scaled Bernstein coefficients (binomial(3, i) times the Bernstein coefficients) on u in
-// [0, 1] of the 4 weights along t = t0 + u (t1 - t0): the blossom values
-// w[t0^(3-i), t1^i] of w(t) = a + b t + c t^2 + e t^3, w[x,y,z] = a + b (x+y+z)/3
+// Scaled Bernstein coefficients (binomial(3, i) times the Bernstein coefficients, i = 0..3 in
+// the components) on u in [0, 1] of the 4 weights along t = t0 + u (t1 - t0): the blossom
+// values w[t0^(3-i), t1^i] of w(t) = a + b t + c t^2 + e t^3, w[x,y,z] = a + b (x+y+z)/3
 // + c (xy+xz+yz)/3 + e xyz.
-inline void bs_axis(float t0, float t1, float w[4][4])
+inline void bs_axis(float t0, float t1, float4 *w)
 {
-    const float s1[4] = {3.0f * t0, 2.0f * t0 + t1, t0 + 2.0f * t1, 3.0f * t1};
-    const float s2[4] = {3.0f * t0 * t0, t0 * t0 + 2.0f * t0 * t1, 2.0f * t0 * t1 + t1 * t1,
-                         3.0f * t1 * t1};
-    const float s3[4] = {t0 * t0 * t0, t0 * t0 * t1, t0 * t1 * t1, t1 * t1 * t1};
-    const float scale[4] = {1.0f, 3.0f, 3.0f, 1.0f};
+    const float4 s1 = (float4)(t0, (2.0f * t0 + t1) / 3.0f, (t0 + 2.0f * t1) / 3.0f, t1);
+    const float4 s2 = (float4)(t0 * t0, (t0 * t0 + 2.0f * t0 * t1) / 3.0f,
+                               (2.0f * t0 * t1 + t1 * t1) / 3.0f, t1 * t1);
+    const float4 s3 = (float4)(t0 * t0 * t0, t0 * t0 * t1, t0 * t1 * t1, t1 * t1 * t1);
+    const float4 scale = (float4)(1.0f, 3.0f, 3.0f, 1.0f);
     for (int m = 0; m < 4; ++m)
-        for (int i = 0; i < 4; ++i)
-            w[m][i] = scale[i] * (bs_power[m][0] + bs_power[m][1] * s1[i] / 3.0f
-                                  + bs_power[m][2] * s2[i] / 3.0f + bs_power[m][3] * s3[i]);
+        w[m] = scale * (bs_power[m][0] + bs_power[m][1] * s1 + bs_power[m][2] * s2
+                        + bs_power[m][3] * s3);
 }
 
 // Weights and their first and second derivatives of the offsets -1..2 at t.
@@ -176,32 +175,48 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
 {
     float c[4][4][4];
     const int sx = SY * SZ;
+    float lo = INFINITY, hi = -INFINITY;
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b)
-            for (int e = 0; e < 4; ++e)
-                c[a][b][e] = (float)data[base + a * sx + b * SZ + e];
-    // the restriction to the segment in scaled Bernstein form, axis by axis (z, y, x)
-    float wx[4][4], wy[4][4], wz[4][4];
+            for (int e = 0; e < 4; ++e) {
+                const float v = (float)data[base + a * sx + b * SZ + e];
+                c[a][b][e] = v;
+                lo = v < lo ? v : lo;
+                hi = v > hi ? v : hi;
+            }
+    // the cell's own bounds (the octree holds those of 2^3 cells): most cells a ray crosses
+    // near the surface end here
+    if (!(lo <= iso && iso <= hi)) return -1.0f;
+    // the restriction to the segment in scaled Bernstein form, axis by axis (z, y, x):
+    // products of scaled Bernstein forms are convolutions of their coefficient vectors
+    float4 wx[4], wy[4], wz[4];
     bs_axis(p.x, p.x + len * d.x, wx);
     bs_axis(p.y, p.y + len * d.y, wy);
     bs_axis(p.z, p.z + len * d.z, wz);
-    float h[4][7];
+    float16 acc = (float16)(0.0f);
     for (int a = 0; a < 4; ++a) {
-        for (int k = 0; k < 7; ++k) h[a][k] = 0.0f;
+        float8 h = (float8)(0.0f);  // degree 6 (7 used)
         for (int b = 0; b < 4; ++b) {
-            float g[4];
-            for (int i = 0; i < 4; ++i)
-                g[i] = c[a][b][0] * wz[0][i] + c[a][b][1] * wz[1][i] + c[a][b][2] * wz[2][i]
-                       + c[a][b][3] * wz[3][i];
-            for (int i = 0; i < 4; ++i)
-                for (int j = 0; j < 4; ++j) h[a][i + j] += g[i] * wy[b][j];
+            const float4 g = c[a][b][0] * wz[0] + c[a][b][1] * wz[1] + c[a][b][2] * wz[2]
+                             + c[a][b][3] * wz[3];
+            const float4 w = wy[b];
+            h += g.s0 * (float8)(w, 0.0f, 0.0f, 0.0f, 0.0f)
+                 + g.s1 * (float8)(0.0f, w, 0.0f, 0.0f, 0.0f)
+                 + g.s2 * (float8)(0.0f, 0.0f, w, 0.0f, 0.0f)
+                 + g.s3 * (float8)(0.0f, 0.0f, 0.0f, w, 0.0f);
         }
+        const float4 w = wx[a];
+        const float4 z4 = (float4)(0.0f);
+        acc += h.s0 * (float16)(w, z4, z4, z4)
+               + h.s1 * (float16)(0.0f, w, z4, z4, z4.s012)
+               + h.s2 * (float16)(0.0f, 0.0f, w, z4, z4, z4.s01)
+               + h.s3 * (float16)(0.0f, 0.0f, 0.0f, w, z4, z4, z4.s0)
+               + h.s4 * (float16)(z4, w, z4, z4)
+               + h.s5 * (float16)(z4, 0.0f, w, z4, z4.s012)
+               + h.s6 * (float16)(z4, 0.0f, 0.0f, w, z4, z4.s01);
     }
-    float f[BS_DEGREE + 1];
-    for (int k = 0; k <= BS_DEGREE; ++k) f[k] = 0.0f;
-    for (int a = 0; a < 4; ++a)
-        for (int i = 0; i < 7; ++i)
-            for (int j = 0; j < 4; ++j) f[i + j] += h[a][i] * wx[a][j];
+    float f[BS_DEGREE + 1] = {acc.s0, acc.s1, acc.s2, acc.s3, acc.s4,
+                              acc.s5, acc.s6, acc.s7, acc.s8, acc.s9};
     bool below = false, above = false;
     for (int k = 0; k <= BS_DEGREE; ++k) {
         f[k] = f[k] / bs_binom9[k] - iso;

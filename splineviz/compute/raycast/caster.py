@@ -86,6 +86,7 @@ class Limits:
         return self.samples > self.max_samples_32
 
 
+@dataclass
 class Classification:
     """Every cell classified at once (:meth:`RayCaster.classify_all`).
 
@@ -568,6 +569,9 @@ class RayCaster:
 
     def _check_placement(self, placement: Placement) -> None:
         """Refuse a placement that does not fit this caster's volume and model."""
+        if self.family is None or not self.family.bricks:
+            raise RayCastError(f"the {self.model} model cannot be rendered in bricks (a "
+                               f"brick's samples do not carry the whole volume's spline)")
         if placement.centred != self.family.centred:
             raise RayCastError(f"the brick's cells do not match the {self.model} model's "
                                f"({'centred' if placement.centred else 'unit'} cells)")
