@@ -183,6 +183,19 @@ class RayCaster:
             self.stats["path"] = "opencl"
         self.set_volume(volume)
 
+    @property
+    def _family(self) -> str | None:
+        """The ``-D`` define of the kernel family (None: NumPy path only)."""
+        return None if self.family is None else self.family.define
+
+    def __getattr__(self, name: str):
+        # the family's buffers and tables (e.g. the TO cell ranges), for inspection and tests
+        family = self.__dict__.get("family")
+        if name.startswith("_") and not name.startswith("__") and family is not None \
+                and name in family.__dict__:
+            return family.__dict__[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
     # -- data ----------------------------------------------------------------------------
 
     @property
