@@ -31,6 +31,9 @@ __constant float bs_power[4][4] = {
     {0.0f, 0.0f, 0.0f, 1.0f / 6.0f},
 };
 
+// the scaled Bernstein coefficients of a cubic are binomial(3, i) times its coefficients
+#define BS_UNSCALE3 ((float4)(1.0f, 1.0f / 3.0f, 1.0f / 3.0f, 1.0f))
+
 // binomial(9, k)
 __constant float bs_binom9[10] = {1.0f, 9.0f, 36.0f, 84.0f, 126.0f, 126.0f, 84.0f, 36.0f,
                                   9.0f, 1.0f};
@@ -173,37 +176,42 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
                        float3 p, float3 d, float len, float iso, float3 *grad,
                        int want_hess, float *hess)
 {
-    float c[4][4][4];
     const int sx = SY * SZ;
-    float lo = INFINITY, hi = -INFINITY;
-    for (int a = 0; a < 4; ++a)
-        for (int b = 0; b < 4; ++b)
-            for (int e = 0; e < 4; ++e) {
-                const float v = (float)data[base + a * sx + b * SZ + e];
-                c[a][b][e] = v;
-                lo = v < lo ? v : lo;
-                hi = v > hi ? v : hi;
-            }
-    // the cell's own bounds (the octree holds those of 2^3 cells): most cells a ray crosses
-    // near the surface end here
-    if (!(lo <= iso && iso <= hi)) return -1.0f;
     // the restriction to the segment in scaled Bernstein form, axis by axis (z, y, x):
     // products of scaled Bernstein forms are convolutions of their coefficient vectors
     float4 wx[4], wy[4], wz[4];
     bs_axis(p.x, p.x + len * d.x, wx);
     bs_axis(p.y, p.y + len * d.y, wy);
     bs_axis(p.z, p.z + len * d.z, wz);
+    // g[a][b]: the coefficient row (a, b, .) along z restricted to the segment; f is a convex
+    // combination of the g (the x and y weights are >= 0 and sum to 1), so the range of their
+    // Bernstein coefficients bounds f on the segment: most candidate cells a ray crosses end
+    // here, before the products
+    float4 g[4][4];
+    float4 glo = (float4)(INFINITY), ghi = (float4)(-INFINITY);
+    for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+            const offset_t row = base + a * sx + b * SZ;
+            g[a][b] = (float)data[row] * wz[0] + (float)data[row + 1] * wz[1]
+                      + (float)data[row + 2] * wz[2] + (float)data[row + 3] * wz[3];
+            // comparisons, not fmin/fmax: PoCL calls those out of line
+            const float4 u = g[a][b] * BS_UNSCALE3;
+            glo = select(glo, u, u < glo);
+            ghi = select(ghi, u, u > ghi);
+        }
+    if (!((glo.s0 <= iso || glo.s1 <= iso || glo.s2 <= iso || glo.s3 <= iso)
+          && (ghi.s0 >= iso || ghi.s1 >= iso || ghi.s2 >= iso || ghi.s3 >= iso)))
+        return -1.0f;
     float16 acc = (float16)(0.0f);
     for (int a = 0; a < 4; ++a) {
         float8 h = (float8)(0.0f);  // degree 6 (7 used)
         for (int b = 0; b < 4; ++b) {
-            const float4 g = c[a][b][0] * wz[0] + c[a][b][1] * wz[1] + c[a][b][2] * wz[2]
-                             + c[a][b][3] * wz[3];
+            const float4 ga = g[a][b];
             const float4 w = wy[b];
-            h += g.s0 * (float8)(w, 0.0f, 0.0f, 0.0f, 0.0f)
-                 + g.s1 * (float8)(0.0f, w, 0.0f, 0.0f, 0.0f)
-                 + g.s2 * (float8)(0.0f, 0.0f, w, 0.0f, 0.0f)
-                 + g.s3 * (float8)(0.0f, 0.0f, 0.0f, w, 0.0f);
+            h += ga.s0 * (float8)(w, 0.0f, 0.0f, 0.0f, 0.0f)
+                 + ga.s1 * (float8)(0.0f, w, 0.0f, 0.0f, 0.0f)
+                 + ga.s2 * (float8)(0.0f, 0.0f, w, 0.0f, 0.0f)
+                 + ga.s3 * (float8)(0.0f, 0.0f, 0.0f, w, 0.0f);
         }
         const float4 w = wx[a];
         const float4 z4 = (float4)(0.0f);
@@ -241,9 +249,10 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
         for (int b = 0; b < 4; ++b) {
             float z0 = 0.0f, z1 = 0.0f, z2 = 0.0f;
             for (int e = 0; e < 4; ++e) {
-                z0 += c[a][b][e] * w[2][e];
-                z1 += c[a][b][e] * dw[2][e];
-                z2 += c[a][b][e] * d2w[2][e];
+                const float v = (float)data[base + a * sx + b * SZ + e];
+                z0 += v * w[2][e];
+                z1 += v * dw[2][e];
+                z2 += v * d2w[2][e];
             }
             v00 += z0 * w[1][b];
             v10 += z0 * dw[1][b];
