@@ -76,9 +76,10 @@ class KernelFamily:
 
     def sample_type(self, data: np.ndarray) -> tuple[type, str]:
         """(numpy type, OpenCL C type) of the device samples of ``data``."""
-        from splineviz.compute.raycast.samples import sample_type_for
+        from splineviz.compute import raycast
 
-        return sample_type_for(data, self.ghost_layers)
+        # looked up on the package, where callers and tests may replace it
+        return raycast.sample_type_for(data, self.ghost_layers)
 
     def extra_bytes(self, bricks: int) -> dict:
         """Device bytes of its per-data buffers besides samples, octree and cache, for
