@@ -626,7 +626,7 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
 // distinct B-net point of the class's pieces is computed once: min <= iso <= max over a
 // piece's coefficients iff one is <= iso and one is >= iso, so each point marks the pieces
 // whose B-net holds it in two masks (to_class_points, generated from the class tables by
-// splineviz/compute/to_program.py and prepended to this file). *range receives a bound of
+// splineviz/compute/raycast/to_program.py and prepended to this file). *range receives a bound of
 // the spline on the cell that does not depend on the isovalue: the points' (min, max) when
 // they were computed, else the cheap bounds.
 inline int to_relevance(__global const DATA_T *pdata, offset_t corner, int cls,

@@ -1,13 +1,13 @@
 """The truncated-octahedral kernel family (``"to-quadratic"``, thesis §5.2).
 
 Unit cells of the grid with per-parity-class tables of the (TO, tet) pieces meeting a cell
-(:mod:`splineviz.compute.to_tables`); a cell's relevance bit set computes each distinct B-net
-point of its pieces once (generated straight-line code, :mod:`splineviz.compute.to_program`),
-and the ray tests only the relevant pieces of the subcells (5^3 per cell) its segment
-crosses. Each classified cell's range (the min/max of its points, 2 bytes) is kept while the
-data stay, so a later isovalue outside it skips the cell without its sums (isovalue-independent
-work once per data change, thesis §6.1.1). The tables take a second of Python and are kept on
-disk between runs (:mod:`splineviz.compute.table_cache`).
+(:mod:`.to_tables`); a cell's relevance bit set computes each distinct B-net point of its
+pieces once (generated straight-line code, :mod:`.to_program`), and the ray tests only the
+relevant pieces of the subcells (5^3 per cell) its segment crosses. Each classified cell's
+range (the min/max of its points, 2 bytes) is kept while the data stay, so a later isovalue
+outside it skips the cell without its sums (isovalue-independent work once per data change,
+thesis §6.1.1). The tables take a second of Python and are kept on disk between runs
+(:mod:`splineviz.compute.table_cache`).
 """
 
 from __future__ import annotations
@@ -45,13 +45,13 @@ class TruncatedOctahedraFamily(KernelFamily):
         From the core model: the 144 x 10 coefficient stencils of Q_k (dense: each tet's 28
         data offsets from its TO's base data point, flattened with the padded strides, and
         (144, 28, 16) weights, zero-padded), barycentric matrices
-        (144, 4, 4); from :mod:`splineviz.compute.to_tables`: the (TO, tet) pieces per cell
+        (144, 4, 4); from :mod:`splineviz.compute.raycast.to_tables`: the (TO, tet) pieces per cell
         parity class and the union of the data each class reads (for the cell bounds).
         """
         import pyopencl.array as cla
 
-        from splineviz.compute import to_program, to_tables
-        from splineviz.compute.to_tables import cell_classes
+        from splineviz.compute.raycast import to_program, to_tables
+        from splineviz.compute.raycast.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
 
@@ -87,7 +87,7 @@ class TruncatedOctahedraFamily(KernelFamily):
         if np.diff(start).max() > 32 * TO_WORDS:
             raise AssertionError("more pieces per cell than the bit set holds")  # a bug
         # the data each class reads (its union: the conservative cell bounds and the private
-        # copy the generated relevance test sums, see splineviz.compute.to_program)
+        # copy the generated relevance test sums, see splineviz.compute.raycast.to_program)
         pts = to_tables.class_points(k, TO_WORDS)
         self._nunion = int(np.diff(pts["union_start"]).max())
         self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
