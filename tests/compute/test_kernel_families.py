@@ -9,7 +9,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import splineviz as sv
 from splineviz.compute import raycast
 from splineviz.compute.raycast import (
     KERNEL_FAMILIES,
@@ -190,10 +189,14 @@ def test_a_family_whose_bricks_carry_another_spline_refuses_a_placement(ml, monk
         rc.render(cameras(vol)[0], (8, 6), placement=placement)
 
 
-def test_doctest_example_still_holds():
-    x = np.linspace(-1, 1, 9)
-    vol = sv.Volume(np.add.outer(np.add.outer(x**2, x**2), x**2))
-    rc = sv.RayCaster(vol, model="trilinear", device="numpy")
-    rc.set_isovalue(0.5)
-    frame = rc.render(sv.Camera((4, -20, 6), (4, 4, 4)), size=(32, 24))
-    assert frame.hit[12, 16]
+
+@needs_cl
+def test_whole_grid_passes_past_32_bit_cell_indices_are_refused(ml, monkeypatch):
+    vol, iso = ml
+    rc = RayCaster(vol, model="cubic-c1", device="cpu")
+    rc.set_isovalue(iso)
+    monkeypatch.setattr(caster_module, "MAX_CELLS", 1000)
+    for call in (rc.classify_all, rc.skip_volume):
+        with pytest.raises(RayCastError, match="32-bit indices"):
+            call()
+    assert rc.render(cameras(vol)[0], (16, 12)).hit.any()  # frames need no such pass

@@ -31,6 +31,8 @@ RAY_GROUP = (8, 8)
 #: most samples (ghost layers included) the kernels address with 32-bit offsets; past it they
 #: are compiled with ``OFFSET64`` (64-bit sample offsets), when the device holds the volume
 MAX_SAMPLES = 2**31 - 1
+#: most cells a whole-grid pass (classify_all, skip_volume) numbers with 32-bit indices
+MAX_CELLS = 2**31 - 1
 #: epochs of the per-cell classification caches: 8 bits beside 24 bits of code or pool
 #: index, 0 = never valid
 MAX_EPOCH = 255
@@ -146,7 +148,10 @@ class RayCaster:
     relevant cells/tets found so far at this isovalue (type-6 and TO; ``None`` for
     trilinear) and ``classified`` is ``"visible"``; after :meth:`classify_all` they are the
     totals and ``classified`` is ``"all"``. ``classify_s`` is the time of the isovalue change.
-    A volume the device cannot hold raises :class:`RayCastError` before anything is allocated.
+    A volume the device cannot hold raises :class:`RayCastError` before anything is allocated
+    (:meth:`limits` says what it needs); past 2^31 device samples the kernels are compiled
+    with 64-bit sample offsets. ``family`` is the model's kernel family (None: the NumPy
+    reference renders it).
 
     Examples
     --------
@@ -456,6 +461,7 @@ class RayCaster:
 
         if self._device is None or self._isovalue is None:
             raise RayCastError("classify_all needs the OpenCL path and an isovalue")
+        self._check_cell_indices("classify_all")
         q = self._device.queue
         ctx = self._device.context
         iso = np.float32(self._isovalue)
@@ -477,6 +483,14 @@ class RayCaster:
                               active_tets=int(relevant.sum()))
         self.stats["classified"] = "all"
         return Classification(cells, relevant, codes)
+
+    def _check_cell_indices(self, what: str) -> None:
+        """Refuse a whole-grid pass whose flat cell indices do not fit 32 bits (the frames,
+        which need no such pass, cast any volume the device holds)."""
+        if int(np.prod(self._cells)) > MAX_CELLS:
+            raise RayCastError(f"{what} numbers the {'x'.join(map(str, self._cells))} cells "
+                               f"with 32-bit indices; render frames instead, which classify "
+                               f"the cells they reach")
 
     def active_cells(self) -> np.ndarray:
         """Flat indices (cell (i, j, k) -> (i*(ny-1) + j)*(nz-1) + k) of the candidate cells."""
@@ -513,6 +527,7 @@ class RayCaster:
 
         if self._device is None or self._isovalue is None:
             raise RayCastError("the skip volume exists on the OpenCL path after set_isovalue")
+        self._check_cell_indices("the skip volume")
         q = self._device.queue
         skip = cla.empty(q, int(np.prod(self._cells)), np.uint8)
         cx, cy, cz = self._cells
