@@ -2,8 +2,8 @@
 // data change, and the classification of every cell at once (RayCaster.classify_all).
 // Specialised by -D options: MODEL_TYPE6 (cubes centred at the samples, padded samples with
 // one ghost layer), MODEL_TO with GHOST (unit cells, parity-class tables), else trilinear;
-// MODEL_CUSTOM with CELL_REACH (a plugin's family: cell (i, j, k) reads the samples i..i+CELL_REACH
-// per axis, without the ghost offset); DATA_T the device type of the samples
+// MODEL_CUSTOM with CELL_REACH (a plugin's family: cell (i, j, k) reads the samples
+// i..i+CELL_REACH per axis, without a ghost offset); DATA_T the device type of the samples
 // (uchar/short/ushort for integer data, else float); OFFSET64 64-bit sample offsets.
 //
 // Cells (i, j, k) of the traversal grid (CX x CY x CZ) are numbered (i*CY + j)*CZ + k; the

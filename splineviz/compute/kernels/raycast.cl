@@ -523,8 +523,9 @@ inline float type6_cube_root(__global const DATA_T *pdata, offset_t base,
 // (averaging) rules from already computed ones (thesis §5.1-5.2, eq. (5.2);
 // type6_rules.apply_rules is the NumPy reference). Row r of the program (CSR over the
 // stencil values, then the coefficients of rows before r at 27 + row) is the r-th point.
-inline uint type6_tet_code(__global const DATA_T *pdata, offset_t base, __constant const int *stencil,
-                           __global const int *prog_ptr, __global const int *prog_cols,
+inline uint type6_tet_code(__global const DATA_T *pdata, offset_t base,
+                           __constant const int *stencil, __global const int *prog_ptr,
+                           __global const int *prog_cols,
                            __global const float *prog_w, __constant const uint *point_tets,
                            float negmass, float iso)
 {
