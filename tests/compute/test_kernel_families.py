@@ -81,10 +81,6 @@ class _Family(CustomKernelFamily):
         return np.pad(rc.volume.data, 1, mode="edge")
 
 
-def _register(api: PluginAPI):
-    api._commit()
-
-
 def test_a_plugin_registers_a_kernel_family_and_a_failure_rolls_it_back():
     api = PluginAPI("test-plugin")
     api.add_model("test-model", "splineviz.core.splines.trilinear:TrilinearSpline",

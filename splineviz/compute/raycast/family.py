@@ -14,6 +14,8 @@ the family class. Plugins add families with :func:`register_kernel_family` (thro
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+
 import numpy as np
 
 from splineviz.core.errors import SplinevizError
@@ -30,7 +32,7 @@ class KernelFamilyError(SplinevizError, ValueError):
     """A kernel family that cannot be registered (bad name, class or source)."""
 
 
-class KernelFamily:
+class KernelFamily(ABC):
     """The model-specific part of the OpenCL ray caster (one instance per ray caster).
 
     Class attributes
@@ -86,6 +88,7 @@ class KernelFamily:
         ``bricks`` level-1 nodes (per buffer name)."""
         return {}
 
+    @abstractmethod
     def upload(self, rc) -> dict:
         """Put the samples and tables on the device for ``rc``'s volume.
 
@@ -93,9 +96,8 @@ class KernelFamily:
         ``rc._negmass`` (the widening of the value bounds of classify.cl), keeps its own
         tables, and returns the defines of classify.cl.
         """
-        raise NotImplementedError
 
-    def allocate(self, rc) -> None:
+    def allocate(self, rc) -> None:  # noqa: B027  (most families keep no per-data buffers)
         """Per-data buffers of its kernels, after the octree (``rc._levels``) exists."""
 
     def defines(self, rc) -> dict:
@@ -223,10 +225,10 @@ class CustomKernelFamily(KernelFamily):
     cache_words = 0
     counts_tets = False
 
+    @abstractmethod
     def device_samples(self, rc) -> np.ndarray:
         """The float32 ``(nx + 2 g, ny + 2 g, nz + 2 g)`` device samples of ``rc.volume``
         (``g`` = :attr:`ghost_layers`), e.g. the coefficients of the spline."""
-        raise NotImplementedError
 
     def sample_type(self, data: np.ndarray) -> tuple[type, str]:
         return np.float32, "float"
