@@ -46,7 +46,6 @@ from splineviz.compute.raycast.caster import (
     MAX_SAMPLES,
     RAY_GROUP,
     Classification,
-    Limits,
     RayCaster,
     _shading_defines,
 )
@@ -64,6 +63,7 @@ from splineviz.compute.raycast.family import (
     register_kernel_family,
     renders_in_bricks,
 )
+from splineviz.compute.raycast.limits import Limits
 from splineviz.compute.raycast.samples import (
     SAMPLE_TYPES,
     numpy_cell_bounds,

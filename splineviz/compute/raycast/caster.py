@@ -18,6 +18,8 @@ from splineviz.compute.device import try_get_device
 from splineviz.compute.program import get_kernel
 from splineviz.compute.raycast.errors import RayCastError
 from splineviz.compute.raycast.family import SKIP_ACTIVE, family_class
+from splineviz.compute.raycast.frames import crop, empty_frame, world_hessian
+from splineviz.compute.raycast.limits import Limits
 from splineviz.compute.raycast.octree import octree_levels, octree_nodes
 from splineviz.compute.raycast.samples import numpy_cell_bounds
 from splineviz.core import raycast_reference as ref
@@ -42,50 +44,6 @@ MAX_POOL = 2**24 - 2
 #: share of the device's global memory the kept buffers may take (the frame buffers and the
 #: compaction of classify_all need room beside them)
 MEMORY_SHARE = 0.8
-
-
-@dataclass(frozen=True)
-class Limits:
-    """What a volume needs of the device and what the device offers
-    (:meth:`RayCaster.limits`).
-
-    Attributes
-    ----------
-    shape : (3,) samples per axis
-    samples : int
-        Device samples of the volume, ghost layers included.
-    need : dict
-        Device bytes of the kept buffers, per buffer name (:meth:`RayCaster.device_bytes`).
-    max_samples_32 : int
-        Most samples the kernels address with 32-bit offsets (:data:`MAX_SAMPLES`).
-    device_bytes : int
-        Bytes the kept buffers may take on the device (:data:`MEMORY_SHARE` of its memory).
-    max_buffer_bytes : int
-        Largest single buffer the device allocates.
-    """
-
-    shape: tuple
-    samples: int
-    need: dict
-    max_samples_32: int
-    device_bytes: int
-    max_buffer_bytes: int
-
-    @property
-    def total(self) -> int:
-        """Device bytes of all kept buffers."""
-        return int(sum(self.need.values()))
-
-    @property
-    def fits(self) -> bool:
-        """Whether the device holds the kept buffers."""
-        return (self.total <= self.device_bytes
-                and max(self.need.values()) <= self.max_buffer_bytes)
-
-    @property
-    def offsets_64(self) -> bool:
-        """Whether the kernels need 64-bit sample offsets (``OFFSET64``) for this volume."""
-        return self.samples > self.max_samples_32
 
 
 @dataclass
@@ -588,7 +546,7 @@ class RayCaster:
                 camera = self._whole_clipping(camera, placement)
                 planes = np.concatenate([planes, ref.normalize_clip_planes(
                     placement.face_planes(self._volume.spacing))])
-            frame = _crop(ref.reference_raycast(self.spline, camera, (w, h), self._isovalue,
+            frame = crop(ref.reference_raycast(self.spline, camera, (w, h), self._isovalue,
                                                 planes), (r0, r1, c0, c1))
         else:
             frame = self._render_cl(camera, w, h, planes, hessian, (r0, r1, c0, c1), placement)
@@ -659,7 +617,7 @@ class RayCaster:
         r0, r1, c0, c1 = (0, h, 0, w) if window is None else window
         ww, wh = c1 - c0, r1 - r0
         if ww == 0 or wh == 0:
-            return _empty_frame(wh, ww, hessian)
+            return empty_frame(wh, ww, hessian)
         # a brick casts in the whole volume's index space (the same floats as a single cast)
         if placement is None:
             origin = np.asarray(vol.origin, dtype=np.float64)
@@ -737,42 +695,9 @@ class RayCaster:
 
         hess_w = grad_norm = None
         if hessian:
-            hess_w, grad_norm = _world_hessian(hess.get(queue=q).reshape(wh, ww, 8))
+            hess_w, grad_norm = world_hessian(hess.get(queue=q).reshape(wh, ww, 8))
         return ref.Frame(hit_h, position, normal, depth.get(queue=q).reshape(wh, ww),
                          color.get(queue=q).reshape(wh, ww, 4), hess_w, grad_norm)
-
-
-
-def _world_hessian(hv: np.ndarray):
-    """(H, W, 3, 3) symmetric Hessians and (H, W) gradient norms from the kernel's (H, W, 8)
-    rows (xx, yy, zz, xy, xz, yz, |grad|, 0)."""
-    hv = hv.astype(np.float64)
-    i, j = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
-    hess_w = np.empty((*hv.shape[:2], 3, 3))
-    hess_w[..., i, j] = hv[..., :6]
-    hess_w[..., j, i] = hv[..., :6]
-    return hess_w, hv[..., 6]
-
-
-def _empty_frame(h: int, w: int, hessian: bool) -> ref.Frame:
-    """A frame of ``h`` x ``w`` pixels without hits (an empty window has none)."""
-    bg = [*(int(round(v * 255)) for v in ref.BACKGROUND), 255]
-    return ref.Frame(np.zeros((h, w), bool), np.full((h, w, 3), np.nan),
-                     np.full((h, w, 3), np.nan), np.ones((h, w), np.float32),
-                     np.tile(np.asarray(bg, np.uint8), (h, w, 1)),
-                     np.full((h, w, 3, 3), np.nan) if hessian else None,
-                     np.full((h, w), np.nan) if hessian else None)
-
-
-def _crop(frame: ref.Frame, window) -> ref.Frame:
-    """The pixels of ``window`` (r0, r1, c0, c1) of a frame."""
-    r0, r1, c0, c1 = window
-    if (r0, c0) == (0, 0) and (r1, c1) == frame.hit.shape:
-        return frame
-    sl = (slice(r0, r1), slice(c0, c1))
-    return ref.Frame(*(None if v is None else v[sl] for v in (
-        frame.hit, frame.position, frame.normal, frame.depth, frame.color, frame.hessian,
-        frame.gradient_norm)))
 
 
 
