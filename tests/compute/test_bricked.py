@@ -8,7 +8,6 @@ import pytest
 
 import splineviz as sv
 from splineviz.compute.bricked import BrickedRayCaster
-from splineviz.compute.raycast import renders_in_bricks
 from splineviz.core.camera import default_camera
 from splineviz.core.splines import MODELS
 
@@ -24,7 +23,7 @@ pytestmark = pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device")
 #: picture would test rounding rather than surfaces)
 ISO = 40.5
 #: the models with a kernel (a plugin's global spline cannot be cut into bricks)
-KERNEL_MODELS = [m for m in MODELS if renders_in_bricks(m)]
+KERNEL_MODELS = [m for m, spec in MODELS.items() if spec.family is not None]
 
 
 @pytest.fixture(scope="module")
