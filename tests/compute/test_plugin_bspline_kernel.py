@@ -115,6 +115,20 @@ def test_a_thin_feature_inside_one_cell_is_hit():
     assert spline.evaluate((x + 0.002 * d)[None])[0] > iso
 
 
+def test_64_bit_sample_offsets_give_the_same_frames(ml, monkeypatch):
+    from splineviz.compute.raycast import caster
+
+    vol, iso = ml
+    cam = cameras(vol)[2]
+    want = _caster(vol, iso).render(cam, SIZE, hessian=True)
+    monkeypatch.setattr(caster, "MAX_SAMPLES", 1000)
+    rc = _caster(vol, iso)
+    assert rc.limits().offsets_64 and rc._prelude().startswith("#define offset_t long")
+    got = rc.render(cam, SIZE, hessian=True)
+    for name in ("hit", "color", "depth", "position", "normal", "hessian"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(want, name), err_msg=name)
+
+
 def test_the_kernel_is_refused_for_bricks(ml):
     from splineviz.compute.bricked import BrickedRayCaster
 
