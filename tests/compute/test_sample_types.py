@@ -35,7 +35,8 @@ def test_small_sample_type_gives_the_float_frames(monkeypatch, model, kind, item
     assert small._sample_type[1] == kind and small._data.dtype.itemsize == itemsize
     small.set_isovalue(100.5)
     got = small.render(cam, (96, 72))
-    monkeypatch.setattr(raycast, "sample_type_for", lambda data, ghost: (np.float32, "float"))
+    monkeypatch.setattr(raycast.samples, "sample_type_for",
+                        lambda data, ghost: (np.float32, "float"))
     ref = RayCaster(vol, model=model)
     assert ref._data.dtype == np.float32
     ref.set_isovalue(100.5)

@@ -25,7 +25,7 @@ from splineviz.compute.raycast.samples import numpy_cell_bounds
 from splineviz.core import raycast_reference as ref
 from splineviz.core.bricks import Placement
 from splineviz.core.camera import Camera, parse_size
-from splineviz.core.splines.registry import MODELS
+from splineviz.core.splines.registry import UnknownModelError, model_spec
 from splineviz.core.volume import Volume
 
 #: work-group size of the ray-casting kernel (pixels): fixed so the kernel is compiled once
@@ -125,9 +125,10 @@ class RayCaster:
 
     def __init__(self, volume, model: str = "cubic-c1", device: str | None = None,
                  **model_kwargs):
-        if model not in MODELS:
-            raise RayCastError(f"unknown spline model {model!r}; choose one of "
-                               f"{', '.join(MODELS)}")
+        try:
+            model_spec(model)
+        except UnknownModelError as exc:
+            raise RayCastError(str(exc)) from None
         self.model = model
         self._model_kwargs = model_kwargs
         family = family_class(model)

@@ -18,6 +18,7 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
+from splineviz.compute.raycast import samples as _samples
 from splineviz.core.errors import SplinevizError
 
 #: 32-bit words of a cell's bit set of relevant (TO, tet) pieces (<= 144 per cell)
@@ -78,10 +79,8 @@ class KernelFamily(ABC):
 
     def sample_type(self, data: np.ndarray) -> tuple[type, str]:
         """(numpy type, OpenCL C type) of the device samples of ``data``."""
-        from splineviz.compute import raycast
-
-        # looked up on the package, where callers and tests may replace it
-        return raycast.sample_type_for(data, self.ghost_layers)
+        # looked up on its module at call time, where tests may replace it
+        return _samples.sample_type_for(data, self.ghost_layers)
 
     def extra_bytes(self, bricks: int) -> dict:
         """Device bytes of its per-data buffers besides samples, octree and cache, for
