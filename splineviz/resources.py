@@ -1,4 +1,4 @@
-"""Files shipped with splineviz in the top-level ``resources/`` folder (DESIGN.md layout).
+"""Files shipped with splineviz in the top-level ``resources/`` folder (docs/architecture.md).
 
 * ``resources/icons/*.svg`` -- toolbar icons (24x24 view box, strokes in ``currentColor``,
   which the root element sets to a mid grey that reads on light and dark toolbars; an accent

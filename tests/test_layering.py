@@ -1,4 +1,5 @@
-"""DESIGN.md's import layering, checked by the import-linter contracts in pyproject.toml."""
+"""The import layering of docs/architecture.md, checked by the import-linter contracts in
+pyproject.toml."""
 
 import subprocess
 import sys

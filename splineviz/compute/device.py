@@ -1,4 +1,5 @@
-"""OpenCL device choice: a GPU if present, else the pocl CPU device (DESIGN.md, "Device choice").
+"""OpenCL device choice: a GPU if present, else the PoCL CPU device (docs/architecture.md,
+"Device choice").
 
 The choice is made once per preference and cached. ``SPLINEVIZ_DEVICE`` overrides it:
 ``gpu``, ``cpu``, ``numpy`` (no OpenCL at all), or a substring of a device name. When no

@@ -38,7 +38,7 @@ BISECTION_STEPS = 52
 
 
 class Frame:
-    """One rendered image of an isosurface (DESIGN.md, ``RayCaster.render``).
+    """One rendered image of an isosurface (docs/api.md, ``RayCaster.render``).
 
     Attributes
     ----------

@@ -1,6 +1,6 @@
 """Mesh and screenshot writers (and a mesh reader for sessions).
 
-Meshes are ``pyvista.PolyData`` at this boundary (DESIGN.md); a ``(vertices (V, 3),
+Meshes are ``pyvista.PolyData`` at this boundary (docs/api.md); a ``(vertices (V, 3),
 faces (F, 3) int)`` pair is accepted too. Every write goes to a temporary file beside the
 target and is renamed onto it only when complete.
 """

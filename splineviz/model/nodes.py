@@ -16,7 +16,7 @@ form, e.g. a path and its read options); everything else is a plain property who
 non-default values :meth:`Node.state` returns, in field order (the order sessions write).
 
 Conventions: colours are RGB in [0, 1]; points and vectors are world coordinates; meshes
-are ``(V, 3)`` float vertex and ``(F, 3)`` int triangle arrays (DESIGN.md: pyvista objects
+are ``(V, 3)`` float vertex and ``(F, 3)`` int triangle arrays (docs/api.md: pyvista objects
 only at the render/io boundary).
 """
 
@@ -325,7 +325,7 @@ class MeshNode(Node):
 
 
 class ClipPlaneNode(Node):
-    """A clip plane keeping the side its normal points to (DESIGN.md ``clip_planes``).
+    """A clip plane keeping the side its normal points to (docs/api.md ``clip_planes``).
 
     ``volume_id`` names the volume whose isosurfaces it cuts; None cuts every isosurface.
     """

@@ -3,7 +3,7 @@
 Pipeline: k-nearest (or, for fixed-width fits, Cocone) connectivity -> local polynomials
 (:class:`Projector`) -> curvature-adapted guidance field -> advancing front -> valence flips
 and tangential relaxation on the surface -> least-squares vertex heights.  Returns a
-``pyvista.PolyData`` (the mesh boundary type of DESIGN.md).
+``pyvista.PolyData`` (the mesh boundary type of docs/api.md).
 """
 
 from __future__ import annotations

@@ -189,7 +189,7 @@ class SplineScene:
 
     def set_clip_planes(self, planes) -> None:
         """Clip planes of the isosurfaces: (origin, normal) pairs, each keeps the side its
-        normal points to (DESIGN.md). Meshes are not clipped: they show what the cut opens."""
+        normal points to (docs/api.md). Meshes are not clipped: they show what the cut opens."""
         self._clip_planes = [tuple(map(tuple, p)) for p in normalize_clip_planes(planes)]
 
     # -- rendering -----------------------------------------------------------------------

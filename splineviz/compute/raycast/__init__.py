@@ -1,4 +1,4 @@
-"""OpenCL ray casting of spline isosurfaces (thesis §6.1.1, §6.2; DESIGN.md ``RayCaster``).
+"""OpenCL ray casting of spline isosurfaces (thesis §6.1.1, §6.2; docs/api.md ``RayCaster``).
 
 Pipeline on the device, without a CPU round trip of the volume:
 

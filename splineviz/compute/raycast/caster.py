@@ -1,4 +1,4 @@
-"""The ray caster's facade: :class:`RayCaster` (DESIGN.md ``RayCaster``).
+"""The ray caster's facade: :class:`RayCaster` (docs/api.md ``RayCaster``).
 
 What every kernel family shares lives here: the device, the device samples (their type and
 ghost layers come from the family), the min-max octree, the classification cache's slots and
@@ -85,7 +85,7 @@ def _shading_defines() -> dict:
 
 
 class RayCaster:
-    """Geometry-free ray caster of the isosurface of a spline model (DESIGN.md).
+    """Geometry-free ray caster of the isosurface of a spline model (docs/api.md).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Kernel families of the ray caster and their registry (DESIGN.md ``RayCaster``).
+"""Kernel families of the ray caster and their registry (docs/api.md ``RayCaster``).
 
 A kernel family is the model-specific part of the OpenCL ray caster: which code of
 ``kernels/raycast.cl`` and ``kernels/classify.cl`` its ``-D`` define selects, what the device
