@@ -12,7 +12,7 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "volumes
 @pytest.mark.bench
 def test_bench_isovalue(monkeypatch):
     monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    from splineviz.compute.bench_isovalue import run_isovalue_bench
+    from splineviz.bench.isovalue import run_isovalue_bench
 
     lines = []
     rows = run_isovalue_bench(DATA, sizes=(256,), models=("trilinear", "cubic-c1"),

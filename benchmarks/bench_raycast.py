@@ -12,7 +12,7 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "volumes
 @pytest.mark.bench
 def test_bench_raycast(monkeypatch):
     monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    from splineviz.compute.bench import run_bench
+    from splineviz.bench.raycast import run_bench
 
     rows = run_bench(DATA, size=(512, 512), repeats=3)
     timed = [r for r in rows if "frame_s" in r]

@@ -1,7 +1,7 @@
 """Readers, writers and session files (no Qt, no rendering).
 
 Public entry points: :func:`read_volume`, :func:`read_points`, :func:`write_volume`,
-:func:`write_mesh`, :func:`read_mesh`, :func:`write_screenshot`, :func:`describe`,
+:func:`write_mesh`, :func:`read_mesh`, :func:`write_screenshot`,
 :func:`open_path` (session, volume or points, whichever the file is), and the session API
 :func:`load_session` / :func:`save_session` / :func:`migrate`. Formats live in a registry
 (:func:`register_format`) that plugins extend. Errors are the typed, one-sentence classes of
@@ -23,7 +23,6 @@ from splineviz.io.errors import (  # noqa: F401
     UnknownFormatError,
     WriteError,
 )
-from splineviz.io.info import describe  # noqa: F401
 from splineviz.io.meshes import (  # noqa: F401
     read_image,
     read_mesh,

@@ -1,7 +1,8 @@
-"""``splineviz bench``: the benchmarks, each printing ratios against baselines run in the same
-run (VTK flying edges and trilinear ray casting for ``raycast``; flying edges + an offscreen
-render of its mesh for ``isovalue``; 1 against 2 dask workers for ``bricks``; Open3D Poisson,
-ball pivoting and Poisson + pymeshlab remeshing for ``remesh``)."""
+"""``splineviz bench``: the benchmarks of :mod:`splineviz.bench`, each printing ratios against
+baselines run in the same run (VTK flying edges and trilinear ray casting for ``raycast``;
+flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 dask workers for
+``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
+the 100 ms budget of the GUI thread for ``gui``)."""
 
 from __future__ import annotations
 
@@ -12,11 +13,11 @@ def _run(args) -> int:
     data = args.data_dir or str(Path.cwd() / ".." / "shared" / "data" / "volumes")
     w, h = (int(v) for v in args.size.lower().split("x"))
     if args.which == "raycast":
-        from splineviz.compute.bench import run_bench
+        from splineviz.bench.raycast import run_bench
 
         run_bench(data, size=(w, h), repeats=args.repeats, device=args.device)
     elif args.which == "isovalue":
-        from splineviz.compute.bench_isovalue import MODELS, run_isovalue_bench
+        from splineviz.bench.isovalue import MODELS, run_isovalue_bench
 
         pw, ph = (int(v) for v in args.preview.lower().split("x"))
         sizes = tuple(int(n) for n in args.sizes.split(","))
@@ -24,14 +25,14 @@ def _run(args) -> int:
         run_isovalue_bench(data, sizes=sizes, models=models, size=(w, h), preview=(pw, ph),
                            device=args.device, timeout=args.timeout or 600.0)
     elif args.which == "bricks":
-        from splineviz.compute.bench_bricks import run_bricks_bench
+        from splineviz.bench.bricks import run_bricks_bench
 
         workers = tuple(int(n) for n in args.workers.split(","))
         model = args.models.split(",")[0] if args.models else "cubic-c1"
         run_bricks_bench(n=args.n, model=model, size=(w, h), brick=args.brick,
                          workers=workers, device=args.device)
     else:
-        from splineviz.pointcloud.bench import CLOUDS, run_bench
+        from splineviz.bench.remesh import CLOUDS, run_bench
 
         clouds = tuple(args.clouds.split(",")) if args.clouds else CLOUDS
         run_bench(args.data_dir, clouds, args.timeout or 180.0)
