@@ -9,7 +9,11 @@ baselines measured in the same run (``splineviz bench NAME``, :mod:`splineviz.cl
 * :mod:`~splineviz.bench.remesh`: the advancing-front mesher against Open3D Poisson, ball
   pivoting and Poisson + pymeshlab remeshing (and CGAL's jet smoothing for the projection);
 * :mod:`~splineviz.bench.gui`: the GUI thread's longest stall per user action against the
-  100 ms budget.
+  100 ms budget (:mod:`~splineviz.bench.driving` plays the user's input);
+* :mod:`~splineviz.bench.evaluate`, :mod:`~splineviz.bench.curvature`,
+  :mod:`~splineviz.bench.spline_mesh` (``python -m splineviz.bench.NAME``): spline evaluation
+  against ``map_coordinates``, curvature at the ray hits against vtkCurvatures, spline meshes
+  against flying edges.
 
 Only this package imports the peers' libraries (open3d, pymeshlab, CGAL): an import-linter
 contract in ``pyproject.toml`` keeps them out of the layers the benchmarks measure.

@@ -1,5 +1,5 @@
 """``splineviz bench isovalue``: the command line and the table (the benchmark itself runs with
-``-m bench``, see benchmarks/bench_isovalue.py)."""
+``-m bench``, see tests/bench/test_bench_isovalue_small.py)."""
 
 import numpy as np
 
