@@ -97,13 +97,13 @@ class _Script:
     more (a stall of our own shows in every run, a busy machine's tick in one)."""
 
     def __init__(self, window, repeats: int, again_over: float | None, out):
-        from splineviz.bench.driving import pump
+        from splineviz.bench import driving  # Qt: imported when a window is driven
 
+        self.drive = driving
         self.w = window
         self.repeats = max(int(repeats), 1)
         self.again_over = again_over
         self.out = out
-        self.pump = pump
         self.stalls = Stalls()
 
     # -- states the window settles in ---------------------------------------------------
@@ -120,17 +120,15 @@ class _Script:
                         for v in w.linked_views.views))
 
     def settle(self, until, what: str, timeout_s: float = 60.0) -> None:
-        _check(self.pump(timeout_s, until), f"{what} did not finish in {timeout_s:g} s")
+        _check(self.drive.pump(timeout_s, until), f"{what} did not finish in {timeout_s:g} s")
 
     # -- measuring -----------------------------------------------------------------------
 
     def _once(self, name, action, settle) -> tuple[float, float]:
-        from splineviz.bench.driving import StallMeter
-
         t0 = time.perf_counter()
-        with StallMeter() as meter:
+        with self.drive.StallMeter() as meter:
             action()
-            _check(self.pump(SETTLE_TIMEOUT_S, settle),
+            _check(self.drive.pump(SETTLE_TIMEOUT_S, settle),
                    f"{name}: did not finish in {SETTLE_TIMEOUT_S:g} s")
         took = time.perf_counter() - t0
         self.out(f"{name}: longest GUI-thread stall {meter.max_ms:.0f} ms "
@@ -173,8 +171,6 @@ class _Script:
         _check(bool(w.scene.isosurfaces), "the data opened without an isosurface")
 
     def orbit_and_zoom(self) -> None:
-        from splineviz.bench.driving import drag, wheel
-
         w = self.w
         p = w.plotter
 
@@ -183,7 +179,7 @@ class _Script:
 
         def orbit():
             cx, cy = centre()
-            drag(p, (cx - 60, cy), (cx + 60, cy + 20), n=15)
+            self.drive.drag(p, (cx - 60, cy), (cx + 60, cy + 20), n=15)
 
         pose = np.array(w.scene.camera.position)
         self.measure("orbit (left drag)", orbit, self.idle_and_exact, lambda: None)
@@ -191,16 +187,20 @@ class _Script:
                "the orbit drag did not reach the interactor")
 
         def zoom_out():
-            wheel(p, centre(), clicks=-2)
+            self.drive.wheel(p, centre(), clicks=-2)
             self.settle(self.idle_and_exact, "zoom out")
 
-        self.measure("wheel zoom (2 notches)", lambda: wheel(p, centre(), clicks=2),
+        def distance():
+            cam = w.scene.camera
+            return float(np.linalg.norm(np.subtract(cam.position, cam.focal_point)))
+
+        far = distance()
+        self.measure("wheel zoom (2 notches)", lambda: self.drive.wheel(p, centre(), clicks=2),
                      self.idle_and_exact, zoom_out)
+        _check(distance() < 0.95 * far, "the wheel did not zoom in")
         zoom_out()
 
     def slider_drag(self) -> None:
-        from splineviz.bench.driving import drag
-
         w = self.w
         node = w.scene.isosurfaces[0]
         w.scene.select(node)
@@ -215,7 +215,7 @@ class _Script:
             hist.setValue(before)
             self.settle(self.idle_and_exact, "isovalue reset")
 
-        self.measure("isovalue slider drag", lambda: drag(hist, (x0, y), (x1, y), n=8),
+        self.measure("isovalue slider drag", lambda: self.drive.drag(hist, (x0, y), (x1, y), n=8),
                      self.idle_and_exact, back)
         _check(abs(node.isovalue - before) > 0.02 * (hi - lo),
                "the slider drag did not change the isovalue")
@@ -225,8 +225,6 @@ class _Script:
         """View > Split view, then an orbit dragged in the new (right) view, then the split
         off again. Turning the split on makes a second VTK window (gui.split.OPEN_STEPS); the
         first drag in it casts previews of sizes not cast before in both views."""
-        from splineviz.bench.driving import drag_steps, line, run_steps
-
         w = self.w
         node = w.scene.isosurfaces[0]
         w.scene.select(node)
@@ -256,8 +254,8 @@ class _Script:
         def drag_right():
             p = w.view2.plotter
             cx, cy = p.width() / 2.0, p.height() / 2.0
-            run_steps(drag_steps(p, line((cx - 60, cy), (cx + 60, cy + 20), 12)),
-                      interval_ms=16)
+            path = self.drive.line((cx - 60, cy), (cx + 60, cy + 20), 12)
+            self.drive.run_steps(self.drive.drag_steps(p, path), interval_ms=16)
 
         def split_on_again():  # a new second view: its first drag again
             split_off()
