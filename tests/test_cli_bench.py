@@ -41,14 +41,17 @@ def test_gui_table_medians_against_the_budget():
     from splineviz.bench.gui import MAX_STALL_MS, Stalls, print_table
 
     stalls = Stalls(ms={"orbit": [30.0, 250.0, 40.0], "wheel": [120.0, 90.0, 130.0]},
-                    cancel_s=[0.2, 0.1, 0.3])
+                    settled_s={"orbit": [1.0, 3.0, 2.0]}, cancel_s=[0.2, 0.1, 0.3])
     lines = []
     rows = print_table(stalls, out=lines.append)
     orbit, wheel = rows
     assert (orbit["median_ms"], orbit["max_ms"], orbit["ok"]) == (40.0, 250.0, True)
     assert (wheel["median_ms"], wheel["ok"], wheel["budget_ms"]) == (120.0, False, MAX_STALL_MS)
     assert orbit["median_ms"] <= orbit["p95_ms"] <= orbit["max_ms"]
-    assert any(line.startswith("| wheel") and line.rstrip().endswith("| NO  |") for line in lines)
+    assert (orbit["settled_s"], wheel["settled_s"]) == (2.0, None)
+    assert any(line.startswith("| wheel") and "| NO  |" in line for line in lines)
+    assert any(line.startswith("| orbit") and line.rstrip().endswith("| yes |      2.00 |")
+               for line in lines)
     assert lines[-1].startswith("cancel: the job stopped after 0.20 s (median of 3, max 0.30 s")
 
 
