@@ -319,12 +319,16 @@ class _Script:
         self.measure("smoothing: Original", w.smooth_panel.reset_button.click,
                      self.idle_and_exact, lambda: sigma(1.5))
 
-        def remove_last():
+        count = len(w.scene.isosurfaces)
+
+        def remove_added():  # and the original selected again: Add needs a selection
             w.scene.remove(w.scene.isosurfaces[-1])
+            w.scene.select(node)
             self.settle(self.idle_and_exact, "remove isosurface")
 
-        self.measure("add isosurface", w.iso_panel.add_button.click, self.idle_and_exact,
-                     remove_last)
+        self.measure("add isosurface", w.iso_panel.add_button.click,
+                     lambda: len(w.scene.isosurfaces) == count + 1 and self.idle_and_exact(),
+                     remove_added)
 
     def points_remesh_cancel(self, cloud_path) -> None:
         from splineviz.model import PointsNode
