@@ -1,6 +1,6 @@
 """Driving a Qt widget like a user, and the meter of the GUI thread's longest stall (for
 :mod:`splineviz.bench.gui` and the GUI tests): mouse drags and wheel turns delivered while the
-event loop runs.
+event loop runs, and a main window opened and closed for a script.
 
 Events are sent from a QTimer callback (one step per tick) while a local event loop runs, so
 the widget receives them as it would from the window system: between two steps Qt processes
@@ -119,12 +119,12 @@ def drag_steps(widget, points, button=LEFT, modifiers=NO_MODIFIER) -> list:
     """Steps (for :func:`run_steps`) of a press at ``points[0]``, moves, release at the last."""
     points = [tuple(map(float, p)) for p in points]
     steps = [lambda: mouse(widget, QEvent.Type.MouseButtonPress, points[0], button, button,
-                            modifiers)]
+                           modifiers)]
     for p in points[1:]:
         steps.append(lambda p=p: mouse(widget, QEvent.Type.MouseMove, p, NO_BUTTON, button,
-                                        modifiers))
+                                       modifiers))
     steps.append(lambda: mouse(widget, QEvent.Type.MouseButtonRelease, points[-1], button,
-                                NO_BUTTON, modifiers))
+                               NO_BUTTON, modifiers))
     return steps
 
 
