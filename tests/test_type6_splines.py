@@ -413,13 +413,9 @@ def test_convergence_tables_and_fig_5_6(capsys):
 @pytest.mark.parametrize("model", MODELS)
 def test_large_volume_memory_and_speed_against_map_coordinates(model):
     """10^6 points of a 256^3 volume: < 2 GB and within 5x map_coordinates(order=3)."""
-    import importlib.util
+    from splineviz.bench.evaluate import run_one
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_evaluate.py"
-    spec = importlib.util.spec_from_file_location("bench_evaluate", path)
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
-    r = bench.run_one(model, 256, 1_000_000)
+    r = run_one(model, 256, 1_000_000)
     print(f"\n{model}: {r['time_s']:.2f} s, map_coordinates {r['baseline_s']:.2f} s, "
           f"ratio {r['ratio']:.2f}, peak RSS {r['peak_rss_mib']:.0f} MiB")
     assert r["ratio"] < 5.0

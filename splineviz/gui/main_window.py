@@ -2,9 +2,11 @@
 
 It owns one :class:`splineviz.model.Scene`; the view (:mod:`splineviz.gui.view`) and every
 panel (:mod:`splineviz.gui.panels`) are views of it, file operations live in
-:mod:`splineviz.gui.commands`, menus in :mod:`splineviz.gui.actions` and background work in
-:mod:`splineviz.gui.jobs`. The window fits the screen it opens on, asks before closing with
-unsaved changes and shows every error as one non-blocking message (also in the log panel).
+:mod:`splineviz.gui.commands` (opening files from the window: :mod:`splineviz.gui.opening`),
+menus in :mod:`splineviz.gui.actions`, the status bar in :mod:`splineviz.gui.status`, crash
+recovery in :mod:`splineviz.gui.recovery` and background work in :mod:`splineviz.gui.jobs`.
+The window fits the screen it opens on, asks before closing with unsaved changes and shows
+every error as one non-blocking message (also in the log panel).
 """
 
 from __future__ import annotations
@@ -14,22 +16,14 @@ from pathlib import Path
 
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtGui import QAction, QGuiApplication
-from PySide6.QtWidgets import (
-    QApplication,
-    QDockWidget,
-    QLabel,
-    QMainWindow,
-    QMessageBox,
-    QProgressBar,
-    QPushButton,
-)
+from PySide6.QtWidgets import QApplication, QDockWidget, QMainWindow, QMessageBox
 
 from splineviz.core.errors import SplinevizError
+from splineviz.gui import opening
 from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
 from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
-from splineviz.gui.open_dialogs import open_chosen
 from splineviz.gui.panels import (
     AnalysisPanel,
     ClippingPanel,
@@ -42,6 +36,7 @@ from splineviz.gui.panels import (
     SmoothingPanel,
 )
 from splineviz.gui.split import LinkedViews
+from splineviz.gui.status import StatusBar
 from splineviz.gui.view import View3D
 from splineviz.model import Scene
 
@@ -98,24 +93,25 @@ class MainWindow(QMainWindow):
         self.plane_widgets = PlaneWidgets(self.scene, self.plotter, self.view.request_render)
         self._build_panels()
         self.actions_by_name = build_actions(self)
-        self._build_status()
+        self.status = StatusBar(self)
+        self._view_busy = self.status.view_busy  # each view of a split reports to it
+        self._add_panel_toggles()
         # after the status bar: a split restored with the scene connects to its labels
         self.linked_views = LinkedViews(self)
         self.setCentralWidget(self.linked_views.splitter)
-        self.jobs.changed.connect(self._jobs_changed)
         self.jobs.error.connect(self.show_error)
         self.jobs.message.connect(lambda m: self.statusBar().showMessage(m, 4000))
         self.view._refiner.error.connect(self.show_error)
         # the first view tells a second one of the drag (LinkedViews)
         self.iso_panel.histogram.pressed.connect(self.view.begin_interaction)
         self.iso_panel.histogram.released.connect(self.view.end_interaction)
-        self.commands.opened.connect(self._opened)
+        self.commands.opened.connect(lambda p: opening.opened(self, p))
         self.commands.saved.connect(lambda p: self.statusBar().showMessage(f"saved {p}", 6000))
         self.commands.saved.connect(lambda p: self.log.add(f"saved {p}"))
         self.commands.warned.connect(self.show_warning)
         #: autosaves the scene for crash recovery (the app turns it on: :meth:`enable_autosave`)
         self.autosaver = None
-        self.scene.changed.connect(self._update_title)
+        self.scene.changed.connect(self.update_title)
         self.fit_to_screen()
 
     # -- construction --------------------------------------------------------------------
@@ -152,27 +148,7 @@ class MainWindow(QMainWindow):
         self.docks["Clipping"].raise_()
         self.docks["Log"].hide()
 
-    def _build_status(self):
-        sb = self.statusBar()
-        self.readout_label = QLabel("")
-        self.readout_label.setToolTip("Position and data value under the cursor")
-        self.fps_label = QLabel("")
-        self.fps_label.setToolTip("Time of the last frame")
-        self.cells_label = QLabel("")
-        self.cells_label.setToolTip("Cells and tetrahedra the ray caster visits")
-        self.progress = QProgressBar()
-        self.progress.setMaximumWidth(200)
-        self.progress.setVisible(False)
-        self.cancel_button = QPushButton("Cancel")
-        self.cancel_button.setToolTip("Stop the running job (Esc)")
-        self.cancel_button.setVisible(False)
-        self.cancel_button.clicked.connect(self.jobs.cancel_all)
-        sb.addWidget(self.readout_label, 1)
-        for w in (self.progress, self.cancel_button, self.fps_label, self.cells_label):
-            sb.addPermanentWidget(w)
-        self.view.readout.connect(self.readout_label.setText)
-        self.view.frame_rendered.connect(self._frame_rendered)
-        self.view.busy.connect(self._view_busy)
+    def _add_panel_toggles(self):
         for name, dock in self.docks.items():
             a: QAction = dock.toggleViewAction()
             a.setToolTip(f"Show or hide the {name} panel")
@@ -205,53 +181,9 @@ class MainWindow(QMainWindow):
             self._docks_sized = True
             QTimer.singleShot(0, self._size_docks)
 
-    # -- status --------------------------------------------------------------------------
+    # -- title, messages--------------------------------------------------------------------
 
-    def _frame_rendered(self, dt: float) -> None:
-        if self._closed:
-            return
-        self.fps_label.setText(f"frame {dt * 1000:.0f} ms")
-        active, devices = [], set()
-        for layer in self.spline_scene.layers:
-            s = layer.last_stats
-            n = s.get("active_tets") or s.get("active_cells")
-            if n is not None:
-                active.append(f"{n:,} active {'tets' if s.get('active_tets') else 'cells'}")
-            if s.get("device"):
-                devices.add(str(s["device"]).split(":")[0])
-        self.cells_label.setText("; ".join(active + sorted(devices)))
-
-    def _jobs_changed(self) -> None:
-        if self._closed:
-            return
-        jobs = self.jobs.jobs
-        self.progress.setVisible(bool(jobs))
-        self.cancel_button.setVisible(any(j.cancellable for j in jobs))
-        if not jobs:
-            self.statusBar().clearMessage()
-            return
-        job = jobs[-1]
-        cancelling = job.state == "cancelling"
-        self.cancel_button.setEnabled(not cancelling)
-        if job.fraction is None or cancelling:
-            self.progress.setRange(0, 0)
-        else:
-            self.progress.setRange(0, 100)
-            self.progress.setValue(int(100 * job.fraction))
-        text = f"cancelling {job.label}..." if cancelling else (
-            job.label + (f": {job.message}" if job.message else "..."))
-        self.progress.setFormat(job.label)
-        self.statusBar().showMessage(text)
-
-    def _view_busy(self, message: str) -> None:
-        """"ray casting..." while exact frames are made; cleared when they are shown (unless
-        a job's message is up)."""
-        if message:
-            self.statusBar().showMessage(message)
-        elif not self.jobs.jobs:
-            self.statusBar().clearMessage()
-
-    def _update_title(self) -> None:
+    def update_title(self) -> None:
         name = self.session_file.name if self.session_file else "untitled"
         self.setWindowTitle(f"{name}{' *' if self.scene.modified else ''} — splineviz")
 
@@ -293,26 +225,17 @@ class MainWindow(QMainWindow):
         return self.commands.open_default()
 
     def open_path(self, path, mode: str = "ask", block: bool = False, **iso):
-        """Open a file or session (a job; ``block`` waits for it: scripts and tests)."""
-        job = self.guard(self.commands.open_path, path, mode=mode, **iso)
-        if block:
-            self.wait_idle()
-        return job
+        """Open a file or session (:func:`splineviz.gui.opening.open_path`)."""
+        return opening.open_path(self, path, mode, block, **iso)
 
     def recent_files(self) -> list[str]:
         return self.recent.files()
-
-    def _opened(self, path: str) -> None:
-        self.recent.add(path)
-        if path.lower().endswith(".svs"):
-            self.session_file = Path(path)
-            self._update_title()
 
     def save_session(self, path) -> Path | None:
         p = self.guard(self.commands.save_session, path)
         if p is not None:
             self.session_file = Path(p)
-            self._update_title()
+            self.update_title()
         return p
 
     def export_screenshot(self, path, size=None, transparent: bool = False):
@@ -333,30 +256,9 @@ class MainWindow(QMainWindow):
         """If an earlier run left a recovery file (a crash or kill), ask whether to restore
         it and, if so, load it in a job (which replaces the scene); returns that job, or
         None. Files not restored are removed; older ones wait for the next start."""
-        from splineviz.gui.recovery import ask_restore, orphaned, restored_data_paths
+        from splineviz.gui.recovery import offer_recovery
 
-        if folder is None and self.autosaver is not None:
-            folder = self.autosaver.folder
-        found = orphaned(folder)
-        if not found:
-            return None
-        newest = found[0]
-        if not ask_restore(self, newest):
-            newest.discard()
-            self.log.add(f"discarded the recovery file {newest.path}")
-            return None
-
-        def loaded():
-            restored_data_paths(self.scene, newest.data_dir)
-            newest.discard()
-            self.scene.modified = True  # restored work is not saved anywhere yet
-            self.session_file = None
-            self._update_title()
-            self.show_warning(f"restored the scene autosaved at "
-                              f"{time.strftime('%H:%M:%S', time.localtime(newest.saved))}")
-
-        # its data paths are relative to the recovery folder: outside it, and ours
-        return self.commands.load_session(newest.path, allow_outside=True, on_loaded=loaded)
+        return offer_recovery(self, folder)
 
     # -- tests and scripts ---------------------------------------------------------------
 
@@ -406,13 +308,10 @@ class MainWindow(QMainWindow):
     # -- drag and drop, close ------------------------------------------------------------
 
     def dragEnterEvent(self, event):  # noqa: N802 (Qt naming)
-        if event.mimeData().hasUrls():
-            event.acceptProposedAction()
+        opening.accepts_drop(event)
 
     def dropEvent(self, event):  # noqa: N802
-        for url in event.mimeData().urls():
-            if url.isLocalFile():
-                open_chosen(self, url.toLocalFile())  # folders: series; raw: its layout
+        opening.drop(self, event)
 
     def confirm_discard(self) -> bool:
         """Ask what to do with unsaved changes; False: the user wants to stay."""

@@ -294,3 +294,32 @@ def ask_restore(window, found: RecoveryFile) -> bool:
     box.addButton("Discard", QMessageBox.ButtonRole.DestructiveRole)
     box.exec()
     return box.clickedButton() is restore
+
+
+def offer_recovery(window, folder: Path | None = None):
+    """If an earlier run left a recovery file in ``folder`` (default: the window's autosave
+    folder, else :func:`recovery_dir`), ask whether to restore it and, if so, load it in a
+    job of ``window`` (which replaces the scene); returns that job, or None. Files not
+    restored are removed; older ones wait for the next start."""
+    if folder is None and window.autosaver is not None:
+        folder = window.autosaver.folder
+    found = orphaned(folder)
+    if not found:
+        return None
+    newest = found[0]
+    if not ask_restore(window, newest):
+        newest.discard()
+        window.log.add(f"discarded the recovery file {newest.path}")
+        return None
+
+    def loaded():
+        restored_data_paths(window.scene, newest.data_dir)
+        newest.discard()
+        window.scene.modified = True  # restored work is not saved anywhere yet
+        window.session_file = None
+        window.update_title()
+        window.show_warning(f"restored the scene autosaved at "
+                            f"{time.strftime('%H:%M:%S', time.localtime(newest.saved))}")
+
+    # its data paths are relative to the recovery folder: outside it, and ours
+    return window.commands.load_session(newest.path, allow_outside=True, on_loaded=loaded)

@@ -10,6 +10,7 @@ Public entry points: :func:`read_volume`, :func:`read_volume_sequence` (4-D file
 """
 
 from splineviz.io import chunked, dicom, neuro, tiff  # noqa: F401  (register their formats)
+from splineviz.io.describe import describe  # noqa: F401
 from splineviz.io.errors import (  # noqa: F401
     CorruptFileError,
     DataFileNotFoundError,
@@ -24,7 +25,6 @@ from splineviz.io.errors import (  # noqa: F401
     UnknownFormatError,
     WriteError,
 )
-from splineviz.io.info import describe  # noqa: F401
 from splineviz.io.meshes import (  # noqa: F401
     read_image,
     read_mesh,

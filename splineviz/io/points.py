@@ -3,7 +3,7 @@
 Convention: a reader returns :class:`PointData` with ``points`` (N, 3) float64, optional
 ``normals`` (N, 3) float64 and ``colors`` (N, 3 or 4) uint8; :func:`read_points` validates it
 and returns a :class:`~splineviz.PointCloud`. Libraries: plyfile (PLY, ascii and binary of
-either endianness), NumPy text parsing (XYZ), Open3D (PCD), VTK (OBJ, STL) and meshio (OFF).
+either endianness), NumPy text parsing (XYZ), pypcd4 (PCD), VTK (OBJ, STL) and meshio (OFF).
 Counts announced in headers are compared with the file size before anything is allocated.
 """
 
@@ -179,8 +179,8 @@ _PCD_KEY = re.compile(rb"^(FIELDS|SIZE|COUNT|POINTS|DATA|WIDTH|HEIGHT)\s+(.*?)\s
 
 
 def _read_pcd(path: Path) -> PointData:
-    """Point Cloud Library PCD through Open3D. The header counts are checked against the file
-    size first: Open3D allocates whatever POINTS says and returns partial data silently."""
+    """Point Cloud Library PCD through pypcd4. The header counts are checked against the file
+    size first: a reader allocates whatever POINTS says."""
     head = _head(path, 8192)
     keys = {k.decode(): v.decode("latin-1") for k, v in _PCD_KEY.findall(head)}
     if "POINTS" not in keys or "DATA" not in keys or "FIELDS" not in keys:
@@ -202,43 +202,30 @@ def _read_pcd(path: Path) -> PointData:
     if mode == "binary_compressed":
         per_point = 0  # compressed size says nothing; the byte budget still applies
     _check_count(count, path, per_point)
-    if mode == "ascii":  # Open3D pads missing ascii rows with zeros: count them first
+    if mode == "ascii":  # missing ascii rows must not be read as zeros: count them first
         body = path.read_bytes().split(b"\nDATA", 1)[-1].split(b"\n", 1)[-1]
         rows = sum(1 for ln in body.splitlines() if ln.strip())
         if rows != count:
             raise DataSizeError(f"{path.name} announces {count} points but holds {rows} rows")
-    import open3d as o3d
+    from pypcd4 import PointCloud as PcdCloud
 
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
-    with _capture_fd_output():
-        pc = o3d.io.read_point_cloud(str(path), format="pcd")
-    pts = np.asarray(pc.points, dtype=np.float64)
-    if len(pts) != count:
-        raise CorruptFileError(
-            f"{path.name} announces {count} points but {len(pts)} could be read"
-        )
-    normals = np.asarray(pc.normals, dtype=np.float64) if pc.has_normals() else None
-    colors = (np.clip(np.asarray(pc.colors) * 255 + 0.5, 0, 255).astype(np.uint8)
-              if pc.has_colors() else None)
+    data = PcdCloud.from_path(path).pc_data  # structured array, one field per PCD field
+    if len(data) != count:
+        raise CorruptFileError(f"{path.name} announces {count} points but {len(data)} could "
+                               f"be read")
+
+    def columns(names):  # (N, 3) float64, or None when a field is missing
+        if not all(n in data.dtype.names for n in names):
+            return None
+        return np.column_stack([data[n] for n in names]).astype(np.float64)
+
+    pts = columns(("x", "y", "z"))
+    normals = columns(("normal_x", "normal_y", "normal_z"))
+    # PCL packs a colour as the four bytes of one field (``rgb`` float32, ``rgba`` uint32)
+    packed = next((f for f in ("rgb", "rgba") if f in data.dtype.names), None)
+    colors = (PcdCloud.decode_rgb(np.ascontiguousarray(data[packed]))
+              if packed is not None and data.dtype[packed].itemsize == 4 else None)
     return PointData(pts, normals, colors, "pcd", {"data": mode})
-
-
-class _capture_fd_output:
-    """Silence C++ libraries (Open3D) that write to file descriptor 1/2 directly."""
-
-    def __enter__(self):
-        self.saved = [os.dup(1), os.dup(2)]
-        self.null = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(self.null, 1)
-        os.dup2(self.null, 2)
-        return self
-
-    def __exit__(self, *exc):
-        os.dup2(self.saved[0], 1)
-        os.dup2(self.saved[1], 2)
-        for fd in (*self.saved, self.null):
-            os.close(fd)
-        return False
 
 
 # ---------------------------------------------------------------------------- meshes' vertices

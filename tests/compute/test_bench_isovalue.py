@@ -1,10 +1,10 @@
 """``splineviz bench isovalue``: the command line and the table (the benchmark itself runs with
-``-m bench``, see benchmarks/bench_isovalue.py)."""
+``-m bench``, see tests/bench/test_bench_isovalue_small.py)."""
 
 import numpy as np
 
+from splineviz.bench.isovalue import _print_table, _rotated
 from splineviz.cli import _build_parser
-from splineviz.compute.bench_isovalue import _print_table, _rotated
 from splineviz.core.camera import Camera
 
 
@@ -41,7 +41,7 @@ def test_table_prints_ratios_and_errors():
 def test_one_measurement_runs_end_to_end(tmp_path):
     """The measuring functions themselves (in this process, on a tiny volume): a broken
     import or call inside them would otherwise only show as an error row of the table."""
-    from splineviz.compute.bench_isovalue import _measure_caster, _measure_vtk
+    from splineviz.bench.isovalue import _measure_caster, _measure_vtk
 
     x = np.linspace(0, 255, 12)
     data = np.add.outer(np.add.outer(x, x), x).astype(np.float32) / 3

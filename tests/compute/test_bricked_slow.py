@@ -69,7 +69,7 @@ def test_every_model_in_8_bricks_on_2_worker_processes(bonsai):
 
 @pytest.mark.slow
 def test_2048_cubed_lazy_volume_under_6_gib():
-    from splineviz.compute.bench_bricks import measure
+    from splineviz.bench.bricks import measure
 
     r = measure(2048, workers=2, model="cubic-c1", size=(1024, 768), brick=256)
     print(f"2048^3 gyroid, cubic-c1, 1024x768, 2 workers: {r['wall_s']:.1f} s (preview "
@@ -106,7 +106,7 @@ def test_1024_cubed_ome_zarr_renders(big_zarr):
 
 @pytest.mark.bench
 def test_bricks_benchmark_prints_its_table():
-    from splineviz.compute.bench_bricks import run_bricks_bench
+    from splineviz.bench.bricks import run_bricks_bench
 
     lines = []
     results = run_bricks_bench(n=256, size=(320, 240), brick=64, workers=(1, 2),

@@ -2,8 +2,10 @@
 100 ms (a reduced-resolution preview), the last one becomes the exact frame, and a frame of
 an older isovalue is never shown after one of a newer isovalue.
 
-Runs on the default data in the default suite; ``-m slow`` drags across bonsai (256^3) with
-the cubic C1 model, the issue's case.
+The default suite drags across the default data against a guard of :data:`PREVIEW_GUARD_S`
+(three times the budget: a busy machine's tick does not reach it, a render in the GUI thread
+does); ``-m slow`` asserts the 100 ms budget on the same data and drags across bonsai (256^3)
+with the cubic C1 model, the issue's case.
 """
 
 import os
@@ -17,9 +19,9 @@ from interaction import (  # noqa: E402
     FRESH,
     LEFT,
     NO_BUTTON,
-    _mouse,
     close_window,
     in_fresh_process,
+    mouse,
     open_window,
     pump,
 )
@@ -27,6 +29,8 @@ from PySide6.QtCore import QEvent  # noqa: E402
 
 #: a picture of the new isovalue must be on screen this soon after a slider step
 PREVIEW_S = 0.100
+#: the default suite's limit on it
+PREVIEW_GUARD_S = 0.300
 #: the exact frame must follow the release within this time
 EXACT_S = 30.0
 
@@ -61,16 +65,16 @@ def _drag_across(w, steps=12):
     xs = [x_of(lo + (hi - lo) * f) for f in [0.15 + 0.7 * i / (steps - 1) for i in range(steps)]]
     latencies, values = [], []
     try:
-        _mouse(hist, QEvent.Type.MouseButtonPress, (xs[0], y), LEFT, LEFT)
+        mouse(hist, QEvent.Type.MouseButtonPress, (xs[0], y), LEFT, LEFT)
         for x in xs[1:]:
-            _mouse(hist, QEvent.Type.MouseMove, (x, y), NO_BUTTON, LEFT)
+            mouse(hist, QEvent.Type.MouseMove, (x, y), NO_BUTTON, LEFT)
             t0 = time.perf_counter()
             state = layer.state
             ok = pump(2.0, lambda s=state: (scene.shown_frame(layer) is not None
                                             and scene.shown_frame(layer).state == s))
             latencies.append(time.perf_counter() - t0 if ok else float("inf"))
             values.append(iso.isovalue)
-        _mouse(hist, QEvent.Type.MouseButtonRelease, (xs[-1], y), LEFT, NO_BUTTON)
+        mouse(hist, QEvent.Type.MouseButtonRelease, (xs[-1], y), LEFT, NO_BUTTON)
         t0 = time.perf_counter()
         assert pump(EXACT_S, lambda: (scene.shown_frame(layer).final
                                       and scene.shown_frame(layer).state == layer.state
@@ -87,14 +91,14 @@ def _drag_across(w, steps=12):
     return latencies
 
 
-def _drag_across_twice_if_slow(w):
-    """:func:`_drag_across`, and once more when a step missed :data:`PREVIEW_S`: on this
-    shared 2-core machine another process can take the CPU for a step; a delay of our own
-    shows in both drags."""
+def _drag_across_twice_if_slow(w, limit_s=PREVIEW_S):
+    """:func:`_drag_across`, and once more when a step missed ``limit_s``: on this shared
+    2-core machine another process can take the CPU for a step; a delay of our own shows in
+    both drags."""
     latencies = _drag_across(w)
-    if max(latencies) > PREVIEW_S:
+    if max(latencies) > limit_s:
         latencies = _drag_across(w)
-    assert max(latencies) <= PREVIEW_S, latencies
+    assert max(latencies) <= limit_s, latencies
 
 
 @pytest.mark.skipif(os.environ.get(FRESH) != "1", reason="run in a fresh process by "
@@ -102,7 +106,16 @@ def _drag_across_twice_if_slow(w):
 def test_slider_drag_on_the_default_data_previews_every_step(window):
     window.open_default()
     window.wait_for_refine()
-    _drag_across_twice_if_slow(window)
+    _drag_across_twice_if_slow(window, PREVIEW_GUARD_S)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.environ.get(FRESH) != "1", reason="run in a fresh process by "
+                    "test_slider_drag_on_the_default_data_keeps_the_budget_alone")
+def test_slider_drag_on_the_default_data_keeps_the_budget(window):
+    window.open_default()
+    window.wait_for_refine()
+    _drag_across_twice_if_slow(window, PREVIEW_S)
 
 
 @pytest.mark.slow
@@ -117,3 +130,10 @@ def test_slider_drag_across_bonsai_with_cubic_c1(window, shared_data):
 @pytest.mark.skipif(os.environ.get(FRESH) == "1", reason="this process is the fresh one")
 def test_slider_drag_on_the_default_data_previews_every_step_alone():
     in_fresh_process("tests/gui/test_isovalue_preview.py::test_slider_drag_on_the_default_data_previews_every_step")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.environ.get(FRESH) == "1", reason="this process is the fresh one")
+def test_slider_drag_on_the_default_data_keeps_the_budget_alone():
+    in_fresh_process("tests/gui/test_isovalue_preview.py::"
+                     "test_slider_drag_on_the_default_data_keeps_the_budget", marks="slow")

@@ -10,8 +10,8 @@ import pytest
 import splineviz as sv
 from splineviz.cli import main
 from splineviz.core.chunked import ChunkedVolume
+from splineviz.io.describe import describe
 from splineviz.io.errors import InvalidDataError
-from splineviz.io.info import describe
 
 #: OME-Zarr test volume: 128^3 uint8 in chunks of 32^3 (the 1024^3 / 128^3 one is -m slow)
 N, CHUNK = 128, 32

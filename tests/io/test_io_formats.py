@@ -284,7 +284,7 @@ def test_nrrd_detached_header_written_by_pynrrd(tmp_path, field):
 
 
 def test_info_on_a_dicom_folder(tmp_path):
-    from splineviz.io.info import describe
+    from splineviz.io.describe import describe
 
     for n, z in enumerate((0.0, 1.5, 3.0)):
         _dicom_slice(tmp_path / f"s{n}.dcm", np.full((3, 4), n, np.uint16), z, instance=n)

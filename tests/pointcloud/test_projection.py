@@ -281,7 +281,7 @@ def test_degree_test_brings_the_noisy_bunny_closer_to_the_clean_scan(shared_data
     position.  Measured: p99 0.241 % of the diagonal with quadratic widest fits, 0.206 % with
     the degree test (the tuned fixed width ``smoothing=2.5``: 0.208 %, in 30 times the time)."""
     import splineviz.pointcloud.projection as projection
-    from splineviz.pointcloud.bench import load_cloud
+    from splineviz.bench.remesh import load_cloud
 
     clean = load_cloud("bunny", shared_data / "points")
     noisy = load_cloud("bunny-noisy", shared_data / "points")

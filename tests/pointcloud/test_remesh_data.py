@@ -104,7 +104,7 @@ def test_noisy_bunny_points_to_mesh_p99_against_the_anchor(shared_data):
     # with the mesh's corners on the surface)
     pytest.importorskip("open3d")
     pytest.importorskip("pymeshlab")
-    from splineviz.pointcloud.bench import _poisson_remeshed, load_cloud
+    from splineviz.bench.remesh import _poisson_remeshed, load_cloud
 
     pts = load_cloud("bunny-noisy", shared_data / "points")
     ours = sv.mesh_quality(sv.remesh(pts), reference=pts)

@@ -186,10 +186,9 @@ def test_sheet_gaps_and_triangles_on_one_sheet():
 @pytest.mark.bench
 @pytest.mark.parametrize("name", ["bonsai-crop", "tooth"])
 def test_data_meshes_against_flying_edges(name):
-    """Issue 14's figures for the exported spline meshes (benchmarks/bench_spline_mesh.py):
+    """Issue 14's figures for the exported spline meshes (splineviz/bench/spline_mesh.py):
     vertices on s = iso, radius ratio, valence 6, no triangle off the surface, at most half of
     flying edges' triangles for no larger a Hausdorff distance. Minutes per set."""
-    import importlib.util
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[2]
@@ -198,10 +197,8 @@ def test_data_meshes_against_flying_edges(name):
         data = root.parents[1] / "shared" / "data" / "volumes"  # a worktree beside main
     if not data.is_dir():
         pytest.skip("shared data sets not present")
-    spec = importlib.util.spec_from_file_location("bench_spline_mesh",
-                                                  root / "benchmarks" / "bench_spline_mesh.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+    from splineviz.bench import spline_mesh as bench
+
     # flying edges as exported (refined once only past its sample cap, as for the tooth),
     # then twice refined where that differs, then the front
     rows = bench.run(data, name, "cubic-c1", [DEFAULT_RHO])

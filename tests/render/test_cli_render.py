@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from splineviz.cli import main
+from splineviz.cli.render import RenderArgumentError, make_camera
 from splineviz.core.testfunctions import ml
 from splineviz.core.volume import Volume
-from splineviz.render.cli_render import RenderArgumentError, make_camera
 
 
 def _read_png(path):

@@ -80,7 +80,7 @@ def _measure_vtk(path, spacing, size):
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     import pyvista as pv
 
-    from splineviz.compute.bench import flying_edges
+    from splineviz.bench.raycast import flying_edges
     from splineviz.core.camera import default_camera
 
     data = np.load(path)

@@ -29,8 +29,8 @@ and the 99th percentile for 2,000 query points at radii 0.9-1.1 ("far"); the pee
 ``jet_smooth_point_set`` (k = 48, degree 2, Cazals-Pouget osculating jets) when the ``cgal``
 package (a ``[bench]`` extra) is installed, timed on the call alone.
 
-Run: ``splineviz bench remesh [--data-dir DIR] [--timeout S] [--clouds a,b]`` (or this module
-as a script).
+Run: ``splineviz bench remesh [--data-dir DIR] [--timeout S] [--clouds a,b]`` (or ``python -m
+splineviz.bench.remesh``).
 """
 
 from __future__ import annotations

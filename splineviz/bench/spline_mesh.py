@@ -17,7 +17,7 @@ points within 1.5 grid steps of the data box: the front stops about one sample s
 box faces (flying edges reaches them), and Newton steps keep a point on a box face within that
 face, so its distance there is not the distance to the surface.
 
-Run: ``.venv/bin/python benchmarks/bench_spline_mesh.py [--data DIR] [--rho 0.3 0.45]
+Run: ``python -m splineviz.bench.spline_mesh [--data DIR] [--rho 0.3 0.45]
 [--sets bonsai-crop bonsai tooth] [--model cubic-c1] [--save DIR]`` (the whole bonsai: ~20 min
 of one core and ~8 GB of memory for the three meshes and their measures)
 """
@@ -198,8 +198,8 @@ def run(data_dir: Path, name: str, model: str, rhos, save: Path | None = None):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path,
-                    default=Path(__file__).resolve().parents[2] / "shared" / "data" / "volumes")
+    ap.add_argument("--data", type=Path, default=Path.cwd() / ".." / "shared" / "data" / "volumes",
+                    help="volumes folder (default ../shared/data/volumes)")
     ap.add_argument("--sets", nargs="+", default=["bonsai-crop", "tooth"], choices=list(SETS))
     ap.add_argument("--model", default="cubic-c1")
     from splineviz.pointcloud.spline_mesh import DEFAULT_RHO

@@ -1,13 +1,13 @@
 """The ``splineviz`` command line.
 
-``splineviz [FILE|SESSION]`` opens the app (:mod:`splineviz.gui`); sub-commands (``render``,
-``remesh``, ``info``, ``bench``) are registered in :data:`SUBCOMMANDS` by the package that
-implements them: each entry names a function ``register(subparsers)`` that adds its parser
-and sets ``func`` (called with the parsed arguments, returns an exit code). User errors
-(:class:`SplinevizError`, ``OSError``, malformed arguments) are printed as one line on stderr
-with exit code 2; no traceback. Documented acceptances (:class:`SplinevizWarning`) are printed
-as one ``splineviz: warning:`` line each; warnings of third-party libraries are not printed
-(the error or warning they lead to is ours to word).
+``splineviz [FILE|SESSION]`` opens the app (:mod:`splineviz.gui`); the sub-commands
+(``render``, ``remesh``, ``info``, ``bench``) are the front-ends in this package, one module
+each, listed in :data:`SUBCOMMANDS`: each entry names a function ``register(subparsers)`` that
+adds its parser and sets ``func`` (called with the parsed arguments, returns an exit code).
+User errors (:class:`SplinevizError`, ``OSError``, malformed arguments) are printed as one
+line on stderr with exit code 2; no traceback. Documented acceptances
+(:class:`SplinevizWarning`) are printed as one ``splineviz: warning:`` line each; warnings of
+third-party libraries are not printed (the error or warning they lead to is ours to word).
 """
 
 from __future__ import annotations
@@ -36,10 +36,10 @@ class _Parser(argparse.ArgumentParser):
 
 # sub-command name -> "module:register_function"
 SUBCOMMANDS: dict[str, str] = {
-    "info": "splineviz.io.info:register",
-    "render": "splineviz.render.cli_render:register",
-    "bench": "splineviz.bench:register",
-    "remesh": "splineviz.pointcloud.cli_remesh:register",
+    "info": "splineviz.cli.info:register",
+    "render": "splineviz.cli.render:register",
+    "bench": "splineviz.cli.bench:register",
+    "remesh": "splineviz.cli.remesh:register",
 }
 
 
@@ -59,7 +59,7 @@ def _build_parser() -> argparse.ArgumentParser:
 def _viewer_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="splineviz", description="Open the splineviz app.")
     parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
-    from splineviz.render.cli_render import finite_float
+    from splineviz.cli.render import finite_float
 
     parser.add_argument("--iso", type=finite_float, default=None, help="isovalue")
     parser.add_argument("--model", default=None,
@@ -108,7 +108,3 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         except KeyboardInterrupt:
             return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -12,7 +12,7 @@ derivatives of the closed forms). vtkCurvatures' mean-curvature sign follows the
 orientation: it is aligned with the analytic sign first. Errors are absolute, in units of
 1 / (domain half-width); the table gives median and 90th percentile.
 
-Run: ``.venv/bin/python benchmarks/bench_curvature.py [--size 64] [--pixels 160]``
+Run: ``python -m splineviz.bench.curvature [--size 64] [--pixels 160]``
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ time of ``scipy.ndimage.map_coordinates(order=3)`` (which includes its B-spline 
 the same points. Each model runs in a fresh subprocess so that its peak resident memory is
 its own; the baseline is measured in the same subprocess, so the printed ratio is same-run.
 
-Run: ``.venv/bin/python benchmarks/bench_evaluate.py [--size 256] [--points 1000000]
+Run: ``python -m splineviz.bench.evaluate [--size 256] [--points 1000000]
 [--models cubic-c1 super-quadratic ...]``
 """
 
@@ -63,8 +63,9 @@ def main(argv=None) -> int:
     print(f"{'model':16s} {'time s':>8s} {'base s':>8s} {'ratio':>6s} {'peak MiB':>9s}")
     for model in args.models:
         proc = subprocess.run(
-            [sys.executable, __file__, "--one", model, "--size", str(args.size),
-             "--points", str(args.points)], capture_output=True, text=True)
+            [sys.executable, "-m", "splineviz.bench.evaluate", "--one", model,
+             "--size", str(args.size), "--points", str(args.points)],
+            capture_output=True, text=True)
         if proc.returncode != 0:
             last = (proc.stderr.strip().splitlines() or ["failed"])[-1]
             print(f"{model:16s} not measured: {last}")

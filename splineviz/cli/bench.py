@@ -1,22 +1,25 @@
-"""``splineviz bench``: the benchmarks, each printing ratios against baselines run in the same
-run (VTK flying edges and trilinear ray casting for ``raycast``; flying edges + an offscreen
-render of its mesh for ``isovalue``; 1 against 2 dask workers for ``bricks``; Open3D Poisson,
-ball pivoting and Poisson + pymeshlab remeshing for ``remesh``)."""
+"""``splineviz bench``: the benchmarks of :mod:`splineviz.bench`, each printing ratios against
+baselines run in the same run (VTK flying edges and trilinear ray casting for ``raycast``;
+flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 dask workers for
+``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
+the 100 ms budget of the GUI thread for ``gui``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
+
+from splineviz.cli.render import finite_float
 
 
 def _run(args) -> int:
     data = args.data_dir or str(Path.cwd() / ".." / "shared" / "data" / "volumes")
     w, h = (int(v) for v in args.size.lower().split("x"))
     if args.which == "raycast":
-        from splineviz.compute.bench import run_bench
+        from splineviz.bench.raycast import run_bench
 
         run_bench(data, size=(w, h), repeats=args.repeats, device=args.device)
     elif args.which == "isovalue":
-        from splineviz.compute.bench_isovalue import MODELS, run_isovalue_bench
+        from splineviz.bench.isovalue import MODELS, run_isovalue_bench
 
         pw, ph = (int(v) for v in args.preview.lower().split("x"))
         sizes = tuple(int(n) for n in args.sizes.split(","))
@@ -24,14 +27,20 @@ def _run(args) -> int:
         run_isovalue_bench(data, sizes=sizes, models=models, size=(w, h), preview=(pw, ph),
                            device=args.device, timeout=args.timeout or 600.0)
     elif args.which == "bricks":
-        from splineviz.compute.bench_bricks import run_bricks_bench
+        from splineviz.bench.bricks import run_bricks_bench
 
         workers = tuple(int(n) for n in args.workers.split(","))
         model = args.models.split(",")[0] if args.models else "cubic-c1"
         run_bricks_bench(n=args.n, model=model, size=(w, h), brick=args.brick,
                          workers=workers, device=args.device)
+    elif args.which == "gui":
+        from splineviz.bench.gui import run_gui_bench
+
+        clouds = args.clouds.split(",") if args.clouds else ["kitten.xyz"]
+        run_gui_bench(args.data_dir, volume=args.volume, points=clouds[0], iso=args.iso,
+                      repeats=args.repeats)
     else:
-        from splineviz.pointcloud.bench import CLOUDS, run_bench
+        from splineviz.bench.remesh import CLOUDS, run_bench
 
         clouds = tuple(args.clouds.split(",")) if args.clouds else CLOUDS
         run_bench(args.data_dir, clouds, args.timeout or 180.0)
@@ -41,17 +50,19 @@ def _run(args) -> int:
 def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
-    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh"],
+    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
-                   help="data folder (default ../shared/data/volumes or ../shared/data/points)")
+                   help="data folder (default ../shared/data/volumes or ../shared/data/points; "
+                        "gui: ../shared/data)")
     p.add_argument("--size", default="512x512", help="raycast, isovalue: image size WxH")
     p.add_argument("--preview", default="128x128", help="isovalue: preview frame size WxH")
     p.add_argument("--sizes", default="256,512",
                    help="isovalue: volume sizes n (bonsai resampled to n^3), comma-separated")
     p.add_argument("--models", default=None,
                    help="isovalue: comma-separated spline models (default: all four)")
-    p.add_argument("--repeats", type=int, default=3, help="raycast: frames per measurement")
+    p.add_argument("--repeats", type=int, default=3,
+                   help="raycast: frames per measurement; gui: measurements per action")
     p.add_argument("--n", type=int, default=512,
                    help="bricks: samples per axis of the lazy gyroid (2048: 32 GiB as float32)")
     p.add_argument("--brick", type=int, default=128, help="bricks: cells per brick and axis")
@@ -62,5 +73,10 @@ def register(subparsers) -> None:
     p.add_argument("--timeout", type=float, default=None,
                    help="remesh: seconds per peer run (180); isovalue: per measurement (600)")
     p.add_argument("--clouds", default=None,
-                   help="remesh: comma-separated clouds (bunny,kitten,bunny-noisy,bunny-open)")
+                   help="remesh: comma-separated clouds (bunny,kitten,bunny-noisy,bunny-open); "
+                        "gui: the point cloud file to open and remesh (kitten.xyz)")
+    p.add_argument("--volume", default=None,
+                   help="gui: volume file in the data folder's volumes/ (default: the embedded "
+                        "default data)")
+    p.add_argument("--iso", type=finite_float, default=None, help="gui: isovalue of --volume")
     p.set_defaults(func=_run)

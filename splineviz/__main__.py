@@ -1,0 +1,7 @@
+"""``python -m splineviz``: the ``splineviz`` command (:func:`splineviz.cli.main`)."""
+
+import sys
+
+from splineviz.cli import main
+
+sys.exit(main())
