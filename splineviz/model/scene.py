@@ -36,14 +36,16 @@ from splineviz.model.nodes import (
     VolumeNode,
 )
 
-#: standard view directions: name -> (direction from the focal point to the eye, view up)
+#: standard views: name -> (direction from the focal point to the eye, view up). ParaView's
+#: convention (its "Set view direction to +X" button): "+X" looks down +X, i.e. along +X,
+#: from an eye on the -X side; the up vector is +Z for the X and Y views and +Y for Z views
 STANDARD_VIEWS = {
-    "+X": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "-X": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "+Y": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-    "-Y": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
-    "+Z": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
-    "-Z": ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),
+    "+X": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "-X": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "+Y": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
+    "-Y": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    "+Z": ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),
+    "-Z": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
     "isometric": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
 }
 
