@@ -232,7 +232,7 @@ class SceneView:
         bounds = self.scene.bounds()
         show = self.scene.view.show_scale and bounds is not None
         if show:
-            self._grid.update_bounds(np.ravel(bounds))  # geometry and tick labels
+            label_grid(self._grid, bounds)
         self._grid.SetVisibility(int(show))
 
     # -- pictures ------------------------------------------------------------------------
@@ -253,6 +253,29 @@ class SceneView:
         for layer in self.layers.values():
             layer.close()
         self.spline_scene.close()
+
+
+def label_grid(grid, bounds, unit: str = "") -> None:
+    """Place pyvista's cube axes ``grid`` around ``bounds`` ``((x0, x1), (y0, y1), (z0,
+    z1))`` padded to round ticks, with the labels and titles of
+    :func:`splineviz.core.ticks.axis_ticks` (engineering notation, no "-0" or float noise),
+    all set anew for each data set."""
+    import vtk
+
+    from splineviz.core.ticks import axis_ticks
+
+    axes = [axis_ticks(lo, hi, name, unit) for (lo, hi), name in zip(bounds, "XYZ", strict=True)]
+    grid.x_title, grid.y_title, grid.z_title = (t.title for t in axes)
+    grid.update_bounds([v for t in axes for v in (t.lo, t.hi)])
+    for i, t in enumerate(axes):
+        getattr(grid, f"Set{'XYZ'[i]}AxisRange")(t.shown_range)
+        labels = vtk.vtkStringArray()
+        # at most 6 labels an axis: beyond, every other one (the even steps, so 0 stays)
+        thin = len(t.labels) > 6
+        k0 = round(t.lo / t.step)
+        for k, text in enumerate(t.labels, start=k0):
+            labels.InsertNextValue("" if thin and k % 2 else text)
+        grid.SetAxisLabels(i, labels)
 
 
 class NodeView:
