@@ -220,6 +220,7 @@ class View3D(QObject):
                                     device=self._device, side=self.side, grid=grid)
         self.spline_scene = self.scene_view.spline_scene
         self.spline_scene.request_refine = self._schedule_refine
+        self.spline_scene.request_render = self.request_render  # a linked colour range
         self.scene.changed.connect(self.request_render)
 
     def add_grid(self) -> None:

@@ -83,6 +83,70 @@ class _LayerView:
     color_range: tuple | None = None
 
 
+class ColourRangeLink:
+    """The automatic colour ranges of the views of one scene model, shared (ParaView's
+    linked views): each :class:`SplineScene` in the link reports the range its frame of a
+    surface needs, and every view colours that surface over the span of all reports. The two
+    halves of a split view, whose frames differ in size and so in their percentiles, then
+    show one surface in one colour scale.
+
+    ``enabled = False`` unlinks them: each view colours by its own frame. ``listeners``
+    are called with ``(key, (lo, hi))`` when the shared range of a surface changes (a panel
+    showing the range in use).
+    """
+
+    def __init__(self):
+        self.enabled = True
+        self.listeners: list = []
+        self._reports: dict = {}  # key -> {id(scene): (lo, hi)}
+        self._scenes: dict = {}  # id(scene) -> scene
+
+    def range_of(self, key) -> tuple | None:
+        """The shared ``(lo, hi)`` of the surface ``key`` (None: no view reported it)."""
+        reports = self._reports.get(key)
+        if not reports:
+            return None
+        return (min(r[0] for r in reports.values()), max(r[1] for r in reports.values()))
+
+    def report(self, scene, key, value: tuple) -> tuple:
+        """``scene``'s range ``value`` of the surface ``key``; returns the range to use."""
+        before = self.range_of(key)
+        self._scenes[id(scene)] = scene
+        self._reports.setdefault(key, {})[id(scene)] = tuple(map(float, value))
+        after = self.range_of(key)
+        if after != before:
+            self._changed(key, after, scene)
+        return after if self.enabled else tuple(value)
+
+    def forget(self, scene, key=None) -> None:
+        """Drop ``scene``'s reports (of ``key``, or all of them when it closes)."""
+        keys = list(self._reports) if key is None else [key]
+        for k in keys:
+            before = self.range_of(k)
+            self._reports.get(k, {}).pop(id(scene), None)
+            if not self._reports.get(k):
+                self._reports.pop(k, None)
+            after = self.range_of(k)
+            if after != before and after is not None:
+                self._changed(k, after, scene)
+        if key is None:
+            self._scenes.pop(id(scene), None)
+
+    def _changed(self, key, value, source) -> None:
+        if self.enabled:
+            for sid, other in list(self._scenes.items()):
+                if other is not source and sid in self._reports.get(key, {}):
+                    other.recolour(key)
+        for listener in list(self.listeners):
+            listener(key, value)
+
+
+def range_key(layer: IsosurfaceLayer):
+    """What identifies a layer's surface across the views of a scene: its node's id."""
+    node = getattr(layer, "node", None)
+    return node.id if node is not None else id(layer)
+
+
 def view_state_of(renderer, size, clip_planes=()) -> ViewState:
     """The :class:`ViewState` of a VTK renderer's active camera at ``size`` (width, height)."""
     cam = renderer.GetActiveCamera()
@@ -120,6 +184,11 @@ class SplineScene:
         self._force_exact = False
         self.last_frame_s = None
         self.frame_times: list[float] = []
+        #: the :class:`ColourRangeLink` of the views of this scene's model (None: alone)
+        self.range_link: ColourRangeLink | None = None
+        #: called with no argument when the picture changed outside a render (a linked
+        #: view changed a shared colour range); the owner renders soon after
+        self.request_render = None
         self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
 
     # -- objects -------------------------------------------------------------------------
@@ -148,6 +217,8 @@ class SplineScene:
             raise SceneError(f"layer {layer.name!r} is not in this scene")
         layer.disconnect(lv.callback)
         self.layers.remove(layer)
+        if self.range_link is not None:
+            self.range_link.forget(self, range_key(layer))
         self.renderer.RemoveActor(lv.quad.actor)
         self.renderer.RemoveActor(lv.scalar_bar)
 
@@ -217,17 +288,31 @@ class SplineScene:
         the layer's scalar bar (no new ray cast: the scalars are kept with the frame)."""
         rf = lv.shown
         scalars = None if rf is None or layer.color_by == "none" else rf.scalars
+        link = self.range_link
         if scalars is None:
             lv.quad.set_colors(None, None)
             lv.color_range = None
+            if link is not None:
+                link.forget(self, range_key(layer))
         else:
             lo, hi = layer.color_range_of(scalars[rf.frame.hit])
+            if link is not None and layer.color_range != "manual":
+                lo, hi = link.report(self, range_key(layer), (lo, hi))
             lv.color_range = (lo, hi)
             lv.quad.set_colors(scalars.shape[::-1],
                                frame_colors(colorize(scalars, layer.color_map, lo, hi)))
             _update_scalar_bar(lv.scalar_bar, layer.color_map, lo, hi,
                                f"{layer.name}: {layer.color_by}")
         lv.scalar_bar.SetVisibility(bool(layer.visible and lv.color_range is not None))
+
+    def recolour(self, key) -> None:
+        """Colour the shown frame of the surface ``key`` (:func:`range_key`) again: its
+        shared range changed in another view of the link."""
+        for layer in self.layers:
+            if range_key(layer) == key:
+                self._apply_colors(layer, self._views[id(layer)])
+                if self.request_render is not None:
+                    self.request_render()
 
     def color_range(self, layer: IsosurfaceLayer) -> tuple | None:
         """The ``(lo, hi)`` the layer's colour map spans in the shown frame (None: flat)."""
@@ -439,6 +524,8 @@ class SplineScene:
         self.renderer.RemoveObserver(self._observer)
         for layer in list(self.layers):
             self.remove_layer(layer)
+        if self.range_link is not None:
+            self.range_link.forget(self)
 
 
 def _brick_progress(job, layer):

@@ -15,6 +15,8 @@ draw through this class, so a session renders the same headless as in the window
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from splineviz.model import (
@@ -28,12 +30,25 @@ from splineviz.model import (
     VolumeNode,
 )
 from splineviz.render.isosurface import IsosurfaceLayer
-from splineviz.render.scene import SplineScene
+from splineviz.render.scene import ColourRangeLink, SplineScene
 
 #: colour of volume outlines and of the axes grid labels
 OUTLINE_COLOR = (0.6, 0.6, 0.65)
 #: camera fields copied between the model and VTK
 _CAMERA_FIELDS = ("position", "focal_point", "view_up", "view_angle")
+
+
+_LINKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def colour_range_link(scene: Scene) -> ColourRangeLink:
+    """The :class:`~splineviz.render.scene.ColourRangeLink` of ``scene``'s views: the two
+    halves of a split view colour a surface over one range (``link.enabled = False``
+    unlinks them)."""
+    link = _LINKS.get(scene)
+    if link is None:
+        link = _LINKS[scene] = ColourRangeLink()
+    return link
 
 
 class SceneView:
@@ -65,6 +80,7 @@ class SceneView:
         self.device = device
         self.side = side
         self.spline_scene = SplineScene(plotter, progressive=progressive)
+        self.spline_scene.range_link = colour_range_link(scene)
         #: node id -> what this view shows of it (a :data:`VIEW_CLASSES` object)
         self.views: dict[str, NodeView] = {}
         #: isosurface node id -> its layer
@@ -525,15 +541,23 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
     else:
         parts = ((None, w),)
     images = []
+    views = []
     with quiet_vtk_logger():
-        for side, width in parts:
-            pl = pv.Plotter(off_screen=True, window_size=(width, h))
-            view = SceneView(scene, pl, progressive=False, device=device, side=side)
-            try:
-                view.render_exact()
+        try:
+            for side, width in parts:
+                pl = pv.Plotter(off_screen=True, window_size=(width, h))
+                views.append((pl, SceneView(scene, pl, progressive=False, device=device,
+                                            side=side)))
+            # twice for a split: the right half may widen a colour range both halves share
+            # (the second pass casts nothing, the frames are current)
+            for _ in range(len(views)):
+                for _pl, view in views:
+                    view.render_exact()
+            for pl, _view in views:
                 images.append(pl.screenshot(None, transparent_background=transparent_background,
                                             return_img=True))
-            finally:
+        finally:
+            for pl, view in views:
                 view.close()
                 pl.close()
     img = images[0] if len(images) == 1 else np.concatenate(images, axis=1)
