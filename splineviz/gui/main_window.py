@@ -184,7 +184,8 @@ class MainWindow(QMainWindow):
     def _size_docks(self) -> None:
         """The 3-D view gets most of the width: each dock column about a fifth."""
         side = max(250, int(0.2 * self.width()))
-        self.resizeDocks([self.docks["Data"], self.docks["Clipping"]], [side, side],
+        self.resizeDocks([self.docks["Data"], self.docks["Clipping"]],
+                         [side, window_state.column_width(self, side)],
                          Qt.Orientation.Horizontal)
 
     def showEvent(self, event):  # noqa: N802 (Qt naming)

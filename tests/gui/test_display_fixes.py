@@ -84,3 +84,24 @@ def test_size_position_and_docks_are_remembered(window, qtbot, tmp_path):
     assert (again.width(), again.height()) == size
     again.wait_idle()
     again.close()
+
+
+def test_dock_tabs_show_whole_titles_at_1280x800(window, qtbot):
+    from PySide6.QtCore import Qt
+    from PySide6.QtWidgets import QTabBar
+
+    window.resize(int(0.85 * 1280), int(0.85 * 800))  # the first opening on that screen
+    qtbot.wait(50)
+    window._size_docks()
+    qtbot.wait(50)
+    bars = [b for b in window.findChildren(QTabBar) if b.isVisible()]
+    assert bars
+    for bar in bars:
+        assert bar.elideMode() == Qt.TextElideMode.ElideNone
+        assert bar.width() >= bar.sizeHint().width(), [bar.tabText(i) for i in range(bar.count())]
+    # a tab bar made later (a dock dragged onto another) gets the same settings
+    window.tabifyDockWidget(window.docks["Data"], window.docks["Log"])
+    window.docks["Log"].show()
+    qtbot.wait(50)
+    assert all(b.elideMode() == Qt.TextElideMode.ElideNone
+               for b in window.findChildren(QTabBar))
