@@ -47,6 +47,8 @@ MIN_PREVIEW_SCALE = 1.0 / 16.0
 PREVIEW_LEVELS = tuple(2.0 ** (-k / 2.0) for k in range(9))
 #: windows narrower than this many pixels get scalar bars with fewer labels across more width
 NARROW_BAR_PX = 480
+#: pixels of height of a scalar bar: the colour bar, its labels and its title above them
+BAR_HEIGHT_PX = 46
 
 
 class SceneError(SplinevizError, ValueError):
@@ -422,13 +424,18 @@ class SplineScene:
 
     def _fit_scalar_bars(self) -> None:
         """Fewer, wider-spread labels on the scalar bars of a narrow window (one of two
-        side-by-side views): five labels of ~7 characters overlap below ~480 pixels."""
-        narrow = self.window_size()[0] < NARROW_BAR_PX
-        for lv in self._views.values():
-            bar = lv.scalar_bar
+        side-by-side views): five labels of ~7 characters overlap below ~480 pixels. Each
+        bar is :data:`BAR_HEIGHT_PX` high whatever the window's height: a bar of a fixed
+        share of a low window had no room for its title above its labels (they overlapped)."""
+        w, h = self.window_size()
+        narrow = w < NARROW_BAR_PX
+        height = min(BAR_HEIGHT_PX / h, 0.3)
+        for index, layer in enumerate(self.layers):
+            bar = self._views[id(layer)].scalar_bar
             bar.SetNumberOfLabels(3 if narrow else 5)
             bar.SetWidth(0.8 if narrow else 0.5)
-            bar.SetPosition(0.1 if narrow else 0.25, bar.GetPosition()[1])
+            bar.SetHeight(height)
+            bar.SetPosition(0.1 if narrow else 0.25, 0.02 + (height + 0.01) * index)
 
     def _reset_clipping_range(self) -> None:
         """Near/far planes around the visible props *and* every visible layer's data box:
@@ -551,7 +558,11 @@ def _scalar_bar(index: int):
     bar.SetPosition(0.25, 0.02 + 0.11 * index)
     bar.SetWidth(0.5)
     bar.SetHeight(0.1)
-    bar.UnconstrainedFontSizeOn()
+    # VTK fits the title and labels into the box (unconstrained sizes overlapped there);
+    # the box is a fixed number of pixels high (:meth:`SplineScene._fit_scalar_bars`), so
+    # the text has one size in every window
+    bar.SetBarRatio(0.3)
+    bar.UnconstrainedFontSizeOff()
     for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
         prop.SetFontSize(12)
         prop.ShadowOff()
