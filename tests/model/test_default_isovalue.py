@@ -66,12 +66,14 @@ def test_the_first_isovalue_shows_an_object_not_a_wall(shared_data, name):
 
 
 def test_the_middle_of_the_range_was_a_wall_on_the_cryo_em_map(shared_data):
-    """What the rule replaces: the middle of the range covers more than half the box."""
+    """What the rule replaces: the middle of the range cuts the noise all over the box
+    (51 % of it measured, against 6 % for the default)."""
     from splineviz.io.volumes import read_volume
 
     volume = read_volume(shared_data / "volumes" / "EMD-3001.map")
     lo, hi = volume.finite_range
-    assert _coverage(volume, 0.5 * (lo + hi)) > 0.5
+    middle = _coverage(volume, 0.5 * (lo + hi))
+    assert middle > 0.4 and middle > 4 * _coverage(volume, default_isovalue(volume))
 
 
 def test_two_classes_are_split_between_them():
