@@ -92,7 +92,7 @@ class ColourRangeLink:
     halves of a split view, whose frames differ in size and so in their percentiles, then
     show one surface in one colour scale.
 
-    ``enabled = False`` unlinks them: each view colours by its own frame. ``listeners``
+    :meth:`set_enabled` (False) unlinks them: each view colours by its own frame. ``listeners``
     are called with ``(key, (lo, hi))`` when the shared range of a surface changes (a panel
     showing the range in use).
     """
@@ -102,6 +102,13 @@ class ColourRangeLink:
         self.listeners: list = []
         self._reports: dict = {}  # key -> {id(scene): (lo, hi)}
         self._scenes: dict = {}  # id(scene) -> scene
+
+    def set_enabled(self, on: bool) -> None:
+        """Link (True) or unlink the views' ranges; every view colours its frames again."""
+        self.enabled = bool(on)
+        for sid, scene in list(self._scenes.items()):
+            for key in [k for k, r in self._reports.items() if sid in r]:
+                scene.recolour(key)
 
     def range_of(self, key) -> tuple | None:
         """The shared ``(lo, hi)`` of the surface ``key`` (None: no view reported it)."""

@@ -43,7 +43,7 @@ _LINKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def colour_range_link(scene: Scene) -> ColourRangeLink:
     """The :class:`~splineviz.render.scene.ColourRangeLink` of ``scene``'s views: the two
-    halves of a split view colour a surface over one range (``link.enabled = False``
+    halves of a split view colour a surface over one range (``link.set_enabled(False)``
     unlinks them)."""
     link = _LINKS.get(scene)
     if link is None:

@@ -10,7 +10,7 @@ import splineviz as sv  # noqa: E402
 from splineviz.core.testfunctions import ml  # noqa: E402
 from splineviz.gui.panels import AnalysisPanel  # noqa: E402
 from splineviz.model import Scene  # noqa: E402
-from splineviz.render.scene_view import SceneView  # noqa: E402
+from splineviz.render.scene_view import SceneView, colour_range_link  # noqa: E402
 
 
 def test_fields_show_the_range_in_use_and_manual_ranges_stay_with_their_measure(qtbot):
@@ -50,6 +50,13 @@ def test_fields_show_the_range_in_use_and_manual_ranges_stay_with_their_measure(
         panel.field.setCurrentIndex(panel.field.findData("mean"))
         assert (iso.color_range, iso.color_min, iso.color_max) == ("manual", -9.0, 9.0)
         assert (panel.vmin.value(), panel.vmax.value()) == (-9.0, 9.0)
+        # the split's two views: linked by default, the box unlinks them
+        link = colour_range_link(scene)
+        assert panel.linked.isChecked() and link.enabled
+        panel.linked.setChecked(False)
+        assert not link.enabled
+        panel.linked.setChecked(True)
+        assert link.enabled
     finally:
         view.close()
         pl.close()

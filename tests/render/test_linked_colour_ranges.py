@@ -53,13 +53,12 @@ def test_the_halves_of_a_split_share_the_range_of_a_surface_unless_unlinked():
         span = (min(own_a[0], own_b[0]), max(own_a[1], own_b[1]))
         assert _range(a, iso) == _range(b, iso) == link.range_of(iso.id) == span
         assert heard and heard[-1] == (iso.id, span)
-        link.enabled = False
-        iso.color_map = "plasma"  # colours again (no new cast)
-        pl_a.render()
-        pl_b.render()
+        link.set_enabled(False)  # each view colours again by its own frame (no new cast)
         assert _range(a, iso) == own_a and _range(b, iso) == own_b
+        link.set_enabled(True)
+        assert _range(a, iso) == _range(b, iso) == span
     finally:
-        link.enabled = True
+        link.set_enabled(True)
         for pl, view in views:
             view.close()
             pl.close()

@@ -9,7 +9,8 @@ The Minimum and Maximum fields always show the range in use: the manual one, or 
 automatic modes the range the views colour by (their shared
 :func:`~splineviz.render.scene_view.colour_range_link`), so switching to manual starts from
 what is on screen. A manual range belongs to the measure it was set for: another measure
-starts automatic, and coming back brings the manual range back.
+starts automatic, and coming back brings the manual range back. "Same range in both views"
+links or unlinks the two halves of a split view.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import math
 import weakref
 
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QFileDialog,
@@ -92,6 +94,9 @@ class AnalysisPanel(QWidget):
                              "range, the range in use in the automatic ones")
         self.vmax.setToolTip("Value at the high end of the colour map: set in the manual "
                              "range, the range in use in the automatic ones")
+        self.linked = QCheckBox("Same range in both views")
+        self.linked.setToolTip("In a split view, colour a surface over one range in both "
+                               "views (the span of what each shows); off: each view its own")
         #: (node id, colour-by field) -> the manual (min, max) set for that measure
         self._manual: dict[tuple[str, str], tuple[float, float]] = {}
         self.section_with = QComboBox()
@@ -115,6 +120,7 @@ class AnalysisPanel(QWidget):
         form.addRow("Range", self.range_mode)
         form.addRow("Minimum", self.vmin)
         form.addRow("Maximum", self.vmax)
+        form.addRow(self.linked)
         form.addRow("Section with", self.section_with)
         form.addRow(self.add_section)
         form.addRow(self.sections)
@@ -140,6 +146,8 @@ class AnalysisPanel(QWidget):
                 panel._range_in_use(key, value)
 
         self._link.listeners.append(in_use)
+        self.linked.setChecked(self._link.enabled)
+        self.linked.toggled.connect(self._link.set_enabled)
         self.destroyed.connect(lambda *_: self._link.listeners.remove(in_use)
                                if in_use in self._link.listeners else None)
         scene.inserted.connect(lambda _n: self._refresh_lists())
