@@ -31,6 +31,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import normalize_clip_planes
 from splineviz.render.colormaps import colorize, lut
+from splineviz.render.colour_ranges import ColourRangeLink, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
 from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
 
@@ -83,77 +84,6 @@ class _LayerView:
     scalar_bar: object = None
     #: the (lo, hi) the colour map spans in the shown frame
     color_range: tuple | None = None
-
-
-class ColourRangeLink:
-    """The automatic colour ranges of the views of one scene model, shared (ParaView's
-    linked views): each :class:`SplineScene` in the link reports the range its frame of a
-    surface needs, and every view colours that surface over the span of all reports. The two
-    halves of a split view, whose frames differ in size and so in their percentiles, then
-    show one surface in one colour scale.
-
-    :meth:`set_enabled` (False) unlinks them: each view colours by its own frame. ``listeners``
-    are called with ``(key, (lo, hi))`` when the shared range of a surface changes (a panel
-    showing the range in use).
-    """
-
-    def __init__(self):
-        self.enabled = True
-        self.listeners: list = []
-        self._reports: dict = {}  # key -> {id(scene): (lo, hi)}
-        self._scenes: dict = {}  # id(scene) -> scene
-
-    def set_enabled(self, on: bool) -> None:
-        """Link (True) or unlink the views' ranges; every view colours its frames again."""
-        self.enabled = bool(on)
-        for sid, scene in list(self._scenes.items()):
-            for key in [k for k, r in self._reports.items() if sid in r]:
-                scene.recolour(key)
-
-    def range_of(self, key) -> tuple | None:
-        """The shared ``(lo, hi)`` of the surface ``key`` (None: no view reported it)."""
-        reports = self._reports.get(key)
-        if not reports:
-            return None
-        return (min(r[0] for r in reports.values()), max(r[1] for r in reports.values()))
-
-    def report(self, scene, key, value: tuple) -> tuple:
-        """``scene``'s range ``value`` of the surface ``key``; returns the range to use."""
-        before = self.range_of(key)
-        self._scenes[id(scene)] = scene
-        self._reports.setdefault(key, {})[id(scene)] = tuple(map(float, value))
-        after = self.range_of(key)
-        if after != before:
-            self._changed(key, after, scene)
-        return after if self.enabled else tuple(value)
-
-    def forget(self, scene, key=None) -> None:
-        """Drop ``scene``'s reports (of ``key``, or all of them when it closes)."""
-        keys = list(self._reports) if key is None else [key]
-        for k in keys:
-            before = self.range_of(k)
-            self._reports.get(k, {}).pop(id(scene), None)
-            if not self._reports.get(k):
-                self._reports.pop(k, None)
-            after = self.range_of(k)
-            if after != before and after is not None:
-                self._changed(k, after, scene)
-        if key is None:
-            self._scenes.pop(id(scene), None)
-
-    def _changed(self, key, value, source) -> None:
-        if self.enabled:
-            for sid, other in list(self._scenes.items()):
-                if other is not source and sid in self._reports.get(key, {}):
-                    other.recolour(key)
-        for listener in list(self.listeners):
-            listener(key, value)
-
-
-def range_key(layer: IsosurfaceLayer):
-    """What identifies a layer's surface across the views of a scene: its node's id."""
-    node = getattr(layer, "node", None)
-    return node.id if node is not None else id(layer)
 
 
 def view_state_of(renderer, size, clip_planes=()) -> ViewState:

@@ -29,8 +29,9 @@ from splineviz.model import (
     SectionNode,
     VolumeNode,
 )
+from splineviz.render.colour_ranges import ColourRangeLink
 from splineviz.render.isosurface import IsosurfaceLayer
-from splineviz.render.scene import ColourRangeLink, SplineScene
+from splineviz.render.scene import SplineScene
 
 #: colour of volume outlines and of the axes grid labels
 OUTLINE_COLOR = (0.6, 0.6, 0.65)
@@ -42,7 +43,7 @@ _LINKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def colour_range_link(scene: Scene) -> ColourRangeLink:
-    """The :class:`~splineviz.render.scene.ColourRangeLink` of ``scene``'s views: the two
+    """The :class:`~splineviz.render.colour_ranges.ColourRangeLink` of ``scene``'s views: the two
     halves of a split view colour a surface over one range (``link.set_enabled(False)``
     unlinks them)."""
     link = _LINKS.get(scene)
