@@ -76,6 +76,18 @@ class ColourRangeLink:
             listener(key, value)
 
 
+class FixedRanges(dict):
+    """Ranges given per surface key, used as they are: what a copy of a view in another
+    window (:func:`~splineviz.render.scene.offscreen_screenshot`) colours by, so that an
+    exported picture has the colours on screen. A surface without one keeps its own."""
+
+    def report(self, scene, key, value: tuple) -> tuple:
+        return tuple(self.get(key, value))
+
+    def forget(self, scene, key=None) -> None:
+        """Nothing to forget: the ranges are fixed."""
+
+
 def range_key(layer):
     """What identifies a layer's surface across the views of a scene: its node's id."""
     node = getattr(layer, "node", None)

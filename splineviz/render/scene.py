@@ -31,7 +31,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import normalize_clip_planes
 from splineviz.render.colormaps import colorize, lut
-from splineviz.render.colour_ranges import ColourRangeLink, range_key
+from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
 from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
 
@@ -123,8 +123,9 @@ class SplineScene:
         self._force_exact = False
         self.last_frame_s = None
         self.frame_times: list[float] = []
-        #: the :class:`ColourRangeLink` of the views of this scene's model (None: alone)
-        self.range_link: ColourRangeLink | None = None
+        #: the :class:`ColourRangeLink` of the views of this scene's model (None: alone;
+        #: a :class:`FixedRanges` for a copy in another window)
+        self.range_link: ColourRangeLink | FixedRanges | None = None
         #: called with no argument when the picture changed outside a render (a linked
         #: view changed a shared colour range); the owner renders soon after
         self.request_render = None
@@ -558,6 +559,11 @@ def offscreen_screenshot(scene: SplineScene, filename=None, size=None,
         bg = background if background is not None else scene.renderer.GetBackground()
         pl.set_background(bg)
         copy = SplineScene(pl, progressive=False)
+        # the picture in the colours of the view: its frame of another size would have
+        # other percentiles (and the view's may be shared with a split's other half)
+        copy.range_link = FixedRanges({range_key(layer): scene.color_range(layer)
+                                       for layer in scene.layers
+                                       if scene.color_range(layer) is not None})
         for rec in scene.props.values():
             if rec.visible:
                 copy.add_mesh(rec.name, rec.dataset, kind=rec.kind, **rec.options)

@@ -64,3 +64,34 @@ def test_the_halves_of_a_split_share_the_range_of_a_surface_unless_unlinked():
             pl.close()
     assert link.range_of(iso.id) is None  # closed views leave nothing behind
 
+
+
+def test_an_exported_picture_has_the_colours_of_the_view(monkeypatch):
+    from splineviz.render.scene import SplineScene, offscreen_screenshot
+
+    scene = Scene()
+    vol = scene.add_volume(sv.Volume.from_function(ml, (17, 17, 17), ml.domain), "ML",
+                           isovalue=0.5, model="trilinear")
+    iso = scene.isosurfaces_of(vol)[0]
+    iso.color_by = "mean"
+    scene.frame(view="isometric")
+    pl = pv.Plotter(off_screen=True, window_size=(120, 90))
+    view = SceneView(scene, pl)
+    seen = []
+    close = SplineScene.close
+
+    def recording_close(self):
+        seen.extend(self.color_range(layer) for layer in self.layers)
+        close(self)
+
+    monkeypatch.setattr(SplineScene, "close", recording_close)
+    try:
+        view.render_exact()
+        shown = _range(view, iso)
+        offscreen_screenshot(view.spline_scene, size=(300, 260))
+        # the copy's own frame (another size) needs another range; it used the view's
+        assert seen == [shown]
+    finally:
+        monkeypatch.undo()
+        view.close()
+        pl.close()
