@@ -141,7 +141,7 @@ def register(subparsers) -> None:
                               "volume (or render a session) into a PNG, without a display.")
     p.add_argument("volume", help="volume file (any format splineviz reads) or session")
     p.add_argument("--iso", type=finite_float, default=None,
-                   help="isovalue (default: mid-range)")
+                   help="isovalue (default: from the data, see splineviz.core.default_isovalue)")
     p.add_argument("--model", default=None,
                    help=" | ".join(MODELS) + " (default: cubic-c1, or the session's)")
     p.add_argument("--size", default="1024x768", help="image size WxH")

@@ -30,7 +30,7 @@ COLORMAPS = ("viridis", "plasma", "inferno", "magma", "cividis", "turbo", "coolw
 RANGE_MODES = ("auto", "manual", "symmetric")
 #: percentiles of the frame's values the automatic range spans (a few extreme pixels at
 #: silhouettes or degenerate points would otherwise take the whole map)
-AUTO_PERCENTILES = (1.0, 99.0)
+AUTO_PERCENTILES = (2.0, 98.0)
 
 
 class ColourByError(SplinevizError, ValueError):

@@ -80,12 +80,19 @@ def run_gui(args) -> int:
         window.export_screenshot(args.screenshot, size=size or DEFAULT_SIZE)
         window.close()
         return 0
+    from splineviz.gui import window_state
+
+    # the last session's size, position and dock layout, unless --size asks for a view size
     if size is not None:
         window.resize(window.width() + size[0] - window.plotter.width(),
                       window.height() + size[1] - window.plotter.height())
+    else:
+        window_state.restore_geometry(window)
     window.ask_before_closing = True
     _install_excepthook(window)
     window.show()
+    if size is None:
+        window_state.restore_layout(window)
     window.enable_autosave()
     # a restored scene (after a crash) replaces what the command line named
     restoring = window.offer_recovery() is not None
@@ -94,5 +101,6 @@ def run_gui(args) -> int:
     elif window.scene.volumes and not restoring:
         window.scene.select(window.scene.volumes[0])
     code = app.exec()
+    window_state.remember(window)
     window.join_workers()
     return code

@@ -15,11 +15,11 @@ import time
 from pathlib import Path
 
 from PySide6.QtCore import Qt, QTimer
-from PySide6.QtGui import QAction, QGuiApplication
+from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QDockWidget, QMainWindow, QMessageBox
 
 from splineviz.core.errors import SplinevizError
-from splineviz.gui import opening
+from splineviz.gui import opening, window_state
 from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
 from splineviz.gui.dialogs import save_session_as
@@ -39,9 +39,6 @@ from splineviz.gui.split import LinkedViews
 from splineviz.gui.status import StatusBar
 from splineviz.gui.view import View3D
 from splineviz.model import Scene
-
-#: share of the screen's available area the window takes at most
-SCREEN_SHARE = 0.92
 
 
 def _preload() -> None:
@@ -155,23 +152,15 @@ class MainWindow(QMainWindow):
             self.panels_menu.addAction(a)
 
     def fit_to_screen(self) -> None:
-        """Size the window to the screen it opens on (status bar and docks visible)."""
-        screen = self.screen() or QGuiApplication.primaryScreen()
-        if screen is None:
-            return
-        avail = screen.availableGeometry()
-        want = self.sizeHint().expandedTo(self.minimumSizeHint())
-        w = min(max(want.width(), int(0.8 * avail.width())), int(SCREEN_SHARE * avail.width()))
-        h = min(max(want.height(), int(0.8 * avail.height())),
-                int(SCREEN_SHARE * avail.height()))
-        self.resize(w, h)
-        self.move(avail.x() + (avail.width() - w) // 2, avail.y() + (avail.height() - h) // 2)
+        """Size the window to the screen it opens on (:func:`.window_state.fit_to_screen`)."""
+        window_state.fit_to_screen(self)
         self._size_docks()
 
     def _size_docks(self) -> None:
         """The 3-D view gets most of the width: each dock column about a fifth."""
         side = max(250, int(0.2 * self.width()))
-        self.resizeDocks([self.docks["Data"], self.docks["Clipping"]], [side, side],
+        self.resizeDocks([self.docks["Data"], self.docks["Clipping"]],
+                         [side, window_state.column_width(self, side)],
                          Qt.Orientation.Horizontal)
 
     def showEvent(self, event):  # noqa: N802 (Qt naming)

@@ -22,6 +22,9 @@ from splineviz.render.scene_view import SceneView
 
 #: delay before exact frames are computed after the last change (debounce)
 REFINE_DELAY_MS = 120
+#: the single keys that act in the view (the help's "Keys in the 3-D view"): key ->
+#: :meth:`View3D.standard_view` argument (None: all data from the current direction)
+VIEW_KEYS = {"r": None, "v": "isometric"}
 #: delay before the value under the cursor is looked up after the mouse stops
 READOUT_DELAY_MS = 40
 #: OpenGL's GL_NEAREST (see :func:`_render_window`)
@@ -181,11 +184,31 @@ class View3D(QObject):
         rw = self.plotter.render_window
         rw.AddObserver("StartEvent", self._frame_start)
         rw.AddObserver("EndEvent", self._frame_end)
+        self._documented_keys_only()
         self.plotter.installEventFilter(self)
         self.plotter.setMouseTracking(True)
         if attach:
             self.attach()
             self.add_axes()
+
+    def _documented_keys_only(self) -> None:
+        """Only the keys the help lists (:data:`VIEW_KEYS`) act in the view.
+
+        VTK's interactor style acts on single letters typed over the view (w: wireframe,
+        s: surface, r: its own camera reset, 3: stereo, e/q: exit, f: fly to, p: pick, j/t:
+        joystick) and pyvista adds its own (q, b, v, C, +, -): a user typing into the wrong
+        place changed the picture or closed the view. Character events are stopped before
+        the style sees them; pyvista's key table holds only the documented keys."""
+        iren = self.plotter.iren
+        iren.clear_key_event_callbacks()
+        for key, view in VIEW_KEYS.items():
+            iren.add_key_event(key, lambda view=view: self.standard_view(view))
+        vtk_iren = iren.interactor
+
+        def swallow(_obj, _event):
+            vtk_iren.GetCommand(tag).SetAbortFlag(1)
+
+        tag = vtk_iren.AddObserver("CharEvent", swallow, 1.0)
 
     def attach(self, grid: bool = True) -> None:
         """Show the scene: its objects become VTK props of this view (nothing is rendered
@@ -197,6 +220,7 @@ class View3D(QObject):
                                     device=self._device, side=self.side, grid=grid)
         self.spline_scene = self.scene_view.spline_scene
         self.spline_scene.request_refine = self._schedule_refine
+        self.spline_scene.request_render = self.request_render  # a linked colour range
         self.scene.changed.connect(self.request_render)
 
     def add_grid(self) -> None:

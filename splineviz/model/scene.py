@@ -36,14 +36,16 @@ from splineviz.model.nodes import (
     VolumeNode,
 )
 
-#: standard view directions: name -> (direction from the focal point to the eye, view up)
+#: standard views: name -> (direction from the focal point to the eye, view up). ParaView's
+#: convention (its "Set view direction to +X" button): "+X" looks down +X, i.e. along +X,
+#: from an eye on the -X side; the up vector is +Z for the X and Y views and +Y for Z views
 STANDARD_VIEWS = {
-    "+X": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "-X": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-    "+Y": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
-    "-Y": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
-    "+Z": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
-    "-Z": ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),
+    "+X": ((-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "-X": ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    "+Y": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0)),
+    "-Y": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    "+Z": ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0)),
+    "-Z": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)),
     "isometric": ((1.0, -1.0, 0.8), (0.0, 0.0, 1.0)),
 }
 
@@ -61,6 +63,20 @@ def default_model() -> str:
     from splineviz.core.splines import MODELS
 
     return "cubic-c1" if "cubic-c1" in MODELS else next(iter(MODELS))
+
+
+def first_isovalue(volume) -> float:
+    """The isovalue a volume's first isosurface starts with, from the histogram the volume
+    already has (:func:`~splineviz.model.summaries.cached_histogram`: made once, by the
+    reading process in the GUI)."""
+    from splineviz.core.default_isovalue import isovalue_from_histogram
+    from splineviz.model.summaries import cached_histogram
+
+    log_counts, edges = cached_histogram(volume)
+    lo, hi = volume.finite_range
+    if not hi > lo:
+        return lo
+    return isovalue_from_histogram(np.rint(np.expm1(log_counts)), edges)
 
 
 class Scene:
@@ -296,15 +312,19 @@ class Scene:
 
     def add_isosurface(self, volume: VolumeNode, isovalue=None, model=None,
                        **props) -> IsosurfaceNode:
-        """A new isosurface of ``volume``: by default the middle of the data range for the
-        first, spread over the range (golden ratio) for the next, in the next palette colour
-        and the model of the volume's last isosurface."""
+        """A new isosurface of ``volume``, in the next palette colour and the model of the
+        volume's last isosurface. A given ``isovalue`` is kept as it is; by default the first
+        isosurface separates background from object
+        (:func:`~splineviz.core.default_isovalue.isovalue_from_histogram` of the volume's
+        histogram: Otsu's threshold, or the level enclosing 1 % of noise-like samples) and
+        the next ones spread over the range (golden ratio)."""
         others = self.isosurfaces_of(volume)
         n = len(others)
         if isovalue is None:
+            isovalue = first_isovalue(volume.active) if n == 0 else None
+        if isovalue is None:
             lo, hi = volume.active.finite_range
-            frac = 0.5 if n == 0 else 0.3 + 0.4 * ((n * 0.618) % 1.0)
-            isovalue = lo + (hi - lo) * frac
+            isovalue = lo + (hi - lo) * (0.3 + 0.4 * ((n * 0.618) % 1.0))
         if model is None:
             model = others[-1].model if others else default_model()
         props.setdefault("color", PALETTE[n % len(PALETTE)])

@@ -31,6 +31,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.raycast_reference import normalize_clip_planes
 from splineviz.render.colormaps import colorize, lut
+from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
 from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
 
@@ -47,6 +48,8 @@ MIN_PREVIEW_SCALE = 1.0 / 16.0
 PREVIEW_LEVELS = tuple(2.0 ** (-k / 2.0) for k in range(9))
 #: windows narrower than this many pixels get scalar bars with fewer labels across more width
 NARROW_BAR_PX = 480
+#: pixels of height of a scalar bar: the colour bar, its labels and its title above them
+BAR_HEIGHT_PX = 46
 
 
 class SceneError(SplinevizError, ValueError):
@@ -120,6 +123,12 @@ class SplineScene:
         self._force_exact = False
         self.last_frame_s = None
         self.frame_times: list[float] = []
+        #: the :class:`ColourRangeLink` of the views of this scene's model (None: alone;
+        #: a :class:`FixedRanges` for a copy in another window)
+        self.range_link: ColourRangeLink | FixedRanges | None = None
+        #: called with no argument when the picture changed outside a render (a linked
+        #: view changed a shared colour range); the owner renders soon after
+        self.request_render = None
         self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
 
     # -- objects -------------------------------------------------------------------------
@@ -148,6 +157,8 @@ class SplineScene:
             raise SceneError(f"layer {layer.name!r} is not in this scene")
         layer.disconnect(lv.callback)
         self.layers.remove(layer)
+        if self.range_link is not None:
+            self.range_link.forget(self, range_key(layer))
         self.renderer.RemoveActor(lv.quad.actor)
         self.renderer.RemoveActor(lv.scalar_bar)
 
@@ -217,17 +228,31 @@ class SplineScene:
         the layer's scalar bar (no new ray cast: the scalars are kept with the frame)."""
         rf = lv.shown
         scalars = None if rf is None or layer.color_by == "none" else rf.scalars
+        link = self.range_link
         if scalars is None:
             lv.quad.set_colors(None, None)
             lv.color_range = None
+            if link is not None:
+                link.forget(self, range_key(layer))
         else:
             lo, hi = layer.color_range_of(scalars[rf.frame.hit])
+            if link is not None and layer.color_range != "manual":
+                lo, hi = link.report(self, range_key(layer), (lo, hi))
             lv.color_range = (lo, hi)
             lv.quad.set_colors(scalars.shape[::-1],
                                frame_colors(colorize(scalars, layer.color_map, lo, hi)))
             _update_scalar_bar(lv.scalar_bar, layer.color_map, lo, hi,
                                f"{layer.name}: {layer.color_by}")
         lv.scalar_bar.SetVisibility(bool(layer.visible and lv.color_range is not None))
+
+    def recolour(self, key) -> None:
+        """Colour the shown frame of the surface ``key`` (:func:`range_key`) again: its
+        shared range changed in another view of the link."""
+        for layer in self.layers:
+            if range_key(layer) == key:
+                self._apply_colors(layer, self._views[id(layer)])
+                if self.request_render is not None:
+                    self.request_render()
 
     def color_range(self, layer: IsosurfaceLayer) -> tuple | None:
         """The ``(lo, hi)`` the layer's colour map spans in the shown frame (None: flat)."""
@@ -337,13 +362,18 @@ class SplineScene:
 
     def _fit_scalar_bars(self) -> None:
         """Fewer, wider-spread labels on the scalar bars of a narrow window (one of two
-        side-by-side views): five labels of ~7 characters overlap below ~480 pixels."""
-        narrow = self.window_size()[0] < NARROW_BAR_PX
-        for lv in self._views.values():
-            bar = lv.scalar_bar
+        side-by-side views): five labels of ~7 characters overlap below ~480 pixels. Each
+        bar is :data:`BAR_HEIGHT_PX` high whatever the window's height: a bar of a fixed
+        share of a low window had no room for its title above its labels (they overlapped)."""
+        w, h = self.window_size()
+        narrow = w < NARROW_BAR_PX
+        height = min(BAR_HEIGHT_PX / h, 0.3)
+        for index, layer in enumerate(self.layers):
+            bar = self._views[id(layer)].scalar_bar
             bar.SetNumberOfLabels(3 if narrow else 5)
             bar.SetWidth(0.8 if narrow else 0.5)
-            bar.SetPosition(0.1 if narrow else 0.25, bar.GetPosition()[1])
+            bar.SetHeight(height)
+            bar.SetPosition(0.1 if narrow else 0.25, 0.02 + (height + 0.01) * index)
 
     def _reset_clipping_range(self) -> None:
         """Near/far planes around the visible props *and* every visible layer's data box:
@@ -439,6 +469,8 @@ class SplineScene:
         self.renderer.RemoveObserver(self._observer)
         for layer in list(self.layers):
             self.remove_layer(layer)
+        if self.range_link is not None:
+            self.range_link.forget(self)
 
 
 def _brick_progress(job, layer):
@@ -464,7 +496,11 @@ def _scalar_bar(index: int):
     bar.SetPosition(0.25, 0.02 + 0.11 * index)
     bar.SetWidth(0.5)
     bar.SetHeight(0.1)
-    bar.UnconstrainedFontSizeOn()
+    # VTK fits the title and labels into the box (unconstrained sizes overlapped there);
+    # the box is a fixed number of pixels high (:meth:`SplineScene._fit_scalar_bars`), so
+    # the text has one size in every window
+    bar.SetBarRatio(0.3)
+    bar.UnconstrainedFontSizeOff()
     for prop in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
         prop.SetFontSize(12)
         prop.ShadowOff()
@@ -523,6 +559,11 @@ def offscreen_screenshot(scene: SplineScene, filename=None, size=None,
         bg = background if background is not None else scene.renderer.GetBackground()
         pl.set_background(bg)
         copy = SplineScene(pl, progressive=False)
+        # the picture in the colours of the view: its frame of another size would have
+        # other percentiles (and the view's may be shared with a split's other half)
+        copy.range_link = FixedRanges({range_key(layer): scene.color_range(layer)
+                                       for layer in scene.layers
+                                       if scene.color_range(layer) is not None})
         for rec in scene.props.values():
             if rec.visible:
                 copy.add_mesh(rec.name, rec.dataset, kind=rec.kind, **rec.options)

@@ -15,6 +15,8 @@ draw through this class, so a session renders the same headless as in the window
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from splineviz.model import (
@@ -27,6 +29,7 @@ from splineviz.model import (
     SectionNode,
     VolumeNode,
 )
+from splineviz.render.colour_ranges import ColourRangeLink
 from splineviz.render.isosurface import IsosurfaceLayer
 from splineviz.render.scene import SplineScene
 
@@ -34,6 +37,19 @@ from splineviz.render.scene import SplineScene
 OUTLINE_COLOR = (0.6, 0.6, 0.65)
 #: camera fields copied between the model and VTK
 _CAMERA_FIELDS = ("position", "focal_point", "view_up", "view_angle")
+
+
+_LINKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def colour_range_link(scene: Scene) -> ColourRangeLink:
+    """The :class:`~splineviz.render.colour_ranges.ColourRangeLink` of ``scene``'s views: the two
+    halves of a split view colour a surface over one range (``link.set_enabled(False)``
+    unlinks them)."""
+    link = _LINKS.get(scene)
+    if link is None:
+        link = _LINKS[scene] = ColourRangeLink()
+    return link
 
 
 class SceneView:
@@ -65,6 +81,7 @@ class SceneView:
         self.device = device
         self.side = side
         self.spline_scene = SplineScene(plotter, progressive=progressive)
+        self.spline_scene.range_link = colour_range_link(scene)
         #: node id -> what this view shows of it (a :data:`VIEW_CLASSES` object)
         self.views: dict[str, NodeView] = {}
         #: isosurface node id -> its layer
@@ -232,7 +249,7 @@ class SceneView:
         bounds = self.scene.bounds()
         show = self.scene.view.show_scale and bounds is not None
         if show:
-            self._grid.update_bounds(np.ravel(bounds))  # geometry and tick labels
+            label_grid(self._grid, bounds)
         self._grid.SetVisibility(int(show))
 
     # -- pictures ------------------------------------------------------------------------
@@ -253,6 +270,29 @@ class SceneView:
         for layer in self.layers.values():
             layer.close()
         self.spline_scene.close()
+
+
+def label_grid(grid, bounds, unit: str = "") -> None:
+    """Place pyvista's cube axes ``grid`` around ``bounds`` ``((x0, x1), (y0, y1), (z0,
+    z1))`` padded to round ticks, with the labels and titles of
+    :func:`splineviz.core.ticks.axis_ticks` (engineering notation, no "-0" or float noise),
+    all set anew for each data set."""
+    import vtk
+
+    from splineviz.core.ticks import axis_ticks
+
+    axes = [axis_ticks(lo, hi, name, unit) for (lo, hi), name in zip(bounds, "XYZ", strict=True)]
+    grid.x_title, grid.y_title, grid.z_title = (t.title for t in axes)
+    grid.update_bounds([v for t in axes for v in (t.lo, t.hi)])
+    for i, t in enumerate(axes):
+        getattr(grid, f"Set{'XYZ'[i]}AxisRange")(t.shown_range)
+        labels = vtk.vtkStringArray()
+        # at most 6 labels an axis: beyond, every other one (the even steps, so 0 stays)
+        thin = len(t.labels) > 6
+        k0 = round(t.lo / t.step)
+        for k, text in enumerate(t.labels, start=k0):
+            labels.InsertNextValue("" if thin and k % 2 else text)
+        grid.SetAxisLabels(i, labels)
 
 
 class NodeView:
@@ -502,15 +542,23 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
     else:
         parts = ((None, w),)
     images = []
+    views = []
     with quiet_vtk_logger():
-        for side, width in parts:
-            pl = pv.Plotter(off_screen=True, window_size=(width, h))
-            view = SceneView(scene, pl, progressive=False, device=device, side=side)
-            try:
-                view.render_exact()
+        try:
+            for side, width in parts:
+                pl = pv.Plotter(off_screen=True, window_size=(width, h))
+                views.append((pl, SceneView(scene, pl, progressive=False, device=device,
+                                            side=side)))
+            # twice for a split: the right half may widen a colour range both halves share
+            # (the second pass casts nothing, the frames are current)
+            for _ in range(len(views)):
+                for _pl, view in views:
+                    view.render_exact()
+            for pl, _view in views:
                 images.append(pl.screenshot(None, transparent_background=transparent_background,
                                             return_img=True))
-            finally:
+        finally:
+            for pl, view in views:
                 view.close()
                 pl.close()
     img = images[0] if len(images) == 1 else np.concatenate(images, axis=1)

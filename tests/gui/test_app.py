@@ -465,13 +465,14 @@ def test_standard_views_look_along_the_axes(window):
     add_sphere(window)
     window.actions_by_name["view +X"].trigger()
     cam = window.scene.camera
+    # ParaView's convention: "+X" looks along +X, from an eye on the -X side
     d = np.subtract(cam.position, cam.focal_point)
-    assert d[0] > 0 and np.allclose(d[1:], 0, atol=1e-9)
+    assert d[0] < 0 and np.allclose(d[1:], 0, atol=1e-9)
     vtk_cam = window.plotter.renderer.GetActiveCamera()
     assert np.allclose(vtk_cam.GetPosition(), cam.position)
     window.actions_by_name["view -Z"].trigger()
     d = np.subtract(cam.position, cam.focal_point)
-    assert d[2] < 0 and np.allclose(d[:2], 0, atol=1e-9)
+    assert d[2] > 0 and np.allclose(d[:2], 0, atol=1e-9)
 
 
 def test_value_readout_under_the_cursor(window):

@@ -107,7 +107,7 @@ def test_scene_colours_the_surface_and_shows_a_scalar_bar():
     scene.render_exact()
     img = np.asarray(pl.screenshot(return_img=True)).astype(int)
     lo, hi = scene.color_range(layer)
-    assert lo == -hi and 0.7 < hi <= 0.8
+    assert lo == -hi and 0.65 < hi <= 0.8  # the 98th percentile of x on a radius-0.8 sphere
     bar = scene._views[id(layer)].scalar_bar
     assert bar.GetVisibility() and bar.GetTitle().endswith("volume")
     # coolwarm: the -x side (image left) bluish, the +x side reddish

@@ -4,13 +4,22 @@ another volume, and exact cross-section curves with their lengths and areas.
 A view of one :class:`~splineviz.model.IsosurfaceNode` (the selection, or the first isosurface
 of a selected volume) like the isosurface panel: widgets write the node's colour-by fields and
 add :class:`~splineviz.model.SectionNode` objects; node events update the widgets.
+
+The Minimum and Maximum fields always show the range in use: the manual one, or in the
+automatic modes the range the views colour by (their shared
+:func:`~splineviz.render.scene_view.colour_range_link`), so switching to manual starts from
+what is on screen. A manual range belongs to the measure it was set for: another measure
+starts automatic, and coming back brings the manual range back. "Same range in both views"
+links or unlinks the two halves of a split view.
 """
 
 from __future__ import annotations
 
 import math
+import weakref
 
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QFileDialog,
@@ -23,6 +32,7 @@ from PySide6.QtWidgets import (
 
 from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
 from splineviz.model import IsosurfaceNode, Scene, SectionNode, VolumeNode
+from splineviz.render.scene_view import colour_range_link
 
 #: labels of the colour-by fields
 FIELD_LABELS = {"none": "Flat colour", "mean": "Mean curvature", "gaussian": "Gaussian curvature",
@@ -80,8 +90,15 @@ class AnalysisPanel(QWidget):
             box.setDecimals(6)
             box.setRange(-1e12, 1e12)
             box.setKeyboardTracking(False)
-        self.vmin.setToolTip("Value at the low end of the colour map (manual range)")
-        self.vmax.setToolTip("Value at the high end of the colour map (manual range)")
+        self.vmin.setToolTip("Value at the low end of the colour map: set in the manual "
+                             "range, the range in use in the automatic ones")
+        self.vmax.setToolTip("Value at the high end of the colour map: set in the manual "
+                             "range, the range in use in the automatic ones")
+        self.linked = QCheckBox("Same range in both views")
+        self.linked.setToolTip("In a split view, colour a surface over one range in both "
+                               "views (the span of what each shows); off: each view its own")
+        #: (node id, colour-by field) -> the manual (min, max) set for that measure
+        self._manual: dict[tuple[str, str], tuple[float, float]] = {}
         self.section_with = QComboBox()
         self.section_with.setToolTip("Cut the isosurface with a clip plane or another "
                                      "isosurface")
@@ -103,6 +120,7 @@ class AnalysisPanel(QWidget):
         form.addRow("Range", self.range_mode)
         form.addRow("Minimum", self.vmin)
         form.addRow("Maximum", self.vmax)
+        form.addRow(self.linked)
         form.addRow("Section with", self.section_with)
         form.addRow(self.add_section)
         form.addRow(self.sections)
@@ -119,6 +137,19 @@ class AnalysisPanel(QWidget):
         self.sections.currentRowChanged.connect(lambda _r: self._show_summary())
         self.export.clicked.connect(lambda: self.export_curves())
         scene.selection.connect(self._selection_changed)
+        self._link = colour_range_link(scene)
+        me = weakref.ref(self)
+
+        def in_use(key, value):
+            panel = me()
+            if panel is not None:
+                panel._range_in_use(key, value)
+
+        self._link.listeners.append(in_use)
+        self.linked.setChecked(self._link.enabled)
+        self.linked.toggled.connect(self._link.set_enabled)
+        self.destroyed.connect(lambda *_: self._link.listeners.remove(in_use)
+                               if in_use in self._link.listeners else None)
         scene.inserted.connect(lambda _n: self._refresh_lists())
         scene.removed.connect(self._removed)
         self.set_node(None)
@@ -212,14 +243,28 @@ class AnalysisPanel(QWidget):
             self.reference.setEnabled(n.color_by == "distance")
             self.cmap.setCurrentText(n.color_map)
             self.range_mode.setCurrentText(n.color_range)
-            self.vmin.setValue(n.color_min)
-            self.vmax.setValue(n.color_max)
             manual = n.color_range == "manual"
+            shown = None if manual else self._link.range_of(n.id)
+            lo, hi = (n.color_min, n.color_max) if shown is None else shown
+            self.vmin.setValue(lo)
+            self.vmax.setValue(hi)
             self.vmin.setEnabled(manual)
             self.vmax.setEnabled(manual)
         finally:
             self._syncing = False
         self._show_summary()
+
+    def _range_in_use(self, key, value) -> None:
+        """The views' shared range of surface ``key`` changed: show it while automatic."""
+        n = self.node
+        if n is None or key != n.id or n.color_range == "manual" or value is None:
+            return
+        self._syncing = True
+        try:
+            self.vmin.setValue(value[0])
+            self.vmax.setValue(value[1])
+        finally:
+            self._syncing = False
 
     def _show_summary(self) -> None:
         secs = self.sections_of_node()
@@ -233,10 +278,23 @@ class AnalysisPanel(QWidget):
     def _write_colour(self) -> None:
         if self._syncing or self.node is None:
             return
+        n = self.node
         values = {"color_by": self.field.currentData(), "color_map": self.cmap.currentText(),
                   "color_range": self.range_mode.currentText()}
-        if self.vmin.value() < self.vmax.value():
+        if values["color_range"] == "manual" and self.vmin.value() < self.vmax.value():
+            # (in the automatic modes the fields show the range in use, not a setting)
             values.update(color_min=self.vmin.value(), color_max=self.vmax.value())
+        if values["color_by"] != n.color_by:
+            # a manual range is that measure's: keep it for a return, start the new
+            # measure from its own (a curvature's range means nothing for a distance)
+            if n.color_range == "manual":
+                self._manual[(n.id, n.color_by)] = (n.color_min, n.color_max)
+            kept = self._manual.get((n.id, values["color_by"]))
+            values["color_range"] = "auto" if kept is None else "manual"
+            if kept is not None:
+                values.update(color_min=kept[0], color_max=kept[1])
+        elif values["color_range"] == "manual" and "color_min" in values:
+            self._manual[(n.id, n.color_by)] = (values["color_min"], values["color_max"])
         if values["color_by"] == "volume":
             values["color_volume_id"] = self.volume.currentData()
         if values["color_by"] == "distance":

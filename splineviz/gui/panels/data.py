@@ -85,6 +85,8 @@ class DataPanel(QWidget):
                 parent_id = getattr(node, "volume_id", None)
                 parent = self._rows.get(parent_id) if parent_id else None
                 row = QTreeWidgetItem([node.name, describe(node)])
+                row.setToolTip(0, node.name)
+                row.setToolTip(1, describe(node))
                 row.setFlags(row.flags() | Qt.ItemFlag.ItemIsUserCheckable)
                 row.setData(0, Qt.ItemDataRole.UserRole, node.id)
                 row.setCheckState(0, self._check_state(node))
@@ -93,6 +95,11 @@ class DataPanel(QWidget):
                 self._rows[node.id] = row
                 node.events.connect(self._node_changed, unique=True)
             self.tree.expandAll()
+            # the names whole (a fixed width cut them at 1280x800); the info gets the rest
+            # and, where it is cut still, its tooltip
+            self.tree.resizeColumnToContents(0)
+            self.tree.setColumnWidth(0, min(self.tree.columnWidth(0) + 8,
+                                            max(120, int(0.6 * self.tree.viewport().width()))))
             if self.scene.selected is not None and self.scene.selected.id in self._rows:
                 self.tree.setCurrentItem(self._rows[self.scene.selected.id])
         finally:
@@ -119,6 +126,8 @@ class DataPanel(QWidget):
         try:
             row.setText(0, node.name)
             row.setText(1, describe(node))
+            row.setToolTip(0, node.name)
+            row.setToolTip(1, describe(node))
             row.setCheckState(0, self._check_state(node))
         finally:
             self._updating = False

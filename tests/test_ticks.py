@@ -1,0 +1,42 @@
+"""Tick labels of the axes grid (issue 26, part 6): round values in engineering notation,
+no "-0", no float noise, one exponent per axis shown in its title."""
+
+import pytest
+
+from splineviz.core.ticks import axis_ticks, vtk_step
+
+
+def test_float_noise_at_an_origin_is_zero():
+    t = axis_ticks(6e-29, 10.0, "X")
+    assert t.labels == ("0", "2", "4", "6", "8", "10") and t.title == "X"
+    assert t.lo == 0.0 and t.hi == 10.0
+
+
+def test_a_bunny_in_metres_is_labelled_in_millimetres_without_minus_zero():
+    t = axis_ticks(-0.094, 0.061, "Y", unit="m")
+    assert t.title == "Y (mm)" and t.exponent == -3
+    assert t.labels[0] == "-100" and t.labels[-1] == "80" and "0" in t.labels
+    assert not any(label in ("-0", "-0.0") or "e" in label for label in t.labels)
+    assert t.lo <= -0.094 and t.hi >= 0.061
+
+
+def test_without_a_unit_the_exponent_is_a_factor_in_the_title():
+    t = axis_ticks(1e-5, 3.3e-5, "Z")
+    assert t.title == "Z (x 1e-6)" and t.labels == ("10", "15", "20", "25", "30", "35")
+    assert axis_ticks(0.0, 255.0, "X").title == "X"
+
+
+@pytest.mark.parametrize(("lo", "hi"), [(-0.3, 0.3), (-9.44, 9.44), (1.0, 1.0 + 1e-12),
+                                        (0.0, 1e6), (-1234.5, -17.25), (5.0, 5.0)])
+def test_labels_are_whole_steps_that_cover_the_range(lo, hi):
+    t = axis_ticks(lo, hi, "X")
+    assert t.lo <= lo and t.hi >= hi
+    n = round((t.hi - t.lo) / t.step)
+    assert len(t.labels) == n + 1
+    # the step is the one VTK's cube axes draw ticks at, on the padded range
+    assert vtk_step(t.hi - t.lo) == pytest.approx(t.step)
+    shown = [float(x) for x in t.labels]
+    scale = 10.0 ** -t.exponent
+    assert shown == pytest.approx([(t.lo + k * t.step) * scale for k in range(n + 1)],
+                                  abs=1e-9 * scale * t.step)
+    assert all(float(x) != 0 or x == "0" for x in t.labels)  # no "-0", no "0.0"
