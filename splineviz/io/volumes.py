@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.errors import SplinevizWarning
-from splineviz.core.volume import Volume, VolumeError
+from splineviz.core.volume import Volume, VolumeError, slabs
 from splineviz.io import _vtk
 from splineviz.io._util import (
     MIN_SAMPLES_PER_AXIS,
@@ -672,8 +672,8 @@ def _read_npy(path: Path) -> VolumeData:
         raise InvalidDataError(f"{path.name} holds a {arr.ndim}-D array, not a volume")
     check_volume_size(arr.shape[:3], arr.dtype.itemsize, path.name)
     check_frame_count(arr.shape[3:], path.name)
-    if arr.ndim == 3:
-        return VolumeData(np.array(arr), format="npy")
+    if arr.ndim == 3:  # stays mapped: Volume keeps a C-ordered array of a kept type as is
+        return VolumeData(np.asarray(arr), format="npy")
     # x, y, z first as in 3-D files; the trailing axes say nothing of what they are. The
     # file stays mapped: each frame is copied out when it is read.
     def read(index):
@@ -713,8 +713,11 @@ def _read_raw(path: Path, *, dims=None, dtype=None, byteorder="little", offset=0
             f"{path.name} holds {have} bytes after the header but dims {dims} of {dt.name} "
             f"need {need}"
         )
-    flat = np.fromfile(str(path), dtype=dt, count=need // dt.itemsize, offset=int(offset))
-    return VolumeData(flat.reshape(dims[::-1]).transpose(2, 1, 0), format="raw")
+    if need == 0:
+        raise DataSizeError(f"{path.name} announces no samples (dims {dims})")
+    # mapped, not read: Volume copies it once into its (x, y, z) C order, in the file's type
+    stored = np.memmap(str(path), dtype=dt, mode="r", offset=int(offset), shape=dims[::-1])
+    return VolumeData(np.asarray(stored).transpose(2, 1, 0), format="raw")
 
 
 # ---------------------------------------------------------------------------- sniffing
@@ -877,9 +880,12 @@ def frames_notice(name: str, selection, channel=None) -> str | None:
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
               nonfinite="error", complex="error", oblique="error") -> Volume:
-    """Validate a :class:`VolumeData` and convert it to a float32 :class:`~splineviz.Volume`
-    (the second half of :func:`read_volume`, whose parameters these are; use it to keep both
-    the stored dtype and the volume from one read)."""
+    """Validate a :class:`VolumeData` and make it a :class:`~splineviz.Volume` (the second
+    half of :func:`read_volume`, whose parameters these are).
+
+    The samples keep the file's type where :class:`~splineviz.Volume` does (8- and 16-bit
+    integers, float32; a memory-mapped array stays mapped when no flip or transpose is
+    needed); the checks run slab by slab, so no full-size float copy is made."""
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     if complex not in ("error", "magnitude"):
@@ -905,32 +911,7 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
     orient = orientation(affine_from(sp, og, vd.direction), raw.shape, name, space=vd.space)
     if oblique == "error":
         refuse_oblique(orient, name)
-    if raw.dtype.kind == "f" and raw.dtype.itemsize > 4:
-        # checked before the float32 cast, which would turn these into infinities and the
-        # message into a false "infinite samples"
-        with np.errstate(invalid="ignore"):
-            beyond = int(np.count_nonzero(np.abs(raw) > np.finfo(np.float32).max))
-        if beyond:
-            raise InvalidDataError(
-                f"{name} has {beyond} finite samples beyond the float32 range "
-                f"(magnitude above {np.finfo(np.float32).max:.3g}) that splineviz computes in; "
-                "rescale the data")
-    data = np.asarray(raw, dtype=np.float32)
-    bad = ~np.isfinite(data)
-    if bad.any():
-        count = int(bad.sum())
-        if bad.all():
-            raise InvalidDataError(f"{name} has no finite samples (all {count:,} are NaN or "
-                                   "infinite), so there is nothing to show")
-        if nonfinite == "error":
-            raise InvalidDataError(
-                f"{name} has {count} NaN or infinite samples "
-                "(read with nonfinite='fill' to replace them)"
-            )
-        fill = float(data[~bad].min())
-        data = np.where(bad, np.float32(fill), data)
-        warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {fill:g}, "
-                      "the smallest finite sample", SplinevizWarning, stacklevel=3)
+    data = _checked_samples(raw, name, nonfinite)
     if orient.oblique:
         data, sp, og = resample_axis_aligned(data, orient, name, fill=float(data.min()))
     else:
@@ -940,6 +921,59 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         return Volume(data, spacing=sp, origin=og)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+
+
+def _checked_samples(raw: np.ndarray, name: str, nonfinite: str) -> np.ndarray:
+    """``raw`` with its non-finite samples refused or filled (:func:`to_volume`); integer
+    samples are returned as they are (only floats hold NaN or infinities).
+
+    Parameters
+    ----------
+    raw : (n0, n1, n2) ndarray, real
+    name : file name for the messages
+    nonfinite : {"error", "fill"}
+
+    Returns
+    -------
+    (n0, n1, n2) ndarray: ``raw`` itself, or a float32 copy (wider floats, or samples filled)
+    """
+    if raw.dtype.kind != "f":
+        return raw
+    beyond = count = 0
+    lo = np.inf
+    big = raw.dtype.itemsize > 4
+    with np.errstate(invalid="ignore", over="ignore"):
+        for slab in slabs(raw):
+            finite = np.isfinite(slab)
+            count += int(slab.size - np.count_nonzero(finite))
+            if big:
+                # counted before the float32 cast, which would turn these into infinities
+                # and the message into a false "infinite samples"
+                beyond += int(np.count_nonzero(np.abs(slab) > np.finfo(np.float32).max))
+            if finite.any():
+                lo = min(lo, float(slab[finite].min()))
+    if beyond:
+        raise InvalidDataError(
+            f"{name} has {beyond} finite samples beyond the float32 range "
+            f"(magnitude above {np.finfo(np.float32).max:.3g}) that splineviz computes in; "
+            "rescale the data")
+    if count == raw.size:
+        raise InvalidDataError(f"{name} has no finite samples (all {count:,} are NaN or "
+                               "infinite), so there is nothing to show")
+    if count and nonfinite == "error":
+        raise InvalidDataError(f"{name} has {count} NaN or infinite samples "
+                               "(read with nonfinite='fill' to replace them)")
+    if not count:
+        return raw
+    fill = np.float32(lo)
+    data = np.asarray(raw, dtype=np.float32)
+    if data is raw or not data.flags.writeable:
+        data = data.copy()
+    for slab in slabs(data):
+        slab[~np.isfinite(slab)] = fill
+    warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {float(fill):g}, "
+                  "the smallest finite sample", SplinevizWarning, stacklevel=4)
+    return data
 
 
 def validate_volume_data(vd: VolumeData, name: str) -> None:
