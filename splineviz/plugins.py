@@ -124,13 +124,17 @@ class PluginAPI:
 
     # -- spline models
     def add_model(self, name, target, *, label=None, degree=None, smoothness="",
-                  ghost_layers=0, options=None):
+                  ghost_layers=0, options=None, kernel_family=None):
         """Add a spline model to the registry :data:`splineviz.core.splines.MODELS`.
 
         ``target`` is ``"module:Class"`` or the class itself (a
         :class:`~splineviz.core.splines.base.Spline` subclass taking the volume). The other
-        arguments describe it to front ends (the GUI's model list shows ``label``); plugin
-        models render through the NumPy reference ray caster (no OpenCL kernel family).
+        arguments describe it to front ends (the GUI's model list shows ``label``). Without
+        ``kernel_family`` the model renders through the NumPy reference ray caster; with a
+        :class:`splineviz.compute.raycast.CustomKernelFamily` subclass (its OpenCL root
+        finder in a ``.cl`` file beside the plugin's module; the class docstring says how to
+        write one) :class:`splineviz.RayCaster` renders it on the OpenCL device like the
+        built-in models, and the family is registered under its ``name``.
         """
         from splineviz.core.splines import MODELS, ModelSpec
 
@@ -140,14 +144,38 @@ class PluginAPI:
             target = f"{target.__module__}:{target.__qualname__}"
         if not isinstance(target, str) or ":" not in target:
             raise PluginError(f"model {name!r} must be given as 'module:Class' or a class")
-        spec = ModelSpec(name, target, label or name, degree, smoothness, None,
+        family = None
+        if kernel_family is not None:
+            from splineviz.compute.raycast import KERNEL_FAMILIES, CustomKernelFamily
+
+            if not (isinstance(kernel_family, type)
+                    and issubclass(kernel_family, CustomKernelFamily)
+                    and kernel_family.name):
+                raise PluginError(f"the kernel family of model {name!r} must be a named "
+                                  "CustomKernelFamily subclass")
+            family = kernel_family.name
+            if KERNEL_FAMILIES.get(family, kernel_family) is not kernel_family:
+                raise PluginError(f"plugin {self.plugin!r} redefines the kernel family "
+                                  f"{family!r}")
+        spec = ModelSpec(name, target, label or name, degree, smoothness, family,
                          int(ghost_layers), dict(options or {}), self.plugin)
+        added_family = []
 
         def do():
+            if kernel_family is not None:
+                from splineviz.compute.raycast import KERNEL_FAMILIES, register_kernel_family
+
+                if family not in KERNEL_FAMILIES:
+                    register_kernel_family(kernel_family)
+                    added_family.append(family)
             MODELS[name] = spec
 
         def undo():
             MODELS.pop(name, None)
+            if added_family:
+                from splineviz.compute.raycast import KERNEL_FAMILIES
+
+                KERNEL_FAMILIES.pop(added_family.pop(), None)
 
         self._staged.append((f"model {name}", do, undo))
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from splineviz.compute.raycast import RayCaster, RayCastError
+from splineviz.compute.raycast import RayCaster, RayCastError, renders_in_bricks
 from splineviz.core.bricks import (
     BrickGrid,
     Placement,
@@ -286,12 +286,12 @@ class BrickedRayCaster:
         from dask.base import tokenize
 
         spec = model_spec(model)
-        if spec.family is None:
-            # only the kernel models declare how far their stencils reach; a plugin model
-            # may be global (an interpolating B-spline's prefilter reads the whole volume)
-            raise RayCastError(f"the {model} model has no OpenCL kernel and cannot be "
-                               f"rendered in bricks; choose one of "
-                               f"{', '.join(m for m, s in MODELS.items() if s.family)}")
+        if not renders_in_bricks(model):
+            # only the kernel families whose bricks carry the same spline declare how far
+            # their stencils reach; a model may be global (an interpolating B-spline's
+            # prefilter reads the whole volume)
+            raise RayCastError(f"the {model} model cannot be rendered in bricks; choose one "
+                               f"of {', '.join(m for m in MODELS if renders_in_bricks(m))}")
         if not isinstance(volume, ChunkedVolume | Volume):
             volume = Volume(volume)
         self.model = model

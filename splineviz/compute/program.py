@@ -3,7 +3,8 @@ specialised with ``-D`` build options (never by string formatting of kernel bodi
 once per (context, file, options, prelude); pyopencl additionally caches binaries on disk.
 
 A prelude is source generated from a model's tables (functions the file calls, e.g.
-:mod:`splineviz.compute.to_program`), prepended to the file; it never depends on a volume."""
+:mod:`splineviz.compute.raycast.to_program`) or a plugin's kernel family, prepended to the
+file; it never depends on a volume."""
 
 from __future__ import annotations
 

@@ -2,7 +2,9 @@
 // data change, and the classification of every cell at once (RayCaster.classify_all).
 // Specialised by -D options: MODEL_TYPE6 (cubes centred at the samples, padded samples with
 // one ghost layer), MODEL_TO with GHOST (unit cells, parity-class tables), else trilinear;
-// DATA_T the device type of the samples (uchar/short/ushort for integer data, else float).
+// MODEL_CUSTOM with CELL_REACH (a plugin's family: cell (i, j, k) reads the samples
+// i..i+CELL_REACH per axis, without a ghost offset); DATA_T the device type of the samples
+// (uchar/short/ushort for integer data, else float); OFFSET64 64-bit sample offsets.
 //
 // Cells (i, j, k) of the traversal grid (CX x CY x CZ) are numbered (i*CY + j)*CZ + k; the
 // samples are data[(i*SY + j)*SZ + k]. The min-max octree holds value bounds (lo, hi) as
@@ -15,6 +17,13 @@
 
 #ifndef DATA_T
 #define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
+#endif
+#ifndef offset_t
+#ifdef OFFSET64
+#define offset_t long
+#else
+#define offset_t int
+#endif
 #endif
 
 // Minimum and maximum of the bound loops: PoCL calls fmin/fmax out of line (two thirds of
@@ -45,13 +54,21 @@ inline float2 cell_bounds(__global const DATA_T *data, int SY, int SZ, int i, in
     for (int a = 0; a < 3; ++a)
         for (int b = 0; b < 3; ++b)
             for (int c = 0; c < 3; ++c) {
-                const float v = data[((i + a) * SY + (j + b)) * SZ + (k + c)];
+                const float v = data[(((offset_t)i + a) * SY + (j + b)) * SZ + (k + c)];
+                lo = min_acc(lo, v);
+                hi = max_acc(hi, v);
+            }
+#elif defined(MODEL_CUSTOM)
+    for (int a = 0; a <= CELL_REACH; ++a)
+        for (int b = 0; b <= CELL_REACH; ++b)
+            for (int c = 0; c <= CELL_REACH; ++c) {
+                const float v = data[(((offset_t)i + a) * SY + (j + b)) * SZ + (k + c)];
                 lo = min_acc(lo, v);
                 hi = max_acc(hi, v);
             }
 #elif defined(MODEL_TO)
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
-    const int base = ((i + GHOST) * SY + (j + GHOST)) * SZ + (k + GHOST);
+    const offset_t base = (((offset_t)i + GHOST) * SY + (j + GHOST)) * SZ + (k + GHOST);
     for (int e = cls_start[cls]; e < cls_start[cls + 1]; ++e) {
         const float v = data[base + cls_offsets[e]];
         lo = min_acc(lo, v);
@@ -61,7 +78,7 @@ inline float2 cell_bounds(__global const DATA_T *data, int SY, int SZ, int i, in
     for (int a = 0; a < 2; ++a)
         for (int b = 0; b < 2; ++b)
             for (int c = 0; c < 2; ++c) {
-                const float v = data[((i + a) * SY + (j + b)) * SZ + (k + c)];
+                const float v = data[(((offset_t)i + a) * SY + (j + b)) * SZ + (k + c)];
                 lo = min_acc(lo, v);
                 hi = max_acc(hi, v);
             }
@@ -92,13 +109,15 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
     // the union of the cells' bounds (the same bounds when negmass is 0), from far fewer loads
 #ifdef MODEL_TYPE6
     const int reach = 2;
+#elif defined(MODEL_CUSTOM)
+    const int reach = CELL_REACH;
 #else
     const int reach = 1;
 #endif
     for (int i = 2 * a; i <= min(2 * a + 1, CX - 1) + reach; ++i)
         for (int j = 2 * b; j <= min(2 * b + 1, CY - 1) + reach; ++j)
             for (int k = 2 * c; k <= min(2 * c + 1, CZ - 1) + reach; ++k) {
-                const float v = data[(i * SY + j) * SZ + k];
+                const float v = data[((offset_t)i * SY + j) * SZ + k];
                 lo = min_acc(lo, v);
                 hi = max_acc(hi, v);
             }

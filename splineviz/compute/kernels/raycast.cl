@@ -10,8 +10,12 @@
 //                        codes from the NPOINTS cube coefficients
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
 //   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
+//   MODEL_CUSTOM         a kernel family brought by a plugin (CustomKernelFamily): its source,
+//   GHOST, CELL_REACH    prepended, defines custom_cell_root, the first root in a unit cell
 //   DATA_T               device type of the samples (uchar/short/ushort: integer data kept
 //                        in a small type, converted to float when read; else float)
+//   OFFSET64             64-bit sample offsets (offset_t is long): volumes past 2^31 device
+//                        samples; without it int, whose arithmetic is cheaper
 //   BRICKS               the ray kernel of a brick of a bigger volume (below); without it,
 //                        the kernel of a single cast, which ignores cell_lo/hi/off
 //
@@ -49,6 +53,14 @@
 #ifndef DATA_T
 #define DATA_T float  // samples as Volume holds them (the host names a smaller exact type)
 #endif
+// offset of a sample in `data` (a plugin's prelude, read before this file, may define it)
+#ifndef offset_t
+#ifdef OFFSET64
+#define offset_t long
+#else
+#define offset_t int
+#endif
+#endif
 #define BISECT_STEPS 40
 // Minimum and maximum for the per-cell and per-point loops: PoCL calls fmin/fmax out of
 // line, and those calls were a seventh of a to-quadratic frame. As fmin/fmax do, a NaN x is
@@ -68,7 +80,7 @@ typedef struct {
 
 inline Trilinear trilinear_coeffs(__global const DATA_T *data, int3 cell, int SY, int SZ)
 {
-    const int base = (cell.x * SY + cell.y) * SZ + cell.z;
+    const offset_t base = ((offset_t)cell.x * SY + cell.y) * SZ + cell.z;
     const int sx = SY * SZ, sy = SZ;
     const float c000 = data[base], c001 = data[base + 1];
     const float c010 = data[base + sy], c011 = data[base + sy + 1];
@@ -462,7 +474,7 @@ inline int cell_word(int a, int3 cell)
 // First root of the type-6 spline - iso on the ray segment p0 + s d, s in [0, len], inside the
 // cube centred at the origin of p; only the tets whose bit is set in `code` are tested.
 // Each tet's part of the segment comes from its four barycentric plane equations (§6.2.2).
-inline float type6_cube_root(__global const DATA_T *pdata, int base,
+inline float type6_cube_root(__global const DATA_T *pdata, offset_t base,
                              __constant const int *stencil, __global const float8 *tet_weights,
                              __constant const float4 *bary, __constant const int *red,
                              uint code, float3 p0, float3 d, float len, float iso,
@@ -511,8 +523,9 @@ inline float type6_cube_root(__global const DATA_T *pdata, int base,
 // (averaging) rules from already computed ones (thesis §5.1-5.2, eq. (5.2);
 // type6_rules.apply_rules is the NumPy reference). Row r of the program (CSR over the
 // stencil values, then the coefficients of rows before r at 27 + row) is the r-th point.
-inline uint type6_tet_code(__global const DATA_T *pdata, int base, __constant const int *stencil,
-                           __global const int *prog_ptr, __global const int *prog_cols,
+inline uint type6_tet_code(__global const DATA_T *pdata, offset_t base,
+                           __constant const int *stencil, __global const int *prog_ptr,
+                           __global const int *prog_cols,
                            __global const float *prog_w, __constant const uint *point_tets,
                            float negmass, float iso)
 {
@@ -545,7 +558,7 @@ inline uint type6_tet_code(__global const DATA_T *pdata, int base, __constant co
 // counts[1] relevant tets); rays that raced it computed the same code and count nothing.
 inline uint type6_cached_code(__global uint *slots, __global uint *pool, int pool_cap,
                               uint epoch, int3 cube, int BY, int BZ,
-                              __global const DATA_T *pdata, int base,
+                              __global const DATA_T *pdata, offset_t base,
                               __constant const int *stencil, __global const int *prog_ptr,
                               __global const int *prog_cols, __global const float *prog_w,
                               __constant const uint *point_tets, float negmass, float iso,
@@ -594,7 +607,7 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
     const int g = get_global_id(0);
     const int cube = cubes[g];
     const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
-    const int base = ((i + 1) * PY + (j + 1)) * PZ + (k + 1);
+    const offset_t base = (((offset_t)i + 1) * PY + (j + 1)) * PZ + (k + 1);
     const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
                                      point_tets, negmass, iso);
     const int3 c3 = (int3)(i, j, k);
@@ -614,10 +627,10 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
 // distinct B-net point of the class's pieces is computed once: min <= iso <= max over a
 // piece's coefficients iff one is <= iso and one is >= iso, so each point marks the pieces
 // whose B-net holds it in two masks (to_class_points, generated from the class tables by
-// splineviz/compute/to_program.py and prepended to this file). *range receives a bound of
+// splineviz/compute/raycast/to_program.py and prepended to this file). *range receives a bound of
 // the spline on the cell that does not depend on the isovalue: the points' (min, max) when
 // they were computed, else the cheap bounds.
-inline int to_relevance(__global const DATA_T *pdata, int corner, int cls,
+inline int to_relevance(__global const DATA_T *pdata, offset_t corner, int cls,
                         __constant const int *cls_start, __constant const int *cls_offsets,
                         float negmass, float iso, uint *words, float2 *range)
 {
@@ -683,7 +696,7 @@ inline uchar2 range_quantise(float2 r, float2 nb)
 // counts it (counts[0] cells with a relevant piece, counts[1] relevant pieces).
 inline void to_cached_bits(__global uint *slots, __global uint *pool, int pool_cap,
                            uint epoch, int3 cell, int BY, int BZ,
-                           __global const DATA_T *pdata, int corner, int cls,
+                           __global const DATA_T *pdata, offset_t corner, int cls,
                            __constant const int *cls_start, __constant const int *cls_offsets,
                            float negmass, float iso, __global int *counts,
                            __global uchar2 *ranges, __global const float2 *bounds,
@@ -731,7 +744,7 @@ __kernel void to_codes(__global const DATA_T *pdata, int PY, int PZ, int CY, int
     const int cell = cells[a];
     const int k = cell % CZ, j = (cell / CZ) % CY, i = cell / (CY * CZ);
     const int cls = ((i & 1) << 2) | ((j & 1) << 1) | (k & 1);
-    const int corner = ((i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
+    const offset_t corner = (((offset_t)i + GHOST) * PY + (j + GHOST)) * PZ + (k + GHOST);
     uint words[NWORDS];
     float2 range;
     n_relevant[a] = to_relevance(pdata, corner, cls, cls_start, cls_offsets, negmass, iso, words,
@@ -771,7 +784,7 @@ inline void to_segment_pieces(int cls, int nw, float3 p0, float3 d, float len, u
 // First root of Q_k - iso on the segment p0 + s d, s in [0, len], in the unit cell whose
 // corner is the origin of p0; the cell's (TO, tet) pieces come from its parity class and
 // only those with their bit set in `words` are tested.
-inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, const uint *words,
+inline float to_cell_root(__global const DATA_T *pdata, offset_t corner, int cls, const uint *words,
                           __constant const int *ent_start,
                           __constant const float4 *ent_centre, __constant const int *ent_base,
                           __constant const int *ent_tet, __global const int *tet_offsets,
@@ -798,7 +811,7 @@ inline float to_cell_root(__global const DATA_T *pdata, int corner, int cls, con
         float lo, hi = best >= 0.0f ? best : len;
         float4 l, av;
         if (!tet_interval(r0, r1, r2, r3, pc, d, &lo, &hi, &l, &av)) continue;
-        const int base = corner + ent_base[e];
+        const offset_t base = corner + ent_base[e];
         // the dense stencil (every tet reads TO_STENCIL data values): each value feeds the
         // 10 coefficients' independent sums, where a sparse row per coefficient made one
         // serial chain of loads and multiply-adds (half the weights are zero)
@@ -946,7 +959,7 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                     break;
                 }
 #elif defined(MODEL_TO)
-                const int corner = ((lc.x + GHOST) * SY + (lc.y + GHOST)) * SZ
+                const offset_t corner = (((offset_t)lc.x + GHOST) * SY + (lc.y + GHOST)) * SZ
                                    + (lc.z + GHOST);
                 // (bricks of TO splines start at even offsets: the parity is the whole grid's)
                 const int cls = ((lc.x & 1) << 2) | ((lc.y & 1) << 1) | (lc.z & 1);
@@ -971,9 +984,23 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                         break;
                     }
                 }
+#elif defined(MODEL_CUSTOM)
+                // a plugin's family: data[base] is the first sample the cell reads
+                const offset_t base = ((offset_t)lc.x * SY + lc.y) * SZ + lc.z;
+                const float3 p = we + s * d - convert_float3(cell);
+                float3 g;
+                const float r = custom_cell_root(data, base, SY, SZ, p, d, s_end - s, iso, &g,
+                                                 want_hess, hess_u);
+                if (r >= 0.0f) {
+                    upos = convert_float3(cell) + p + r * d;
+                    grad_u = g;
+                    t_hit = t0 + s + r;
+                    found = true;
+                    break;
+                }
 #else
                 // cube centred at data point `cell`
-                const int base = ((lc.x + 1) * SY + (lc.y + 1)) * SZ + (lc.z + 1);
+                const offset_t base = (((offset_t)lc.x + 1) * SY + (lc.y + 1)) * SZ + (lc.z + 1);
                 const uint tc = type6_cached_code(slots, pool, pool_cap, epoch, lc, BY, BZ,
                                                   data, base, stencil, prog_ptr, prog_cols,
                                                   prog_w, point_tets, negmass, iso, counts);

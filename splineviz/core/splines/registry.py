@@ -4,9 +4,10 @@ The GUI's model list, the CLI's ``--model`` choices, session files and
 :class:`splineviz.RayCaster` all look models up here, so a model added by a plugin
 (``api.add_model``) appears everywhere at once. An entry names the class that builds the
 spline (``"module:Class"``, imported lazily) and what front ends need to know without
-importing it: the label users see, the polynomial degree and smoothness, the OpenCL kernel
-family that ray casts it (``None``: the NumPy reference ray caster) and how many ghost layers
-of extrapolated samples its stencils read beyond the data box (thesis Remark 1).
+importing it: the label users see, the polynomial degree and smoothness, the name of the
+kernel family that ray casts it (``None``: the NumPy reference ray caster; the families and
+their OpenCL code live in :mod:`splineviz.compute.raycast`) and how many ghost layers of
+extrapolated samples its stencils read beyond the data box (thesis Remark 1).
 """
 
 from __future__ import annotations
@@ -26,10 +27,6 @@ class SplineOptionError(SplinevizError, ValueError):
     (e.g. ``k <= 0`` for ``to-quadratic``)."""
 
 
-#: OpenCL kernel families of ``compute/kernels/raycast.cl`` (the ``-D`` define each selects)
-KERNEL_FAMILIES = {"trilinear": "MODEL_TRILINEAR", "type6": "MODEL_TYPE6", "to": "MODEL_TO"}
-
-
 @dataclass(frozen=True)
 class ModelSpec:
     """One spline model.
@@ -47,7 +44,9 @@ class ModelSpec:
     smoothness : str
         ``"C0"``, ``"C1"``, ...
     family : str or None
-        Key of :data:`KERNEL_FAMILIES`, or None when only the NumPy reference renders it.
+        Name of the ray caster's kernel family (``"trilinear"``, ``"type6"``, ``"to"`` or one
+        a plugin registered, see :data:`splineviz.compute.raycast.KERNEL_FAMILIES`), or None
+        when only the NumPy reference renders it.
     ghost_layers : int
         Extrapolated sample layers the stencils reach beyond the data box.
     options : dict
@@ -70,11 +69,6 @@ class ModelSpec:
     options: dict = field(default_factory=dict)
     plugin: str | None = None
     lattice_period: int = 1
-
-    @property
-    def kernel_define(self) -> str | None:
-        """The ``-D`` define of the OpenCL ray-casting kernel, or None."""
-        return KERNEL_FAMILIES.get(self.family) if self.family else None
 
     @property
     def centred_cells(self) -> bool:

@@ -1,0 +1,123 @@
+"""Device samples of the ray caster: their type, ghost layers, and the trilinear cell bounds
+of the NumPy path."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: device sample types tried in order (numpy type, OpenCL C type) for integer-valued data
+SAMPLE_TYPES = ((np.uint8, "uchar"), (np.int16, "short"), (np.uint16, "ushort"))
+
+
+def sample_type_for(data: np.ndarray, ghost: int) -> tuple[type, str]:
+    """The device type of the samples: the smallest integer type that holds them exactly with
+    ``ghost`` linearly extrapolated layers (uint8/uint16 data, which :class:`Volume` keeps as
+    float32: 4x/2x less device memory and bandwidth), else float32.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) float32
+    ghost : ghost layers (each axis' extrapolation widens the value range by ``2 ghost``
+        times its width, and integers stay integers)
+
+    Returns
+    -------
+    (numpy type, OpenCL C type name)
+    """
+    flat = data.reshape(len(data), -1)
+    step = max(1, 2**24 // flat.shape[1])  # slabs of about 16 M samples: no big temporaries
+    lo, hi = np.inf, -np.inf
+    for i in range(0, len(flat), step):
+        s = flat[i:i + step]
+        if not np.array_equal(s, np.rint(s)):  # fractions, NaN or inf
+            return np.float32, "float"
+        lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
+    grow = (hi - lo) * ghost * sum((1 + 2 * ghost) ** a for a in range(3))
+    for np_type, cl_type in SAMPLE_TYPES:
+        info = np.iinfo(np_type)
+        if info.min <= lo - grow and hi + grow <= info.max:
+            return np_type, cl_type
+    return np.float32, "float"
+
+
+def pad_linear_into(data: np.ndarray, layers: int, out: np.ndarray) -> None:
+    """:func:`splineviz.core.splines.boundary.pad_linear` written into a smaller array type.
+
+    The ghost samples are computed one slab at a time in float64 (as the core does, up to a
+    rounding of the ghosts of earlier axes), so no float64 copy of the volume is made.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) array
+    layers : int >= 1
+    out : (nx + 2 layers, ny + 2 layers, nz + 2 layers), written; float32, or an integer
+        type that holds the padded values exactly (:func:`sample_type_for`)
+    """
+    g = layers
+    n = data.shape
+    out[g:g + n[0], g:g + n[1], g:g + n[2]] = data
+    for axis in range(3):
+        # as the core: axes before `axis` are already padded, the later ones not yet
+        region = [slice(None) if ax < axis else slice(g, g + n[ax]) for ax in range(3)]
+
+        def at(i, region=region, axis=axis):
+            r = list(region)
+            r[axis] = i
+            return tuple(r)
+
+        lo = out[at(g)].astype(np.float64), out[at(g + min(1, n[axis] - 1))].astype(np.float64)
+        hi = (out[at(g + n[axis] - 1)].astype(np.float64),
+              out[at(g + max(n[axis] - 2, 0))].astype(np.float64))
+        for m in range(1, g + 1):
+            # a single sample is repeated (its "neighbour" is itself, so the slope is 0)
+            out[at(g - m)] = (1 + m) * lo[0] - m * lo[1]
+            out[at(g + n[axis] - 1 + m)] = (1 + m) * hi[0] - m * hi[1]
+
+
+def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-cell (min, max) of the 8 corner samples: the trilinear model's value bounds.
+
+    Parameters
+    ----------
+    data : (nx, ny, nz) float
+
+    Returns
+    -------
+    vmin, vmax : (nx-1, ny-1, nz-1) float32
+    """
+    d = np.asarray(data, dtype=np.float32)
+    corners = [d[i:d.shape[0] - 1 + i, j:d.shape[1] - 1 + j, k:d.shape[2] - 1 + k]
+               for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    return np.minimum.reduce(corners), np.maximum.reduce(corners)
+
+
+
+def padded_device_samples(device, data: np.ndarray, ghost: int, dtype):
+    """The samples with ``ghost`` linearly extrapolated layers in their device type, written
+    straight into a device buffer (no host copy of the padded volume).
+
+    Parameters
+    ----------
+    device : splineviz.compute.device.Device
+    data : (nx, ny, nz) float32
+    ghost : int
+    dtype : numpy type of the device samples (:func:`sample_type_for`)
+
+    Returns
+    -------
+    pyopencl.array.Array of shape (nx + 2 ghost, ny + 2 ghost, nz + 2 ghost)
+    """
+    import pyopencl as cl
+    import pyopencl.array as cla
+
+    q = device.queue
+    shape = tuple(n + 2 * ghost for n in data.shape)
+    dtype = np.dtype(dtype)
+    mf = cl.mem_flags
+    buf = cl.Buffer(device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
+                    dtype.itemsize * int(np.prod(shape)))
+    host, _ = cl.enqueue_map_buffer(q, buf, cl.map_flags.WRITE_INVALIDATE_REGION, 0, shape,
+                                    dtype)
+    pad_linear_into(data, ghost, host)
+    host.base.release(q)
+    return cla.Array(q, shape, dtype, data=buf)
