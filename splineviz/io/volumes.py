@@ -54,6 +54,7 @@ from splineviz.io.geometry import (
     resample_axis_aligned,
     warn_flips,
 )
+from splineviz.io.mapped import MappedArray, lazy_array, renders_in_pieces
 from splineviz.io.registry import find_format, register_format
 from splineviz.io.volume_data import (
     FrameAxis,
@@ -672,7 +673,12 @@ def _read_npy(path: Path) -> VolumeData:
         raise InvalidDataError(f"{path.name} holds a {arr.ndim}-D array, not a volume")
     check_volume_size(arr.shape[:3], arr.dtype.itemsize, path.name)
     check_frame_count(arr.shape[3:], path.name)
-    if arr.ndim == 3:  # stays mapped: Volume keeps a C-ordered array of a kept type as is
+    if arr.ndim == 3:
+        if renders_in_pieces(arr.shape, arr.dtype):
+            order = "F" if arr.flags.f_contiguous and not arr.flags.c_contiguous else "C"
+            return _mapped_data(MappedArray(path, arr.offset, arr.dtype, arr.shape, order),
+                                "npy")
+        # stays mapped: Volume keeps a C-ordered array of a kept type as it is
         return VolumeData(np.asarray(arr), format="npy")
     # x, y, z first as in 3-D files; the trailing axes say nothing of what they are. The
     # file stays mapped: each frame is copied out when it is read.
@@ -715,9 +721,17 @@ def _read_raw(path: Path, *, dims=None, dtype=None, byteorder="little", offset=0
         )
     if need == 0:
         raise DataSizeError(f"{path.name} announces no samples (dims {dims})")
+    if renders_in_pieces(dims, dt):
+        return _mapped_data(MappedArray(path, offset, dt, dims, "F"), "raw")
     # mapped, not read: Volume copies it once into its (x, y, z) C order, in the file's type
     stored = np.memmap(str(path), dtype=dt, mode="r", offset=int(offset), shape=dims[::-1])
     return VolumeData(np.asarray(stored).transpose(2, 1, 0), format="raw")
+
+
+def _mapped_data(source: MappedArray, fmt: str) -> VolumeData:
+    """A volume too large to render in one piece (:func:`~splineviz.io.mapped.renders_in_pieces`),
+    read lazily from its mapped file."""
+    return VolumeData(lazy_array(source), format=fmt, meta={"levels": (), "source": source})
 
 
 # ---------------------------------------------------------------------------- sniffing
