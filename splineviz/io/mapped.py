@@ -60,11 +60,16 @@ class MappedArray:
         return np.array(stored[key], dtype=self.dtype.newbyteorder("="), order="C")
 
     def chunks(self) -> tuple[int, int, int]:
-        """Dask chunks: cubes of about :data:`CHUNK_BYTES` (sides a multiple of 16), the
-        shape the bricks of the ray caster are cut in (:mod:`splineviz.compute.bricked`)."""
-        side = int(round((CHUNK_BYTES / self.dtype.itemsize) ** (1 / 3)))
-        side = max(16, side - side % 16)
-        return tuple(min(n, side) for n in self.shape)
+        """Dask chunks of this array (:func:`cube_chunks`)."""
+        return cube_chunks(self.shape, self.dtype)
+
+
+def cube_chunks(shape, dtype) -> tuple[int, int, int]:
+    """Dask chunks: cubes of about :data:`CHUNK_BYTES` (sides a multiple of 16), the shape
+    the bricks of the ray caster are cut in (:mod:`splineviz.compute.bricked`)."""
+    side = int(round((CHUNK_BYTES / np.dtype(dtype).itemsize) ** (1 / 3)))
+    side = max(16, side - side % 16)
+    return tuple(min(int(n), side) for n in shape)
 
 
 def renders_in_pieces(shape, dtype) -> bool:
@@ -77,8 +82,10 @@ def renders_in_pieces(shape, dtype) -> bool:
     return count * (np.dtype(dtype).itemsize + RENDER_BYTES_PER_SAMPLE) > lazy_threshold()
 
 
-def lazy_array(source: MappedArray):
-    """The dask array of ``source`` (nothing read)."""
+def lazy_array(source):
+    """The dask array of ``source`` (a :class:`MappedArray`, or any region reader with
+    ``shape`` and ``dtype``), in :func:`cube_chunks`; nothing is read."""
     import dask.array as da
 
-    return da.from_array(source, chunks=source.chunks(), asarray=False)
+    return da.from_array(source, chunks=cube_chunks(source.shape, source.dtype),
+                         asarray=False)

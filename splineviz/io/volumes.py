@@ -39,7 +39,7 @@ from splineviz.io._util import (
     reader_errors,
     regular_input,
 )
-from splineviz.io.chunked import is_lazy, to_chunked_volume
+from splineviz.io.chunked import AxisSource, is_lazy, to_chunked_volume
 from splineviz.io.errors import (
     CorruptFileError,
     DataFileNotFoundError,
@@ -351,13 +351,7 @@ def _read_nrrd(path: Path) -> VolumeData:
                                f"{header.get('type')!r}") from None
     check_volume_size(sizes, itemsize, path.name)
     datafile = str(header.get("data file", header.get("datafile", "")))
-    if datafile and (datafile.upper().startswith("LIST") or "%" in datafile):
-        if len(sizes) != 3:
-            raise FileFormatError(f"{path.name} is a {len(sizes)}-D NRRD in several files; "
-                                  "only 3-D multi-file NRRDs are supported")
-        data = _read_nrrd_multifile(path, header, datafile, sizes)
-    else:
-        data, header = _read_nrrd_single(path, datafile)
+    multifile = datafile and (datafile.upper().startswith("LIST") or "%" in datafile)
     spacing, direction = (1.0, 1.0, 1.0), None
     if "space directions" in header:
         dirs = np.asarray(header["space directions"], dtype=float)
@@ -376,6 +370,20 @@ def _read_nrrd(path: Path) -> VolumeData:
     elif "spacings" in header:
         spacing = tuple(float(np.asarray(header["spacings"], dtype=float)[a]) for a in spatial)
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
+    source = None
+    if len(sizes) == 3 and not multifile and direction is None:
+        source = _nrrd_mapped(path, header, datafile, sizes)
+    if source is not None:
+        return VolumeData(lazy_array(source), spacing, origin, "nrrd",
+                          {"levels": (), "source": source}, None,
+                          _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""))
+    if multifile:
+        if len(sizes) != 3:
+            raise FileFormatError(f"{path.name} is a {len(sizes)}-D NRRD in several files; "
+                                  "only 3-D multi-file NRRDs are supported")
+        data = _read_nrrd_multifile(path, header, datafile, sizes)
+    else:
+        data, _ = _read_nrrd_single(path, datafile)
     frames = None
     if len(sizes) > 3:
         extra = [a for a in range(len(sizes)) if a not in spatial]
@@ -551,6 +559,38 @@ def _read_nrrd_multifile(path: Path, header, datafile: str, sizes) -> np.ndarray
     return out
 
 
+def _nrrd_mapped(path: Path, header, datafile: str, sizes) -> MappedArray | None:
+    """The samples of a raw-encoded 3-D NRRD too large to render in one piece
+    (:func:`~splineviz.io.mapped.renders_in_pieces`), mapped where they lie in the file, or
+    None for any other NRRD (compressed, text, line skips: pynrrd reads those whole)."""
+    import nrrd
+
+    if str(header.get("encoding", "")).lower() != "raw" or \
+            any(k in header for k in ("line skip", "lineskip")):
+        return None
+    dtype = np.dtype(nrrd.reader._determine_datatype(header))
+    if not renders_in_pieces(sizes, dtype):
+        return None
+    need = int(np.prod(sizes, dtype=object)) * dtype.itemsize
+    skip = int(header.get("byte skip", header.get("byteskip", 0)))
+    if datafile:
+        target = regular_input(confined(datafile, path))
+        size = target.stat().st_size
+        offset = size - need if skip == -1 else skip
+    else:  # attached: the samples follow the blank line that ends the header
+        if skip:
+            return None
+        target = path
+        size = target.stat().st_size
+        end = _head(path, 2**20).find(b"\n\n")
+        if end < 0:
+            return None
+        offset = end + 2
+    if offset < 0 or offset + need != size:
+        return None  # pynrrd reads it, or says what is wrong with it
+    return MappedArray(target, offset, dtype, sizes, "F")
+
+
 def _read_nrrd_single(path: Path, datafile: str):
     import nrrd
 
@@ -641,12 +681,17 @@ def _read_mrc(path: Path) -> VolumeData:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            with mrcfile.open(str(path), mode="r", permissive=False) as m:
+            with mrcfile.mmap(str(path), mode="r", permissive=False) as m:
                 h = m.header
                 if m.data is None or m.data.ndim != 3:
                     raise InvalidDataError(f"{path.name} does not hold a 3-D map")
                 axes = _mrc_axes(h)
-                data = np.array(m.data.transpose(axes))
+                if renders_in_pieces(dims, m.data.dtype):  # read brick by brick, mapped
+                    data = None
+                    source = AxisSource(MappedArray(path, 1024 + int(h.nsymbt), m.data.dtype,
+                                                    m.data.shape, "C"), axes)
+                else:  # copied out of the mapping in (x, y, z) order and the file's type
+                    data = np.array(m.data.transpose(axes))
                 vs = m.voxel_size
                 spacing = (float(vs.x), float(vs.y), float(vs.z))
                 org = np.array([float(h.origin.x), float(h.origin.y), float(h.origin.z)])
@@ -660,6 +705,9 @@ def _read_mrc(path: Path) -> VolumeData:
         start_xyz = [start_crs[crs.index(w + 1)] for w in range(3)]
         org = np.asarray(start_xyz, float) * np.asarray(spacing)
     meta = {"axis_order": "".join("xyz"[c - 1] for c in crs)}
+    if data is None:
+        data = lazy_array(source)
+        meta.update(levels=(), source=source)
     return VolumeData(data, spacing, tuple(float(o) for o in org), "mrc", meta)
 
 

@@ -146,3 +146,29 @@ def test_no_float_copy_of_the_volume_on_the_way_to_a_frame(tmp_path, model):
     # a float32 copy of the samples would be 4 bytes per sample, even a uint8 copy 1 (the
     # device buffers are the OpenCL driver's, not traced)
     assert peak < 1.0 * n**3, f"{peak / n**3:.2f} bytes traced per sample"
+
+
+def test_large_raw_nrrd_and_mrc_read_mapped_in_bricks(tmp_path, monkeypatch):
+    import mrcfile
+    import nrrd
+
+    data = _blob(24, np.int16)
+    data = data[:, :20, :18].copy()
+    nrrd.write(str(tmp_path / "v.nrrd"), data, {"encoding": "raw", "endian": "big",
+                                                 "spacings": [1.0, 2.0, 3.0]}, index_order="F")
+    nrrd.write(str(tmp_path / "d.nhdr"), data, {"encoding": "raw"}, index_order="F",
+               detached_header=True)
+    with mrcfile.new(str(tmp_path / "v.mrc")) as m:
+        m.set_data(np.ascontiguousarray(data.transpose(1, 2, 0)))  # sections along y
+        m.header.mapc, m.header.mapr, m.header.maps = 1, 3, 2  # columns x, rows z
+    eager = {name: sv.read_volume(tmp_path / name) for name in ("v.nrrd", "d.nhdr", "v.mrc")}
+    monkeypatch.setenv("SPLINEVIZ_LAZY_SHARE", "0")
+    for name, whole in eager.items():
+        assert whole.dtype == np.int16, name
+        np.testing.assert_array_equal(whole.data, data, err_msg=name)
+        lazy = sv.read_volume(tmp_path / name)
+        assert isinstance(lazy, ChunkedVolume) and lazy.shape == data.shape, name
+        assert lazy.spacing == whole.spacing and lazy.origin == whole.origin, name
+        box = ((2, 19), (3, 4), (0, 18))
+        np.testing.assert_array_equal(lazy.read(box).data, data[2:19, 3:4], err_msg=name)
+    assert eager["v.nrrd"].spacing == (1.0, 2.0, 3.0)
