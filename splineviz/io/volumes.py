@@ -3,8 +3,12 @@
 Convention: every reader returns a :class:`~splineviz.io.volume_data.VolumeData` whose
 ``data`` is indexed ``data[i, j, k]`` at world point ``origin + D @ ((i, j, k) * spacing)``
 (x fastest in the file; ``D`` its direction matrix, the identity unless the file states
-one), in the file's own sample type; :func:`read_volume` turns it into a float32
-:class:`~splineviz.Volume`, axis-aligned by the rule of :mod:`splineviz.io.geometry`.
+one), in the file's own sample type; :func:`read_volume` turns it into a
+:class:`~splineviz.Volume` that keeps that type where it can (8- and 16-bit integers,
+float32), axis-aligned by the rule of :mod:`splineviz.io.geometry`. NumPy, raw, raw-encoded
+NRRD and MRC samples are memory-mapped; a volume too large to render in one piece
+(:func:`~splineviz.io.mapped.renders_in_pieces`) opens as a chunked volume read from the
+mapping brick by brick.
 Readers are built on VTK (VTI, legacy VTK, MetaImage, multi-file NRRD), pynrrd (NRRD/NHDR),
 mrcfile (MRC/CCP4) and pydicom (DICOM series); the nibabel formats live in
 :mod:`splineviz.io.neuro`, 4-D files read as sequences in :mod:`splineviz.io.sequence`. SLC
@@ -893,9 +897,10 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     Returns
     -------
     Volume or ChunkedVolume
-        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, float32; chunked formats
-        (OME-Zarr, Zarr, HDF5) give a lazily read
-        :class:`~splineviz.core.chunked.ChunkedVolume`.
+        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, in the file's sample type
+        where :class:`~splineviz.Volume` keeps it (else float32); chunked formats
+        (OME-Zarr, Zarr, HDF5), and mapped ones too large to render in one piece, give a
+        lazily read :class:`~splineviz.core.chunked.ChunkedVolume`.
 
     Raises
     ------
