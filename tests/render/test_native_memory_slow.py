@@ -31,30 +31,32 @@ def _write_phantom(path: Path, n: int = 1024) -> None:
     del out
 
 
-def _peak_memory(cmd, cwd) -> tuple[int, float, int]:
-    """Run ``cmd``; return (exit status, wall seconds, peak of the summed proportional set
-    size of its process tree: shared libraries and shared file pages counted once)."""
+def _peak_memory(cmd, cwd, log: Path) -> tuple[float, int]:
+    """Run ``cmd`` (output to ``log``); return (wall seconds, peak of the summed
+    proportional set size of its process tree: shared libraries and shared file pages
+    counted once)."""
     psutil = pytest.importorskip("psutil")
     t0 = time.perf_counter()
-    proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-    root = psutil.Process(proc.pid)
-    peak = 0
-    while proc.poll() is None:
-        total = 0
-        try:
-            procs = [root, *root.children(recursive=True)]
-        except psutil.Error:
-            break
-        for p in procs:
+    with open(log, "wb") as out, subprocess.Popen(cmd, cwd=cwd, stdout=out,
+                                                   stderr=subprocess.STDOUT) as proc:
+        root = psutil.Process(proc.pid)
+        peak = 0
+        while proc.poll() is None:
+            total = 0
             try:
-                total += p.memory_full_info().pss
+                procs = [root, *root.children(recursive=True)]
             except psutil.Error:
-                pass
-        peak = max(peak, total)
-        time.sleep(0.2)
-    out = proc.stdout.read().decode(errors="replace")
-    assert proc.returncode == 0, out
-    return proc.returncode, time.perf_counter() - t0, peak
+                break
+            for p in procs:
+                try:
+                    total += p.memory_full_info().pss
+                except psutil.Error:
+                    pass
+            peak = max(peak, total)
+            time.sleep(0.2)
+        proc.wait()
+    assert proc.returncode == 0, log.read_text(errors="replace")
+    return time.perf_counter() - t0, peak
 
 
 @pytest.mark.slow
@@ -62,8 +64,9 @@ def test_a_1024_cubed_uint8_volume_renders_within_2_5_gb(tmp_path):
     volume = tmp_path / "ball1024.npy"
     _write_phantom(volume)
     png = tmp_path / "ball.png"
-    _, seconds, peak = _peak_memory(
-        [sys.executable, "-m", "splineviz.cli", "render", str(volume), "-o", str(png)], ROOT)
+    seconds, peak = _peak_memory(
+        [sys.executable, "-m", "splineviz.cli", "render", str(volume), "-o", str(png)], ROOT,
+        tmp_path / "render.log")
     print(f"1024^3 uint8 render: {seconds:.1f} s, peak {peak / 1e9:.2f} GB")
     assert png.stat().st_size > 1000
     assert peak <= LIMIT_BYTES, f"peak {peak / 1e9:.2f} GB"
