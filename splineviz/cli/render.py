@@ -77,8 +77,10 @@ def _configure_bricks(scene, args):
         bar.refresh()
 
     saved = dict(bricked.DEFAULTS)
+    # one frame: a brick's caster is not asked again, so none is kept (their device buffers
+    # are the larger part of a worker's memory)
     bricked.configure(scheduler=args.scheduler or saved["scheduler"], workers=args.workers,
-                      progress=progress)
+                      progress=progress, cache_bytes=0)
     return bar, saved
 
 

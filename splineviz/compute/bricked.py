@@ -55,7 +55,8 @@ from splineviz.core.volume import Volume
 
 #: cells per brick along each axis when none is given (bricks of whole chunks, about 256^3)
 BRICK_CELLS = 256
-#: bytes of brick ray casters a worker keeps for later frames (``$SPLINEVIZ_BRICK_CACHE``)
+#: bytes of brick ray casters (samples and device buffers, :func:`caster_bytes`) a worker
+#: keeps for later frames (``$SPLINEVIZ_BRICK_CACHE``)
 WORKER_CACHE_BYTES = int(float(os.environ.get("SPLINEVIZ_BRICK_CACHE", 2**30)))
 #: bricks in flight per worker (more: better load balance; fewer: more hidden bricks culled)
 INFLIGHT_PER_WORKER = 2
@@ -79,9 +80,19 @@ _cache: OrderedDict = OrderedDict()
 _cache_lock = threading.Lock()
 
 
+def caster_bytes(rc) -> int:
+    """Memory a ray caster holds: its samples (in their own type: 1 byte each for uint8) and,
+    on the OpenCL path, its device buffers (host memory on a CPU device; the larger part)."""
+    n = rc.volume.data.nbytes
+    if rc.stats.get("path") == "opencl":
+        n += sum(rc.limits().need.values())
+    return n
+
+
 def _cached_caster(key, make, budget: int):
-    """A brick's ray caster from this worker's LRU cache (``budget`` bytes of samples), or
-    ``make()`` it. Returns (caster, seconds to make it, whether it was cached)."""
+    """A brick's ray caster from this worker's LRU cache (``budget`` bytes,
+    :func:`caster_bytes`), or ``make()`` it. Returns (caster, seconds to make it, whether it
+    was cached)."""
     with _cache_lock:
         rc = _cache.get(key)
         if rc is not None:
@@ -91,10 +102,10 @@ def _cached_caster(key, make, budget: int):
     rc = make()
     seconds = time.perf_counter() - t
     with _cache_lock:
-        size = rc.volume.data.nbytes
+        size = caster_bytes(rc)
         if size <= budget:
             _cache[key] = rc
-            while sum(c.volume.data.nbytes for c in _cache.values()) > budget:
+            while sum(caster_bytes(c) for c in _cache.values()) > budget:
                 _cache.popitem(last=False)
     return rc, seconds, False
 
@@ -180,15 +191,16 @@ def _caster_lock(rc) -> threading.Lock:
 _local = {}
 
 #: defaults of casters made without explicit settings (the CLI's ``--scheduler``,
-#: ``--workers`` and progress bar; ``$SPLINEVIZ_SCHEDULER``)
+#: ``--workers``, progress bar and brick cache; ``$SPLINEVIZ_SCHEDULER``)
 DEFAULTS = {"scheduler": os.environ.get("SPLINEVIZ_SCHEDULER") or None, "workers": None,
-            "progress": None}
+            "progress": None, "cache_bytes": WORKER_CACHE_BYTES}
 
 
 def configure(**settings) -> None:
     """Set :data:`DEFAULTS`: ``scheduler`` (``tcp://host:port`` or None for a
     LocalCluster), ``workers`` (LocalCluster size), ``progress`` (``progress(done, total)``
-    called after each brick of every frame)."""
+    called after each brick of every frame), ``cache_bytes`` (brick casters a worker keeps
+    for later frames; 0 for a single frame)."""
     unknown = set(settings) - set(DEFAULTS)
     if unknown:
         raise TypeError(f"unknown bricked rendering settings: {', '.join(sorted(unknown))}")
@@ -266,8 +278,9 @@ class BrickedRayCaster:
         Number of bricks per axis instead of ``brick_size``.
     cull : bool
         Skip bricks hidden behind hits already composited (opaque; exact).
-    cache_bytes : int
-        Brick ray casters kept per worker for later frames.
+    cache_bytes : int, optional
+        Bytes of brick ray casters kept per worker for later frames (:func:`caster_bytes`;
+        default ``DEFAULTS["cache_bytes"]``).
     **model_kwargs
         Passed to the brick ray casters (e.g. ``k``).
 
@@ -282,7 +295,7 @@ class BrickedRayCaster:
     def __init__(self, volume, model: str = "cubic-c1", device: str | None = None, *,
                  client=None, scheduler: str | None = None, workers: int | None = None,
                  brick_size=None, bricks=None, cull: bool = True,
-                 cache_bytes: int = WORKER_CACHE_BYTES, **model_kwargs):
+                 cache_bytes: int | None = None, **model_kwargs):
         from dask.base import tokenize
 
         spec = model_spec(model)
@@ -306,7 +319,7 @@ class BrickedRayCaster:
             self.grid = BrickGrid(volume.shape, brick_size or default_brick_size(chunks), halo,
                                   align, centred)
         self.cull = bool(cull)
-        self.cache_bytes = int(cache_bytes)
+        self.cache_bytes = int(DEFAULTS["cache_bytes"] if cache_bytes is None else cache_bytes)
         self._client = client
         self._scheduler = scheduler
         self._workers = workers

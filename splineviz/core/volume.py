@@ -1,6 +1,11 @@
 """The volume data model: a 3-D scalar grid with spacing and origin.
 
 Convention: ``data[i, j, k]`` is the sample at world point ``origin + (i*sx, j*sy, k*sz)``.
+
+Samples keep their own type when float32 holds every value of it exactly (8- and 16-bit
+integers, float32 itself), so a 1 GiB uint8 file stays 1 GiB; computations convert where they
+need floats, a piece at a time (:meth:`Volume.values`), and get the numbers a float32 volume
+would give. Other types become float32, the compute precision, as before.
 """
 
 from __future__ import annotations
@@ -11,6 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from splineviz.core.errors import SplinevizError
+
+#: sample types a volume keeps: float32 holds each of their values exactly
+NATIVE_TYPES = frozenset(np.dtype(t) for t in (np.uint8, np.int8, np.uint16, np.int16,
+                                               np.float32))
+#: samples per slab of the whole-volume passes (range, non-finite count): bounded temporaries
+SLAB_SAMPLES = 2**24
 
 
 class VolumeError(SplinevizError, ValueError):
@@ -24,7 +35,9 @@ class Volume:
     Parameters
     ----------
     data : (nx, ny, nz) array_like
-        Samples; stored as C-contiguous float32 (the compute precision).
+        Samples, stored C-contiguous in their own type if it is one of :data:`NATIVE_TYPES`
+        (no copy of an array that already is, a memory-mapped file included), bool as uint8,
+        anything else as float32 (the compute precision). :meth:`values` gives float32.
     spacing : (3,) sequence of float, optional
         Grid step along x, y, z; all must be finite and positive.
     origin : (3,) sequence of float, optional
@@ -61,7 +74,7 @@ class Volume:
             raise VolumeError(f"spacing must be finite and positive, got {spacing}")
         if not all(np.isfinite(o) for o in origin):
             raise VolumeError(f"origin must be finite, got {origin}")
-        object.__setattr__(self, "data", np.ascontiguousarray(data, dtype=np.float32))
+        object.__setattr__(self, "data", _stored(data))
         object.__setattr__(self, "spacing", spacing)
         object.__setattr__(self, "origin", origin)
 
@@ -77,21 +90,53 @@ class Volume:
             for o, n, s in zip(self.origin, self.shape, self.spacing, strict=True)
         )
 
+    @property
+    def dtype(self) -> np.dtype:
+        """The type the samples are stored in (see :data:`NATIVE_TYPES`)."""
+        return self.data.dtype
+
+    def values(self, region=None) -> np.ndarray:
+        """The samples of ``region`` as float32, the type computations take.
+
+        Parameters
+        ----------
+        region : tuple of slices or int index arrays, optional
+            A NumPy index into :attr:`data`; the whole volume when omitted (a full-size copy
+            unless the samples are float32 already: convert pieces where you can).
+
+        Returns
+        -------
+        ndarray of float32, the shape ``data[region]`` has (``data`` itself when float32
+        and ``region`` is omitted)
+        """
+        part = self.data if region is None else self.data[region]
+        return np.asarray(part, dtype=np.float32)
+
     @functools.cached_property
     def finite_range(self) -> tuple[float, float]:
         """(min, max) over the finite samples; raises VolumeError if there are none.
 
-        Computed once (a full pass over the data: ~0.1 s for 256^3), so callers in a GUI
-        thread can ask again for free; the samples are not meant to change in place."""
-        finite = self.data[np.isfinite(self.data)]
-        if finite.size == 0:
+        Computed once, slab by slab (no full-size temporary; a full pass over the data,
+        ~0.1 s for 256^3), so callers in a GUI thread can ask again for free; the samples are
+        not meant to change in place."""
+        lo, hi = np.inf, -np.inf
+        for slab in slabs(self.data):
+            if slab.dtype.kind == "f":
+                slab = slab[np.isfinite(slab)]
+                if slab.size == 0:
+                    continue
+            lo, hi = min(lo, float(slab.min())), max(hi, float(slab.max()))
+        if lo > hi:
             raise VolumeError("the volume has no finite samples")
-        return float(finite.min()), float(finite.max())
+        return lo, hi
 
     @functools.cached_property
     def nonfinite_count(self) -> int:
         """Number of NaN or infinite samples (computed once, like :attr:`finite_range`)."""
-        return int(self.data.size - np.count_nonzero(np.isfinite(self.data)))
+        if self.data.dtype.kind != "f":
+            return 0
+        return sum(int(slab.size - np.count_nonzero(np.isfinite(slab)))
+                   for slab in slabs(self.data))
 
     def world_to_index(self, points: np.ndarray) -> np.ndarray:
         """(N, 3) world coordinates -> (N, 3) continuous grid indices (float64)."""
@@ -120,3 +165,19 @@ class Volume:
         spacing = tuple((hi - lo) / max(n - 1, 1)
                         for (lo, hi), n in zip(bounds, shape, strict=True))
         return cls(func(x, y, z), spacing=spacing, origin=tuple(lo for lo, _ in bounds))
+
+
+def _stored(data: np.ndarray) -> np.ndarray:
+    """``data`` in the type and layout a :class:`Volume` keeps (see its ``data``)."""
+    if data.dtype == bool:
+        return np.ascontiguousarray(data).view(np.uint8)
+    if data.dtype.newbyteorder("=") in NATIVE_TYPES:
+        return np.ascontiguousarray(data, dtype=data.dtype.newbyteorder("="))
+    return np.ascontiguousarray(data, dtype=np.float32)
+
+
+def slabs(data: np.ndarray):
+    """``data`` in slabs along its first axis of about :data:`SLAB_SAMPLES` samples."""
+    step = max(1, SLAB_SAMPLES // max(1, data[0].size))
+    for i in range(0, len(data), step):
+        yield data[i:i + step]

@@ -473,4 +473,6 @@ def _trilinear(volume, point) -> float:
     from scipy.ndimage import map_coordinates
 
     idx = volume.world_to_index(np.asarray(point, dtype=np.float64)[None])
-    return float(map_coordinates(volume.data, idx.T, order=1, mode="nearest")[0])
+    # float32 output: the samples may be integers (map_coordinates returns their type)
+    return float(map_coordinates(volume.data, idx.T, order=1, mode="nearest",
+                                 output=np.float32)[0])

@@ -3,8 +3,12 @@
 Convention: every reader returns a :class:`~splineviz.io.volume_data.VolumeData` whose
 ``data`` is indexed ``data[i, j, k]`` at world point ``origin + D @ ((i, j, k) * spacing)``
 (x fastest in the file; ``D`` its direction matrix, the identity unless the file states
-one), in the file's own sample type; :func:`read_volume` turns it into a float32
-:class:`~splineviz.Volume`, axis-aligned by the rule of :mod:`splineviz.io.geometry`.
+one), in the file's own sample type; :func:`read_volume` turns it into a
+:class:`~splineviz.Volume` that keeps that type where it can (8- and 16-bit integers,
+float32), axis-aligned by the rule of :mod:`splineviz.io.geometry`. NumPy, raw, raw-encoded
+NRRD and MRC samples are memory-mapped; a volume too large to render in one piece
+(:func:`~splineviz.io.mapped.renders_in_pieces`) opens as a chunked volume read from the
+mapping brick by brick.
 Readers are built on VTK (VTI, legacy VTK, MetaImage, multi-file NRRD), pynrrd (NRRD/NHDR),
 mrcfile (MRC/CCP4) and pydicom (DICOM series); the nibabel formats live in
 :mod:`splineviz.io.neuro`, 4-D files read as sequences in :mod:`splineviz.io.sequence`. SLC
@@ -25,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.errors import SplinevizWarning
-from splineviz.core.volume import Volume, VolumeError
+from splineviz.core.volume import Volume, VolumeError, slabs
 from splineviz.io import _vtk
 from splineviz.io._util import (
     MIN_SAMPLES_PER_AXIS,
@@ -39,7 +43,7 @@ from splineviz.io._util import (
     reader_errors,
     regular_input,
 )
-from splineviz.io.chunked import is_lazy, to_chunked_volume
+from splineviz.io.chunked import AxisSource, is_lazy, to_chunked_volume
 from splineviz.io.errors import (
     CorruptFileError,
     DataFileNotFoundError,
@@ -54,6 +58,7 @@ from splineviz.io.geometry import (
     resample_axis_aligned,
     warn_flips,
 )
+from splineviz.io.mapped import MappedArray, lazy_array, renders_in_pieces
 from splineviz.io.registry import find_format, register_format
 from splineviz.io.volume_data import (
     FrameAxis,
@@ -350,13 +355,7 @@ def _read_nrrd(path: Path) -> VolumeData:
                                f"{header.get('type')!r}") from None
     check_volume_size(sizes, itemsize, path.name)
     datafile = str(header.get("data file", header.get("datafile", "")))
-    if datafile and (datafile.upper().startswith("LIST") or "%" in datafile):
-        if len(sizes) != 3:
-            raise FileFormatError(f"{path.name} is a {len(sizes)}-D NRRD in several files; "
-                                  "only 3-D multi-file NRRDs are supported")
-        data = _read_nrrd_multifile(path, header, datafile, sizes)
-    else:
-        data, header = _read_nrrd_single(path, datafile)
+    multifile = datafile and (datafile.upper().startswith("LIST") or "%" in datafile)
     spacing, direction = (1.0, 1.0, 1.0), None
     if "space directions" in header:
         dirs = np.asarray(header["space directions"], dtype=float)
@@ -375,6 +374,20 @@ def _read_nrrd(path: Path) -> VolumeData:
     elif "spacings" in header:
         spacing = tuple(float(np.asarray(header["spacings"], dtype=float)[a]) for a in spatial)
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
+    source = None
+    if len(sizes) == 3 and not multifile and direction is None:
+        source = _nrrd_mapped(path, header, datafile, sizes)
+    if source is not None:
+        return VolumeData(lazy_array(source), spacing, origin, "nrrd",
+                          {"levels": (), "source": source}, None,
+                          _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""))
+    if multifile:
+        if len(sizes) != 3:
+            raise FileFormatError(f"{path.name} is a {len(sizes)}-D NRRD in several files; "
+                                  "only 3-D multi-file NRRDs are supported")
+        data = _read_nrrd_multifile(path, header, datafile, sizes)
+    else:
+        data, _ = _read_nrrd_single(path, datafile)
     frames = None
     if len(sizes) > 3:
         extra = [a for a in range(len(sizes)) if a not in spatial]
@@ -550,6 +563,38 @@ def _read_nrrd_multifile(path: Path, header, datafile: str, sizes) -> np.ndarray
     return out
 
 
+def _nrrd_mapped(path: Path, header, datafile: str, sizes) -> MappedArray | None:
+    """The samples of a raw-encoded 3-D NRRD too large to render in one piece
+    (:func:`~splineviz.io.mapped.renders_in_pieces`), mapped where they lie in the file, or
+    None for any other NRRD (compressed, text, line skips: pynrrd reads those whole)."""
+    import nrrd
+
+    if str(header.get("encoding", "")).lower() != "raw" or \
+            any(k in header for k in ("line skip", "lineskip")):
+        return None
+    dtype = np.dtype(nrrd.reader._determine_datatype(header))
+    if not renders_in_pieces(sizes, dtype):
+        return None
+    need = int(np.prod(sizes, dtype=object)) * dtype.itemsize
+    skip = int(header.get("byte skip", header.get("byteskip", 0)))
+    if datafile:
+        target = regular_input(confined(datafile, path))
+        size = target.stat().st_size
+        offset = size - need if skip == -1 else skip
+    else:  # attached: the samples follow the blank line that ends the header
+        if skip:
+            return None
+        target = path
+        size = target.stat().st_size
+        end = _head(path, 2**20).find(b"\n\n")
+        if end < 0:
+            return None
+        offset = end + 2
+    if offset < 0 or offset + need != size:
+        return None  # pynrrd reads it, or says what is wrong with it
+    return MappedArray(target, offset, dtype, sizes, "F")
+
+
 def _read_nrrd_single(path: Path, datafile: str):
     import nrrd
 
@@ -640,12 +685,17 @@ def _read_mrc(path: Path) -> VolumeData:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            with mrcfile.open(str(path), mode="r", permissive=False) as m:
+            with mrcfile.mmap(str(path), mode="r", permissive=False) as m:
                 h = m.header
                 if m.data is None or m.data.ndim != 3:
                     raise InvalidDataError(f"{path.name} does not hold a 3-D map")
                 axes = _mrc_axes(h)
-                data = np.array(m.data.transpose(axes))
+                if renders_in_pieces(dims, m.data.dtype):  # read brick by brick, mapped
+                    data = None
+                    source = AxisSource(MappedArray(path, 1024 + int(h.nsymbt), m.data.dtype,
+                                                    m.data.shape, "C"), axes)
+                else:  # copied out of the mapping in (x, y, z) order and the file's type
+                    data = np.array(m.data.transpose(axes))
                 vs = m.voxel_size
                 spacing = (float(vs.x), float(vs.y), float(vs.z))
                 org = np.array([float(h.origin.x), float(h.origin.y), float(h.origin.z)])
@@ -659,6 +709,9 @@ def _read_mrc(path: Path) -> VolumeData:
         start_xyz = [start_crs[crs.index(w + 1)] for w in range(3)]
         org = np.asarray(start_xyz, float) * np.asarray(spacing)
     meta = {"axis_order": "".join("xyz"[c - 1] for c in crs)}
+    if data is None:
+        data = lazy_array(source)
+        meta.update(levels=(), source=source)
     return VolumeData(data, spacing, tuple(float(o) for o in org), "mrc", meta)
 
 
@@ -673,7 +726,12 @@ def _read_npy(path: Path) -> VolumeData:
     check_volume_size(arr.shape[:3], arr.dtype.itemsize, path.name)
     check_frame_count(arr.shape[3:], path.name)
     if arr.ndim == 3:
-        return VolumeData(np.array(arr), format="npy")
+        if renders_in_pieces(arr.shape, arr.dtype):
+            order = "F" if arr.flags.f_contiguous and not arr.flags.c_contiguous else "C"
+            return _mapped_data(MappedArray(path, arr.offset, arr.dtype, arr.shape, order),
+                                "npy")
+        # stays mapped: Volume keeps a C-ordered array of a kept type as it is
+        return VolumeData(np.asarray(arr), format="npy")
     # x, y, z first as in 3-D files; the trailing axes say nothing of what they are. The
     # file stays mapped: each frame is copied out when it is read.
     def read(index):
@@ -713,8 +771,19 @@ def _read_raw(path: Path, *, dims=None, dtype=None, byteorder="little", offset=0
             f"{path.name} holds {have} bytes after the header but dims {dims} of {dt.name} "
             f"need {need}"
         )
-    flat = np.fromfile(str(path), dtype=dt, count=need // dt.itemsize, offset=int(offset))
-    return VolumeData(flat.reshape(dims[::-1]).transpose(2, 1, 0), format="raw")
+    if need == 0:
+        raise DataSizeError(f"{path.name} announces no samples (dims {dims})")
+    if renders_in_pieces(dims, dt):
+        return _mapped_data(MappedArray(path, offset, dt, dims, "F"), "raw")
+    # mapped, not read: Volume copies it once into its (x, y, z) C order, in the file's type
+    stored = np.memmap(str(path), dtype=dt, mode="r", offset=int(offset), shape=dims[::-1])
+    return VolumeData(np.asarray(stored).transpose(2, 1, 0), format="raw")
+
+
+def _mapped_data(source: MappedArray, fmt: str) -> VolumeData:
+    """A volume too large to render in one piece (:func:`~splineviz.io.mapped.renders_in_pieces`),
+    read lazily from its mapped file."""
+    return VolumeData(lazy_array(source), format=fmt, meta={"levels": (), "source": source})
 
 
 # ---------------------------------------------------------------------------- sniffing
@@ -828,9 +897,10 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     Returns
     -------
     Volume or ChunkedVolume
-        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, float32; chunked formats
-        (OME-Zarr, Zarr, HDF5) give a lazily read
-        :class:`~splineviz.core.chunked.ChunkedVolume`.
+        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, in the file's sample type
+        where :class:`~splineviz.Volume` keeps it (else float32); chunked formats
+        (OME-Zarr, Zarr, HDF5), and mapped ones too large to render in one piece, give a
+        lazily read :class:`~splineviz.core.chunked.ChunkedVolume`.
 
     Raises
     ------
@@ -877,9 +947,12 @@ def frames_notice(name: str, selection, channel=None) -> str | None:
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
               nonfinite="error", complex="error", oblique="error") -> Volume:
-    """Validate a :class:`VolumeData` and convert it to a float32 :class:`~splineviz.Volume`
-    (the second half of :func:`read_volume`, whose parameters these are; use it to keep both
-    the stored dtype and the volume from one read)."""
+    """Validate a :class:`VolumeData` and make it a :class:`~splineviz.Volume` (the second
+    half of :func:`read_volume`, whose parameters these are).
+
+    The samples keep the file's type where :class:`~splineviz.Volume` does (8- and 16-bit
+    integers, float32; a memory-mapped array stays mapped when no flip or transpose is
+    needed); the checks run slab by slab, so no full-size float copy is made."""
     if nonfinite not in ("error", "fill"):
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     if complex not in ("error", "magnitude"):
@@ -905,32 +978,7 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
     orient = orientation(affine_from(sp, og, vd.direction), raw.shape, name, space=vd.space)
     if oblique == "error":
         refuse_oblique(orient, name)
-    if raw.dtype.kind == "f" and raw.dtype.itemsize > 4:
-        # checked before the float32 cast, which would turn these into infinities and the
-        # message into a false "infinite samples"
-        with np.errstate(invalid="ignore"):
-            beyond = int(np.count_nonzero(np.abs(raw) > np.finfo(np.float32).max))
-        if beyond:
-            raise InvalidDataError(
-                f"{name} has {beyond} finite samples beyond the float32 range "
-                f"(magnitude above {np.finfo(np.float32).max:.3g}) that splineviz computes in; "
-                "rescale the data")
-    data = np.asarray(raw, dtype=np.float32)
-    bad = ~np.isfinite(data)
-    if bad.any():
-        count = int(bad.sum())
-        if bad.all():
-            raise InvalidDataError(f"{name} has no finite samples (all {count:,} are NaN or "
-                                   "infinite), so there is nothing to show")
-        if nonfinite == "error":
-            raise InvalidDataError(
-                f"{name} has {count} NaN or infinite samples "
-                "(read with nonfinite='fill' to replace them)"
-            )
-        fill = float(data[~bad].min())
-        data = np.where(bad, np.float32(fill), data)
-        warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {fill:g}, "
-                      "the smallest finite sample", SplinevizWarning, stacklevel=3)
+    data = _checked_samples(raw, name, nonfinite)
     if orient.oblique:
         data, sp, og = resample_axis_aligned(data, orient, name, fill=float(data.min()))
     else:
@@ -940,6 +988,59 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         return Volume(data, spacing=sp, origin=og)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
+
+
+def _checked_samples(raw: np.ndarray, name: str, nonfinite: str) -> np.ndarray:
+    """``raw`` with its non-finite samples refused or filled (:func:`to_volume`); integer
+    samples are returned as they are (only floats hold NaN or infinities).
+
+    Parameters
+    ----------
+    raw : (n0, n1, n2) ndarray, real
+    name : file name for the messages
+    nonfinite : {"error", "fill"}
+
+    Returns
+    -------
+    (n0, n1, n2) ndarray: ``raw`` itself, or a float32 copy (wider floats, or samples filled)
+    """
+    if raw.dtype.kind != "f":
+        return raw
+    beyond = count = 0
+    lo = np.inf
+    big = raw.dtype.itemsize > 4
+    with np.errstate(invalid="ignore", over="ignore"):
+        for slab in slabs(raw):
+            finite = np.isfinite(slab)
+            count += int(slab.size - np.count_nonzero(finite))
+            if big:
+                # counted before the float32 cast, which would turn these into infinities
+                # and the message into a false "infinite samples"
+                beyond += int(np.count_nonzero(np.abs(slab) > np.finfo(np.float32).max))
+            if finite.any():
+                lo = min(lo, float(slab[finite].min()))
+    if beyond:
+        raise InvalidDataError(
+            f"{name} has {beyond} finite samples beyond the float32 range "
+            f"(magnitude above {np.finfo(np.float32).max:.3g}) that splineviz computes in; "
+            "rescale the data")
+    if count == raw.size:
+        raise InvalidDataError(f"{name} has no finite samples (all {count:,} are NaN or "
+                               "infinite), so there is nothing to show")
+    if count and nonfinite == "error":
+        raise InvalidDataError(f"{name} has {count} NaN or infinite samples "
+                               "(read with nonfinite='fill' to replace them)")
+    if not count:
+        return raw
+    fill = np.float32(lo)
+    data = np.asarray(raw, dtype=np.float32)
+    if data is raw or not data.flags.writeable:
+        data = data.copy()
+    for slab in slabs(data):
+        slab[~np.isfinite(slab)] = fill
+    warnings.warn(f"{name}: {count} NaN or infinite samples were replaced by {float(fill):g}, "
+                  "the smallest finite sample", SplinevizWarning, stacklevel=4)
+    return data
 
 
 def validate_volume_data(vd: VolumeData, name: str) -> None:

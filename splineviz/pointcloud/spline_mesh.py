@@ -218,7 +218,7 @@ def surface_samples(spline, iso: float, cell: float | None = None):
     points : (N, 3), normals : (N, 3), cell : float
     """
     vol = spline.volume
-    data = vol.data
+    data = vol.values()  # the crossing test in float32 whatever the stored type
     found = []
     for axis in range(3):
         a = np.moveaxis(data, axis, 0)

@@ -5,18 +5,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from splineviz.core.volume import slabs
+
 #: device sample types tried in order (numpy type, OpenCL C type) for integer-valued data
 SAMPLE_TYPES = ((np.uint8, "uchar"), (np.int16, "short"), (np.uint16, "ushort"))
 
 
 def sample_type_for(data: np.ndarray, ghost: int) -> tuple[type, str]:
     """The device type of the samples: the smallest integer type that holds them exactly with
-    ``ghost`` linearly extrapolated layers (uint8/uint16 data, which :class:`Volume` keeps as
-    float32: 4x/2x less device memory and bandwidth), else float32.
+    ``ghost`` linearly extrapolated layers (integer samples, as :class:`Volume` keeps them,
+    or float samples of integer values: 4x/2x less device memory and bandwidth than
+    float32), else float32.
 
     Parameters
     ----------
-    data : (nx, ny, nz) float32
+    data : (nx, ny, nz) array, any real type
     ghost : ghost layers (each axis' extrapolation widens the value range by ``2 ghost``
         times its width, and integers stay integers)
 
@@ -24,12 +27,10 @@ def sample_type_for(data: np.ndarray, ghost: int) -> tuple[type, str]:
     -------
     (numpy type, OpenCL C type name)
     """
-    flat = data.reshape(len(data), -1)
-    step = max(1, 2**24 // flat.shape[1])  # slabs of about 16 M samples: no big temporaries
+    integers = data.dtype.kind in "biu"
     lo, hi = np.inf, -np.inf
-    for i in range(0, len(flat), step):
-        s = flat[i:i + step]
-        if not np.array_equal(s, np.rint(s)):  # fractions, NaN or inf
+    for s in slabs(data):  # about 16 M samples at a time: no big temporaries
+        if not integers and not np.array_equal(s, np.rint(s)):  # fractions, NaN or inf
             return np.float32, "float"
         lo, hi = min(lo, float(s.min())), max(hi, float(s.max()))
     grow = (hi - lo) * ghost * sum((1 + 2 * ghost) ** a for a in range(3))
@@ -79,16 +80,18 @@ def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     Parameters
     ----------
-    data : (nx, ny, nz) float
+    data : (nx, ny, nz) array, any real type
 
     Returns
     -------
     vmin, vmax : (nx-1, ny-1, nz-1) float32
     """
-    d = np.asarray(data, dtype=np.float32)
+    # in the samples' own type (min and max commute with the exact conversion to float32)
+    d = np.asarray(data)
     corners = [d[i:d.shape[0] - 1 + i, j:d.shape[1] - 1 + j, k:d.shape[2] - 1 + k]
                for i in (0, 1) for j in (0, 1) for k in (0, 1)]
-    return np.minimum.reduce(corners), np.maximum.reduce(corners)
+    return (np.minimum.reduce(corners).astype(np.float32, copy=False),
+            np.maximum.reduce(corners).astype(np.float32, copy=False))
 
 
 
@@ -99,7 +102,7 @@ def padded_device_samples(device, data: np.ndarray, ghost: int, dtype):
     Parameters
     ----------
     device : splineviz.compute.device.Device
-    data : (nx, ny, nz) float32
+    data : (nx, ny, nz) array in the volume's type (integers are written as they are)
     ghost : int
     dtype : numpy type of the device samples (:func:`sample_type_for`)
 

@@ -1,0 +1,91 @@
+"""Uncompressed samples in a file, memory-mapped: a small picklable region reader.
+
+A ``.npy`` or raw volume too large to render in one piece is opened through the chunked path
+(:class:`~splineviz.core.chunked.ChunkedVolume`, rendered in bricks): its dask array and
+region reads go through a :class:`MappedArray`, which each process maps on first use, so a
+brick reads only its own box of the file and nothing but the path travels to the workers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: bytes a volume costs in one piece beside its samples, per sample: the ray caster's device
+#: buffers (16-bit padded samples of 8-bit data, the min-max octree, classification slots;
+#: host memory on a CPU OpenCL device) or the float32 copy of the NumPy paths
+RENDER_BYTES_PER_SAMPLE = 4
+#: stored bytes per dask chunk of a mapped volume (a brick reads whole chunks' rows)
+CHUNK_BYTES = 16 * 2**20
+
+
+class MappedArray:
+    """Region reads ``source[i0:i1, j0:j1, k0:k1]`` of a 3-D array stored uncompressed.
+
+    Parameters
+    ----------
+    path : path-like
+    offset : int
+        Bytes before the first sample.
+    dtype : numpy dtype, byte order included
+    shape : (nx, ny, nz)
+        The volume's shape, ``data[i, j, k]`` with i along x.
+    order : {"C", "F"}
+        "C": k varies fastest in the file (``.npy``); "F": i varies fastest (raw, x fastest).
+    """
+
+    def __init__(self, path, offset: int, dtype, shape, order: str = "C"):
+        self.path = str(path)
+        self.offset = int(offset)
+        self.dtype = np.dtype(dtype)
+        self.shape = tuple(int(n) for n in shape)
+        self.ndim = 3
+        self.order = order
+
+    def __dask_tokenize__(self):
+        import os
+
+        st = os.stat(self.path)
+        return (self.path, st.st_mtime_ns, st.st_size, self.offset, self.dtype.str,
+                self.shape, self.order)
+
+    def __getitem__(self, key) -> np.ndarray:
+        """The samples of ``key`` (a NumPy index), copied out of the file, C-ordered, in the
+        native byte order of their type.
+
+        The file is mapped for this read only: the pages read leave the process's resident
+        memory with the mapping (one kept open would hold every page any brick read)."""
+        stored = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset,
+                           shape=self.shape, order=self.order)
+        # a copy: nothing refers to the mapping afterwards, so it is unmapped on return
+        return np.array(stored[key], dtype=self.dtype.newbyteorder("="), order="C")
+
+    def chunks(self) -> tuple[int, int, int]:
+        """Dask chunks of this array (:func:`cube_chunks`)."""
+        return cube_chunks(self.shape, self.dtype)
+
+
+def cube_chunks(shape, dtype) -> tuple[int, int, int]:
+    """Dask chunks: cubes of about :data:`CHUNK_BYTES` (sides a multiple of 16), the shape
+    the bricks of the ray caster are cut in (:mod:`splineviz.compute.bricked`)."""
+    side = int(round((CHUNK_BYTES / np.dtype(dtype).itemsize) ** (1 / 3)))
+    side = max(16, side - side % 16)
+    return tuple(min(int(n), side) for n in shape)
+
+
+def renders_in_pieces(shape, dtype) -> bool:
+    """Whether a volume of ``shape`` samples of ``dtype`` costs more in one piece (its samples
+    and :data:`RENDER_BYTES_PER_SAMPLE` per sample) than the share of memory above which TIFF
+    stacks are read lazily too (:func:`~splineviz.io.tiff.lazy_threshold`)."""
+    from splineviz.io.tiff import lazy_threshold
+
+    count = int(np.prod([int(n) for n in shape], dtype=object))
+    return count * (np.dtype(dtype).itemsize + RENDER_BYTES_PER_SAMPLE) > lazy_threshold()
+
+
+def lazy_array(source):
+    """The dask array of ``source`` (a :class:`MappedArray`, or any region reader with
+    ``shape`` and ``dtype``), in :func:`cube_chunks`; nothing is read."""
+    import dask.array as da
+
+    return da.from_array(source, chunks=cube_chunks(source.shape, source.dtype),
+                         asarray=False)
