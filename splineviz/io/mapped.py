@@ -8,8 +8,18 @@ brick reads only its own box of the file and nothing but the path travels to the
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
+from splineviz.io._util import memory_budget
+
+#: environment variable: share of :func:`~splineviz.io._util.memory_budget` above which a
+#: volume (a TIFF or slice stack, a mapped file too big to render in one piece) is read
+#: lazily through the chunked path
+LAZY_SHARE_ENV = "SPLINEVIZ_LAZY_SHARE"
+#: default share (the eager path holds the stored samples and their float32 copy)
+LAZY_SHARE = 0.25
 #: bytes a volume costs in one piece beside its samples, per sample: the ray caster's device
 #: buffers (16-bit padded samples of 8-bit data, the min-max octree, classification slots;
 #: host memory on a CPU OpenCL device) or the float32 copy of the NumPy paths
@@ -72,12 +82,24 @@ def cube_chunks(shape, dtype) -> tuple[int, int, int]:
     return tuple(min(int(n), side) for n in shape)
 
 
+def lazy_threshold() -> int:
+    """Bytes above which a volume is read lazily (TIFF and slice stacks: stored samples plus
+    a float32 copy; mapped files: :func:`renders_in_pieces`): ``$SPLINEVIZ_LAZY_SHARE``
+    (default :data:`LAZY_SHARE`) of the memory budget."""
+    share = LAZY_SHARE
+    env = os.environ.get(LAZY_SHARE_ENV)
+    if env:
+        try:
+            share = min(max(float(env), 0.0), 1.0)
+        except ValueError:
+            pass
+    return int(share * memory_budget())
+
+
 def renders_in_pieces(shape, dtype) -> bool:
     """Whether a volume of ``shape`` samples of ``dtype`` costs more in one piece (its samples
     and :data:`RENDER_BYTES_PER_SAMPLE` per sample) than the share of memory above which TIFF
-    stacks are read lazily too (:func:`~splineviz.io.tiff.lazy_threshold`)."""
-    from splineviz.io.tiff import lazy_threshold
-
+    stacks are read lazily too (:func:`lazy_threshold`)."""
     count = int(np.prod([int(n) for n in shape], dtype=object))
     return count * (np.dtype(dtype).itemsize + RENDER_BYTES_PER_SAMPLE) > lazy_threshold()
 

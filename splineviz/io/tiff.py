@@ -22,17 +22,13 @@ from pathlib import Path
 
 import numpy as np
 
-from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, memory_budget
+from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size
 from splineviz.io.chunked import AxisSource
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
+from splineviz.io.mapped import LAZY_SHARE_ENV, lazy_threshold  # noqa: F401  (tests set it)
 from splineviz.io.registry import register_format
 from splineviz.io.volume_data import VolumeData
 
-#: environment variable: share of :func:`~splineviz.io._util.memory_budget` above which a
-#: TIFF volume or slice stack is read lazily through the chunked path
-LAZY_SHARE_ENV = "SPLINEVIZ_LAZY_SHARE"
-#: default share (the eager path holds the stored samples and their float32 copy)
-LAZY_SHARE = 0.25
 #: suffixes of the 2-D slices a folder or pattern may hold
 SLICE_SUFFIXES = (".tif", ".tiff", ".png")
 #: stored bytes per dask chunk of a lazily read stack: a preview or histogram pass holds a
@@ -49,20 +45,6 @@ _AXIS_NAMES = {"C": "channels", "T": "time points", "S": "colour samples", "Z": 
 _UNITS_UM = {"nm": 1e-3, "nanometer": 1e-3, "um": 1.0, "µm": 1.0, "\u03bcm": 1.0,
              "micron": 1.0, "microns": 1.0, "micrometer": 1.0, "mm": 1e3, "millimeter": 1e3,
              "cm": 1e4, "m": 1e6, "meter": 1e6, "pixel": None, "px": None, "": None}
-
-
-def lazy_threshold() -> int:
-    """Bytes (stored samples plus their float32 copy) above which TIFF and slice stacks are
-    read lazily: ``$SPLINEVIZ_LAZY_SHARE`` (default :data:`LAZY_SHARE`) of the memory
-    budget."""
-    share = LAZY_SHARE
-    env = os.environ.get(LAZY_SHARE_ENV)
-    if env:
-        try:
-            share = min(max(float(env), 0.0), 1.0)
-        except ValueError:
-            pass
-    return int(share * memory_budget())
 
 
 def _eager_bytes(shape, dtype) -> int:
