@@ -3,7 +3,8 @@ another volume, and exact cross-section curves with their lengths and areas.
 
 A view of one :class:`~splineviz.model.IsosurfaceNode` (the selection, or the first isosurface
 of a selected volume) like the isosurface panel: widgets write the node's colour-by fields and
-add :class:`~splineviz.model.SectionNode` objects; node events update the widgets.
+add :class:`~splineviz.model.SectionNode` objects, each a step of the scene's undo stack
+(:mod:`splineviz.gui.undo`); node events update the widgets.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from PySide6.QtWidgets import (
 )
 
 from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
+from splineviz.gui.undo import undo_stack
 from splineviz.model import IsosurfaceNode, Scene, SectionNode, VolumeNode
 
 #: labels of the colour-by fields
@@ -243,7 +245,7 @@ class AnalysisPanel(QWidget):
             values["color_isosurface_id"] = self.reference.currentData()
         self._syncing = True
         try:
-            self.node.update(values)
+            undo_stack(self.scene).set(self.node, f"Colour of {self.node.name}", **values)
         finally:
             self._syncing = False
         self._sync()
@@ -253,10 +255,10 @@ class AnalysisPanel(QWidget):
         if self.node is None or self.section_with.currentData() is None:
             return None
         other = self.scene.get(self.section_with.currentData())
-        if isinstance(other, IsosurfaceNode):
-            sec = self.scene.add_section(self.node, other=other)
-        else:
-            sec = self.scene.add_section(self.node, plane=other)
+        node = self.node
+        kind = "other" if isinstance(other, IsosurfaceNode) else "plane"
+        sec = undo_stack(self.scene).change(
+            "Add cross section", lambda: self.scene.add_section(node, **{kind: other}))
         self._refresh_lists()
         self.sections.setCurrentRow(self.sections.count() - 1)
         return sec
