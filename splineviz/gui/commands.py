@@ -91,9 +91,14 @@ class Commands(QObject):
             return False
         self.scene.clear()
         self.scene.mark_saved()
-        self.window.session_file = None
-        self.scene.changed.emit()  # the title says "untitled"
+        self._untitled()
         return True
+
+    def _untitled(self) -> None:
+        """The scene was replaced by one that no session file holds: Save asks for a file
+        (it must not overwrite the session the old scene came from); the title follows."""
+        self.window.session_file = None
+        self.scene.changed.emit()
 
     def open_default(self) -> VolumeNode | None:
         """Replace the scene by the embedded default data (asks about unsaved changes
@@ -103,6 +108,7 @@ class Commands(QObject):
         if not self.confirm_unsaved("Opening the default data"):
             return None
         default_scene(self.scene)
+        self._untitled()
         node = self.scene.volumes[0]
         self.scene.select(node)
         return node
@@ -219,8 +225,11 @@ class Commands(QObject):
             self.scene.select(node)
             return node
 
-        return put() if mode == "replace" else undo_stack(self.scene).change(f"Open {name}",
-                                                                              put)
+        if mode == "replace":
+            node = put()
+            self._untitled()
+            return node
+        return undo_stack(self.scene).change(f"Open {name}", put)
 
     def _add_volume(self, vol, name, mode, path=None, isovalue=None, model=None,
                     source=None, read_options=None) -> VolumeNode:

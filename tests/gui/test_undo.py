@@ -330,6 +330,7 @@ def test_replacing_an_unsaved_scene_asks_first(window, tmp_path, answering, path
     asked, answers = answering
     do = replace_paths(window, tmp_path)[path]
     before = unsaved(window)
+    old = window.session_file = tmp_path / "old.svs"  # the scene came from a session
     answers.append(Button.Cancel)
     do()
     window.wait_idle()
@@ -340,6 +341,7 @@ def test_replacing_an_unsaved_scene_asks_first(window, tmp_path, answering, path
     window.wait_idle()
     assert len(asked) == 2 and window.last_error is None
     assert not window.scene.of_kind(MeshNode)  # replaced
+    assert window.session_file != old  # Save must not overwrite the old scene's session
     assert not undo_stack(window.scene).stack.canUndo()
     # a saved scene is replaced without a question
     window.scene.mark_saved()
