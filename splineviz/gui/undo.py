@@ -25,6 +25,10 @@ from PySide6.QtGui import QUndoCommand, QUndoStack
 from splineviz.model import Node, Scene
 from splineviz.model.commands import ChangeObjects, Command, SetProperties, remove_objects
 
+#: steps kept: a removed object stays in memory, with its data, while a step can bring it
+#: back (ParaView keeps a bounded history too)
+UNDO_LIMIT = 100
+
 #: scene -> its undo stack (the stack refers to the scene weakly: it dies with the scene)
 _STACKS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -81,6 +85,7 @@ class SceneUndo(QObject):
     def __init__(self, scene: Scene):
         super().__init__()
         self.stack = QUndoStack(self)
+        self.stack.setUndoLimit(UNDO_LIMIT)
         self._scene = weakref.ref(scene)
         self._running = 0
         self._drag = 0
