@@ -3,8 +3,7 @@ another volume, and exact cross-section curves with their lengths and areas.
 
 A view of one :class:`~splineviz.model.IsosurfaceNode` (the selection, or the first isosurface
 of a selected volume) like the isosurface panel: widgets write the node's colour-by fields and
-add :class:`~splineviz.model.SectionNode` objects, each a step of the scene's undo stack
-(:mod:`splineviz.gui.undo`); node events update the widgets.
+add :class:`~splineviz.model.SectionNode` objects; node events update the widgets.
 """
 
 from __future__ import annotations
@@ -45,7 +44,8 @@ def curve_summary(curves) -> str:
 
 
 class AnalysisPanel(QWidget):
-    """Colour-by and cross-section controls of the current isosurface (see module docstring).
+    """Colour-by and cross-section controls of the current isosurface (see module docstring);
+    each edit is a step of the scene's undo stack (:mod:`splineviz.gui.undo`).
 
     Parameters
     ----------
