@@ -1,8 +1,9 @@
 """Menus, toolbar and shortcuts of the main window.
 
 Every action has a tooltip and, where it is common, a standard shortcut; the View menu and
-the toolbar offer the standard views of ParaView/Slicer (+X ... -Z, isometric, reset).
-Actions only call the window's commands, panels and view; they hold no state.
+the toolbar offer the standard views of ParaView/Slicer (+X ... -Z, isometric, reset), the
+Edit menu undo and redo of the scene's edits (:mod:`splineviz.gui.undo`). Actions only call
+the window's commands, panels and view; they hold no state.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from PySide6.QtGui import QAction, QIcon, QKeySequence
 from PySide6.QtWidgets import QToolBar
 
 from splineviz.gui import dialogs, open_dialogs
+from splineviz.gui.undo import undo_stack
 
 #: (view name, menu text, shortcut, icon name) of the standard views
 STANDARD_VIEW_ACTIONS = (
@@ -50,10 +52,30 @@ def _action(window, text, slot, *, shortcut=None, tip="", icon_name=None, menu=N
     return a
 
 
+def build_edit_menu(window, acts: dict[str, QAction]) -> None:
+    """Edit > Undo / Redo over the scene's undo stack; their text names the step."""
+    stack = undo_stack(window.scene).stack
+    e = window.menuBar().addMenu("&Edit")
+    # explicit keys: without a desktop environment Qt maps the standard ones to none
+    for name, action, keys, tip in (
+            ("undo", stack.createUndoAction(window, "&Undo"), ["Ctrl+Z"],
+             "Undo the last edit of the scene"),
+            ("redo", stack.createRedoAction(window, "&Redo"), ["Ctrl+Shift+Z", "Ctrl+Y"],
+             "Redo the edit undone last")):
+        action.setShortcuts([QKeySequence(k) for k in keys])
+        tip += f" ({QKeySequence(keys[0]).toString()})"
+        action.setToolTip(tip)
+        action.setStatusTip(tip)
+        e.addAction(action)
+        acts[name] = action
+
+
 def build_actions(window) -> dict[str, QAction]:
     """Fill the window's menu bar and toolbar; returns the actions by name."""
     acts: dict[str, QAction] = {}
     m = window.menuBar().addMenu("&File")
+    acts["new"] = _action(window, "&New", lambda: window.commands.new_scene(), menu=m,
+                          shortcut="Ctrl+N", tip="An empty scene (asks about unsaved changes)")
     acts["open"] = _action(window, "&Open...", lambda: open_dialogs.open_file(window), menu=m,
                            shortcut=QKeySequence.StandardKey.Open, icon_name="open",
                            tip="Open a volume, point cloud or session")
@@ -92,6 +114,8 @@ def build_actions(window) -> dict[str, QAction]:
     m.addSeparator()
     # explicit: without a desktop environment Qt maps StandardKey.Quit to no key at all
     _action(window, "&Quit", window.close, menu=m, shortcut="Ctrl+Q")
+
+    build_edit_menu(window, acts)
 
     v = window.menuBar().addMenu("&View")
     acts["reset"] = _action(window, "&Reset camera", lambda: window.view.standard_view(None),

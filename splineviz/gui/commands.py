@@ -1,6 +1,14 @@
-"""What the File menu, drag and drop and the command line do to the scene: open, save,
+"""What the File menu, drag and drop and the command line do to the scene: new, open, save,
 export. Reading and writing run as jobs (progress, cancel); the scene model is changed in
-the GUI thread when they finish. No method here blocks the GUI thread on data."""
+the GUI thread when they finish. No method here blocks the GUI thread on data.
+
+No work is lost: every path that replaces the scene (New, Open, Open default data, a
+synthetic source or an example session opened in place of the objects, Load session) first
+asks what to do with unsaved changes -- Save, Discard or Cancel (:meth:`Commands.
+confirm_unsaved`) -- when the window asks about them (the app's windows; scripts and tests
+that do not turn :attr:`MainWindow.ask_before_closing` on are never asked). Data opened
+beside the objects already shown is a step of the undo stack (:mod:`splineviz.gui.undo`);
+replacing the scene clears the history."""
 
 from __future__ import annotations
 
@@ -13,6 +21,7 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from splineviz.core.errors import SplinevizError
 from splineviz.gui.jobs import error_message
+from splineviz.gui.undo import undo_stack
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
 from splineviz.model.opening import OutsideFolder, noting_warnings, read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
@@ -48,18 +57,63 @@ class Commands(QObject):
         self.jobs = jobs
         self.window = window
 
+    # -- unsaved changes -----------------------------------------------------------------
+
+    def confirm_unsaved(self, action: str = "Replacing the scene") -> bool:
+        """Ask what to do with unsaved changes before ``action`` loses them: Save (to the
+        session file, or one asked for), Discard or Cancel. True: go on (saved, discarded,
+        or nothing to lose); False: the user cancelled, or the save did not happen."""
+        window = self.window
+        if (not getattr(window, "ask_before_closing", False) or not self.scene.modified
+                or not len(self.scene)):
+            return True
+        buttons = QMessageBox.StandardButton
+        answer = QMessageBox.question(
+            window, "Unsaved changes",
+            f"The scene has unsaved changes. {action} discards them. Save them as a "
+            "session first?", buttons.Save | buttons.Discard | buttons.Cancel, buttons.Save)
+        if answer == buttons.Cancel:
+            return False
+        if answer == buttons.Save:
+            if window.session_file is not None:
+                return window.save_session(window.session_file) is not None
+            from splineviz.gui.dialogs import save_session_as
+
+            return save_session_as(window)
+        return True
+
     # -- open ----------------------------------------------------------------------------
 
-    def open_default(self) -> VolumeNode:
-        """Replace the scene by the embedded default data."""
+    def new_scene(self) -> bool:
+        """Start an empty, untitled scene (asks about unsaved changes first); False: the
+        user kept the scene."""
+        if not self.confirm_unsaved("Starting a new scene"):
+            return False
+        self.scene.clear()
+        self.scene.mark_saved()
+        self._untitled()
+        return True
+
+    def _untitled(self) -> None:
+        """The scene was replaced by one that no session file holds: Save asks for a file
+        (it must not overwrite the session the old scene came from); the title follows."""
+        self.window.session_file = None
+        self.scene.changed.emit()
+
+    def open_default(self) -> VolumeNode | None:
+        """Replace the scene by the embedded default data (asks about unsaved changes
+        first; None: the user kept the scene)."""
         from splineviz.model.opening import default_scene
 
+        if not self.confirm_unsaved("Opening the default data"):
+            return None
         default_scene(self.scene)
+        self._untitled()
         node = self.scene.volumes[0]
         self.scene.select(node)
         return node
 
-    def open_source(self, name: str, shape=None, mode: str = "add") -> VolumeNode:
+    def open_source(self, name: str, shape=None, mode: str = "add") -> VolumeNode | None:
         """Sample a synthetic source offered by a plugin (see :mod:`splineviz.plugins`)."""
         from splineviz.plugins import source_volume, sources
 
@@ -101,7 +155,7 @@ class Commands(QObject):
                                  **iso)
             else:
                 self._add(mode, lambda: self.scene.add_points(data, Path(path).name,
-                                                              path=path))
+                                                              path=path), Path(path).name)
 
         # a process: readers (VTK's, NumPy's text parser) hold the GIL while they parse
         return self.jobs.run(f"Opening {Path(path).name}", noting_warnings, read_file, path,
@@ -154,33 +208,47 @@ class Commands(QObject):
         clicked = box.clickedButton()
         return "replace" if clicked is replace else "add" if clicked is add else None
 
-    def _add(self, mode: str, make):
+    def _add(self, mode: str, make, name: str = "data"):
+        """Put what ``make()`` makes in the scene, replacing the objects (unsaved changes
+        are asked about) or beside them (one undo step)."""
         mode = self._replace_or_add(mode)
-        if mode is None:
+        if mode is None or (mode == "replace" and not self.confirm_unsaved(f"Opening {name}")):
             return None
+
+        def put():
+            if mode == "replace":
+                self.scene.clear()
+            node = make()
+            # frame what is new when replacing, everything when adding
+            self.scene.frame(node.bounds if mode == "replace" and isinstance(node, VolumeNode)
+                             else None, view="isometric" if mode == "replace" else None)
+            self.scene.select(node)
+            return node
+
         if mode == "replace":
-            self.scene.clear()
-        node = make()
-        # frame what is new when replacing, everything when adding
-        self.scene.frame(node.bounds if mode == "replace" and isinstance(node, VolumeNode)
-                         else None, view="isometric" if mode == "replace" else None)
-        self.scene.select(node)
-        return node
+            node = put()
+            self._untitled()
+            return node
+        return undo_stack(self.scene).change(f"Open {name}", put)
 
     def _add_volume(self, vol, name, mode, path=None, isovalue=None, model=None,
                     source=None, read_options=None) -> VolumeNode:
         return self._add(mode, lambda: self.scene.add_volume(
             vol, name, path=path, source=source, read_options=read_options,
-            isovalue=isovalue, model=model))
+            isovalue=isovalue, model=model), name)
 
     # -- sessions ------------------------------------------------------------------------
 
-    def load_session(self, path, *, allow_outside: bool = False, on_loaded=None):
+    def load_session(self, path, *, allow_outside: bool = False, on_loaded=None,
+                     asked: bool = False):
         """Parse the session here (fast; missing data files are asked for), read its data
         in a job, then replace the scene (and call ``on_loaded()``). Returns the job, or
-        None when the session was refused (the message is shown) or not confirmed."""
+        None when the session was refused (the message is shown) or not confirmed.
+        Unsaved changes are asked about first, unless ``asked``."""
         from splineviz.io.session import load_session
 
+        if not asked and not self.confirm_unsaved(f"Opening {Path(path).name}"):
+            return None
         try:
             noted = noting_warnings(load_session, path, repoint=self._ask_repoint,
                                     allow_outside=allow_outside)
@@ -192,7 +260,7 @@ class Commands(QObject):
         session = self._noted(noted, Path(path).name)
         if isinstance(session, OutsideFolder):
             return self._outside(session, allow_outside, lambda: self.load_session(
-                path, allow_outside=True, on_loaded=on_loaded))
+                path, allow_outside=True, on_loaded=on_loaded, asked=True))
         return self._read_session(path, session, allow_outside, on_loaded)
 
     def _read_session(self, path, session, allow_outside: bool, on_loaded):

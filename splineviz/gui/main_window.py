@@ -22,7 +22,6 @@ from splineviz.core.errors import SplinevizError
 from splineviz.gui import opening, window_state
 from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
-from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
 from splineviz.gui.panels import (
     AnalysisPanel,
@@ -304,19 +303,7 @@ class MainWindow(QMainWindow):
 
     def confirm_discard(self) -> bool:
         """Ask what to do with unsaved changes; False: the user wants to stay."""
-        if not self.ask_before_closing or not self.scene.modified or not len(self.scene):
-            return True
-        answer = QMessageBox.question(
-            self, "Unsaved changes", "The scene has unsaved changes. Save them as a session?",
-            QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Discard
-            | QMessageBox.StandardButton.Cancel, QMessageBox.StandardButton.Save)
-        if answer == QMessageBox.StandardButton.Cancel:
-            return False
-        if answer == QMessageBox.StandardButton.Save:
-            if self.session_file is not None:
-                return self.save_session(self.session_file) is not None
-            return save_session_as(self)
-        return True
+        return self.commands.confirm_unsaved("Quitting")
 
     def closeEvent(self, event):  # noqa: N802
         if self._closed:

@@ -229,8 +229,9 @@ class Scene:
             n += 1
         return f"{prefix}{n}"
 
-    def add(self, node: Node) -> Node:
-        """Insert ``node`` (an id is given when it has none); returns it."""
+    def add(self, node: Node, index: int | None = None) -> Node:
+        """Insert ``node`` (an id is given when it has none) at the end of the scene's order,
+        or at ``index`` (undo puts a removed object back in its place); returns it."""
         if not node.id:
             node.id = self.new_id(node.kind.replace("_", ""))
         if node.id in self._nodes or node.id in ("camera", "view"):
@@ -244,7 +245,12 @@ class Scene:
             self._check_section(node)
         if not node.name:
             node.name = node.id
-        self._nodes[node.id] = node
+        if index is None:
+            self._nodes[node.id] = node
+        else:
+            items = list(self._nodes.items())
+            items.insert(index, (node.id, node))
+            self._nodes = dict(items)
         node.events.connect(self._node_changed)
         self.inserted.emit(node)
         self._node_changed()

@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
 )
 
 from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
+from splineviz.gui.undo import undo_stack
 from splineviz.model import IsosurfaceNode, Scene, SectionNode, VolumeNode
 from splineviz.render.scene_view import colour_range_link
 
@@ -53,7 +54,8 @@ def curve_summary(curves) -> str:
 
 
 class AnalysisPanel(QWidget):
-    """Colour-by and cross-section controls of the current isosurface (see module docstring).
+    """Colour-by and cross-section controls of the current isosurface (see module docstring);
+    each edit is a step of the scene's undo stack (:mod:`splineviz.gui.undo`).
 
     Parameters
     ----------
@@ -301,7 +303,7 @@ class AnalysisPanel(QWidget):
             values["color_isosurface_id"] = self.reference.currentData()
         self._syncing = True
         try:
-            self.node.update(values)
+            undo_stack(self.scene).set(self.node, f"Colour of {self.node.name}", **values)
         finally:
             self._syncing = False
         self._sync()
@@ -311,10 +313,10 @@ class AnalysisPanel(QWidget):
         if self.node is None or self.section_with.currentData() is None:
             return None
         other = self.scene.get(self.section_with.currentData())
-        if isinstance(other, IsosurfaceNode):
-            sec = self.scene.add_section(self.node, other=other)
-        else:
-            sec = self.scene.add_section(self.node, plane=other)
+        node = self.node
+        kind = "other" if isinstance(other, IsosurfaceNode) else "plane"
+        sec = undo_stack(self.scene).change(
+            "Add cross section", lambda: self.scene.add_section(node, **{kind: other}))
         self._refresh_lists()
         self.sections.setCurrentRow(self.sections.count() - 1)
         return sec

@@ -3,7 +3,9 @@
 Clip planes are :class:`~splineviz.model.ClipPlaneNode`\\ s: each cuts the isosurfaces of one
 volume (the default when a volume is selected) or of the whole scene. The panel lists them;
 :class:`PlaneWidgets` gives each a VTK plane widget in the view whose drags write the node,
-and whose pose follows the node when it changes elsewhere (a session, the Flip button).
+and whose pose follows the node when it changes elsewhere (a session, the Flip button, undo).
+Every edit is a step of the scene's undo stack (:mod:`splineviz.gui.undo`); a widget drag
+is one step.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from splineviz.gui.undo import undo_stack
 from splineviz.model import ClipPlaneNode, IsosurfaceNode, Scene, VolumeNode
 
 
@@ -50,7 +53,9 @@ class PlaneWidgets:
                 return
             self._echo = True
             try:
-                node.update(normal=tuple(map(float, normal)), origin=tuple(map(float, origin)))
+                undo_stack(self.scene).set(node, f"Move {node.name}",
+                                           normal=tuple(map(float, normal)),
+                                           origin=tuple(map(float, origin)))
             finally:
                 self._echo = False
 
@@ -58,6 +63,9 @@ class PlaneWidgets:
             moved, normal=node.normal, origin=node.origin, bounds=self._bounds(node),
             normal_rotation=True, outline_translation=False, origin_translation=True,
             implicit=True, interaction_event="always", color="white", test_callback=False)
+        undo = undo_stack(self.scene)
+        widget.AddObserver("StartInteractionEvent", lambda *_: undo.begin_drag())
+        widget.AddObserver("EndInteractionEvent", lambda *_: undo.end_drag())
         self.widgets[node.id] = widget
         self._apply(node)
         node.events.connect(self._changed)
@@ -181,21 +189,30 @@ class ClippingPanel(QWidget):
 
     def add_plane(self, origin=None, normal=(1.0, 0.0, 0.0)) -> ClipPlaneNode:
         volume = self._selected_volume() if self.target.currentIndex() == 0 else None
-        node = self.scene.add_clip_plane(origin, normal, volume=volume,
-                                         show_widget=self.show_widgets.isChecked())
-        self.scene.select(node)
-        return node
+        show = self.show_widgets.isChecked()
+
+        def add():
+            node = self.scene.add_clip_plane(origin, normal, volume=volume, show_widget=show)
+            self.scene.select(node)
+            return node
+
+        return undo_stack(self.scene).change("Add clip plane", add)
 
     def remove_plane(self) -> None:
         node = self.current()
         if node is not None:
-            self.scene.remove(node)
+            undo_stack(self.scene).remove(node)
 
     def flip_plane(self) -> None:
         node = self.current()
         if node is not None:
-            node.normal = tuple(-v for v in node.normal)
+            undo_stack(self.scene).set(node, f"Flip {node.name}",
+                                       normal=tuple(-v for v in node.normal))
 
     def _toggle_widgets(self, on: bool) -> None:
-        for p in self.scene.clip_planes:
-            p.show_widget = on
+        def show():
+            for p in self.scene.clip_planes:
+                p.show_widget = on
+
+        undo_stack(self.scene).change("Show plane widgets" if on else "Hide plane widgets",
+                                      show)

@@ -1,6 +1,7 @@
 """The data panel: every object of the scene in a tree, with visibility check boxes (like
 ParaView's pipeline browser). A view of the scene model: it rebuilds on insert/remove and
-updates a row when its node changes; selecting a row selects the node in the scene."""
+updates a row when its node changes; selecting a row selects the node in the scene. Ticks
+and removals are steps of the scene's undo stack (:mod:`splineviz.gui.undo`)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from splineviz.gui.undo import undo_stack
 from splineviz.model import (
     ClipPlaneNode,
     IsosurfaceNode,
@@ -137,10 +139,9 @@ class DataPanel(QWidget):
             return
         node = self.scene.get(row.data(0, Qt.ItemDataRole.UserRole))
         on = row.checkState(0) == Qt.CheckState.Checked
-        if isinstance(node, ClipPlaneNode):
-            node.enabled = on
-        else:
-            node.visible = on
+        field = "enabled" if isinstance(node, ClipPlaneNode) else "visible"
+        undo_stack(self.scene).set(node, f"{'Show' if on else 'Hide'} {node.name}",
+                                   **{field: on})
 
     def _current_changed(self, row, _previous) -> None:
         if self._updating:
@@ -157,7 +158,7 @@ class DataPanel(QWidget):
 
     def remove_selected(self) -> None:
         if self.scene.selected is not None:
-            self.scene.remove(self.scene.selected)
+            undo_stack(self.scene).remove(self.scene.selected)
 
     def keyPressEvent(self, event):  # noqa: N802 (Qt naming)
         if event.key() == Qt.Key.Key_Delete:

@@ -2,7 +2,9 @@
 material of the current isosurface node.
 
 A view of one :class:`~splineviz.model.IsosurfaceNode` (the scene's selection, or the first
-isosurface of a selected volume): widgets write the node, node events update the widgets.
+isosurface of a selected volume): widgets write the node through the scene's undo stack
+(:mod:`splineviz.gui.undo`; a drag of the isovalue or opacity slider is one step), node
+events update the widgets.
 The histogram of a big volume is computed in a worker and cached per volume.
 """
 
@@ -21,6 +23,7 @@ from PySide6.QtWidgets import (
 from superqt import QLabeledDoubleSlider
 
 from splineviz.core.splines import MODELS
+from splineviz.gui.undo import undo_stack
 from splineviz.gui.widgets import ColorButton, HistogramSlider
 from splineviz.model import MATERIALS, SIDES, IsosurfaceNode, Scene, VolumeNode
 from splineviz.model.summaries import cached_histogram
@@ -108,6 +111,11 @@ class IsosurfacePanel(QWidget):
         self.material.currentTextChanged.connect(lambda m: self._write("material", m))
         self.shown_in.currentIndexChanged.connect(lambda _i: self._write(
             "shown_in", self.shown_in.currentData()))
+        undo = undo_stack(scene)
+        for press, release in ((self.histogram.pressed, self.histogram.released),
+                               (self.opacity.sliderPressed, self.opacity.sliderReleased)):
+            press.connect(undo.begin_drag)
+            release.connect(undo.end_drag)
         scene.view.events.split.connect(self._split_changed)
         self.add_button.clicked.connect(self.add_isosurface)
         scene.selection.connect(self._selection_changed)
@@ -226,7 +234,7 @@ class IsosurfacePanel(QWidget):
             return
         self._syncing = True
         try:
-            setattr(self.node, field, value)
+            undo_stack(self.scene).set(self.node, **{field: value})
         finally:
             self._syncing = False
         if field == "model":
@@ -248,6 +256,11 @@ class IsosurfacePanel(QWidget):
         # isovalue in the right view stays in the right view)
         side = self.node.shown_in if self.node is not None and self.scene.view.split \
             else "both"
-        node = self.scene.add_isosurface(self._volume, shown_in=side)
-        self.scene.select(node)
-        return node
+        volume = self._volume
+
+        def add():
+            node = self.scene.add_isosurface(volume, shown_in=side)
+            self.scene.select(node)
+            return node
+
+        return undo_stack(self.scene).change("Add isosurface", add)

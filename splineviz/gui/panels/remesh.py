@@ -2,7 +2,8 @@
 
 Parameters, a Remesh button for the current point cloud, the point size of that cloud, and
 the quality statistics of the current mesh (read from its :class:`~splineviz.model.MeshNode`,
-so they always belong to the mesh selected, never to an older or removed one).
+so they always belong to the mesh selected, never to an older or removed one). A remeshed
+mesh and a new point size are steps of the scene's undo stack (:mod:`splineviz.gui.undo`).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from PySide6.QtWidgets import (
 )
 
 from splineviz.gui.jobs import call_named
+from splineviz.gui.undo import undo_stack
 from splineviz.model import MeshNode, PointsNode, Scene
 from splineviz.model.summaries import cached_spacing, known_spacing
 
@@ -124,7 +126,8 @@ class RemeshPanel(QWidget):
 
     def _point_size(self, size: int) -> None:
         if self.points is not None:
-            self.points.point_size = float(size)
+            undo_stack(self.scene).set(self.points, f"Point size of {self.points.name}",
+                                       point_size=float(size))
 
     def run(self, points: PointsNode | None = None):
         """Remesh ``points`` (default: the current cloud) in a job; returns the job."""
@@ -136,11 +139,14 @@ class RemeshPanel(QWidget):
         rho = float(self.rho.value()) if adaptive else None
 
         def done(out, node=node):
-            mesh = self.scene.add_mesh(out["vertices"], out["faces"],
-                                       name=f"mesh of {node.name}", normals=out["normals"],
-                                       points_id=node.id if node.id in self.scene else None,
-                                       edge_length=edge, rho=rho, stats=out["quality"])
-            self.scene.select(mesh)
+            def add():
+                mesh = self.scene.add_mesh(
+                    out["vertices"], out["faces"], name=f"mesh of {node.name}",
+                    normals=out["normals"], points_id=node.id if node.id in self.scene else None,
+                    edge_length=edge, rho=rho, stats=out["quality"])
+                self.scene.select(mesh)
+
+            undo_stack(self.scene).change(f"Remesh {node.name}", add)
 
         # a process, not a thread: the front is Python that would hold the GIL for
         # hundreds of milliseconds at a time, and Cancel can stop a process at once; the

@@ -3,6 +3,7 @@
 It edits :attr:`VolumeNode.sigma`; :class:`Smoother` sees every sigma change (from the panel,
 a session or the API) and makes the smoothed data in a worker, which the isosurfaces then
 use. The original samples are never replaced: sigma 0 ("Original") shows them at once.
+A new sigma from the panel is a step of the scene's undo stack (:mod:`splineviz.gui.undo`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from splineviz.gui.undo import undo_stack
 from splineviz.model import MAX_SIGMA, IsosurfaceNode, Scene, VolumeNode
 
 #: delay before live smoothing runs after the last sigma change
@@ -32,14 +34,23 @@ class Smoother:
         self.scene = scene
         self.jobs = jobs
         self.device = device
+        #: volume id -> its sigma listener (dropped on removal: undo inserts it again)
+        self._listeners: dict[str, object] = {}
         scene.inserted.connect(self._inserted)
+        scene.removed.connect(self._removed)
         for v in scene.volumes:
             self._inserted(v)
 
     def _inserted(self, node) -> None:
         if isinstance(node, VolumeNode):
-            node.events.sigma.connect(lambda _s, node=node: self.update(node))
+            listener = self._listeners[node.id] = lambda _s, node=node: self.update(node)
+            node.events.sigma.connect(listener)
             self.update(node)
+
+    def _removed(self, node) -> None:
+        listener = self._listeners.pop(node.id, None)
+        if listener is not None:
+            node.events.sigma.disconnect(listener)
 
     def update(self, node: VolumeNode) -> None:
         if not node.smoothing_pending or node.id not in self.scene:
@@ -141,7 +152,8 @@ class SmoothingPanel(QWidget):
     def apply(self) -> None:
         self._timer.stop()
         if self.node is not None:
-            self.node.sigma = float(self.sigma.value())
+            undo_stack(self.scene).set(self.node, f"Smooth {self.node.name}",
+                                       sigma=float(self.sigma.value()))
 
     def reset(self) -> None:
         self.sigma.blockSignals(True)
