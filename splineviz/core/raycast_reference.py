@@ -56,8 +56,8 @@ class Frame:
     ``position`` and ``normal`` may be given as functions of no argument that return the
     array: they are then called on first access. Drawing a frame needs only its colour and
     depth, so the OpenCL ray caster leaves positions and normals on the device until
-    something (picking, colour by, a test) reads them: at 1920x1080 converting them took
-    ~130 ms of a frame whose kernel ran in 1-30 ms on a GPU.
+    something (picking, colour by, a test) reads them: converting them costs more than the
+    kernel that made the frame.
     """
 
     __slots__ = ("hit", "_position", "_normal", "depth", "color", "hessian", "gradient_norm")

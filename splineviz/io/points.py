@@ -88,8 +88,8 @@ def read_ply_data(path: Path):
         mode = {"mode": "r", "encoding": "latin-1", "newline": ""} if text else {"mode": "rb"}
         with open(path, **mode) as fh:
             try:
-                # triangle faces of known length can be memory-mapped too (10x faster than
-                # plyfile's row-by-row list parsing); other meshes take the general path
+                # triangle faces of known length can be memory-mapped too, not parsed row by
+                # row as plyfile parses lists; other meshes take the general path
                 ply = PlyData.read(fh, mmap="c", known_list_len=_TRIANGLES)
             except PlyElementParseError as exc:
                 if "unexpected list length" not in str(exc):

@@ -3,9 +3,8 @@
 One pass over each point's neighbourhood gathers, for every Gaussian width, the weighted
 moments ``sum w x^a y^b`` (``a + b <= 2q``) from which the normal matrix of eq. (7.4) is read,
 so a degree-3 fit costs 28 sums per neighbour instead of 100 products; the small systems are
-solved per point.  NumPy's batched version of the same arithmetic spent most of its time
-allocating and filling ``(points, neighbours, monomials)`` temporaries (about 5x slower on
-20,000 points).
+solved per point. The fits are compiled rather than batched in NumPy because a batched version
+spends its time allocating and filling ``(points, neighbours, monomials)`` temporaries.
 
 Conventions as in :mod:`~splineviz.pointcloud.projection`: points ``(N, 3)``, orthonormal
 frames ``(N, 3, 3)`` with rows x, y, z, local coordinates in units of the local spacing, the
@@ -245,8 +244,8 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
             spread[s, p] = acc
             if with_noise:
                 # E[sum w r^2] = sigma^2 (sum w - tr(A^-1 B^T W^2 B)) for weighted LS; with
-                # A = L L^T the trace is sum_i l_i^T C l_i over the rows l_i of L^-1 (m solves
-                # took 0.040 s of a degree-4 fit's 0.093 s on 20,000 points; this 0.015 s)
+                # A = L L^T the trace is sum_i l_i^T C l_i over the rows l_i of L^-1, which
+                # costs one triangular inverse instead of m solves
                 for r in range(m):
                     for c in range(m):
                         c2[r, c] = mom2[pair[r, c]] * f[pair[r, c]]

@@ -20,10 +20,9 @@ the projector (thesis §7.3 with the volume's spline in place of the local polyn
   (:func:`fill_holes`); then valence flips and tangential relaxation
   (:func:`splineviz.pointcloud.relaxation.optimize`) with the spline as projector.
 * Speed: for type-6 models (cubic-c1, super-quadratic) the projection, the one-sheet test
-  and the sheet gaps run in compiled kernels (:mod:`.spline_kernels`), a microsecond per
-  spline evaluation: through the vectorised evaluation each of the front's small questions
-  cost ~0.3 ms of fixed overhead (two thirds of the front's time). Other models take that
-  path.
+  and the sheet gaps run in compiled kernels (:mod:`.spline_kernels`): the front asks many
+  small questions, and the vectorised evaluation's fixed overhead per call would dominate.
+  Other models take the vectorised path.
 * Clip planes: the front runs a little past each plane, then the mesh is cut there; vertices
   on the cut are put onto the exact section curve (plane and isosurface,
   :func:`splineviz.core.sections.project`), vertices closer than ``SNAP`` edge lengths to the
@@ -54,10 +53,9 @@ from splineviz.pointcloud.guidance import GuidanceField, limit_gradation
 from splineviz.pointcloud.relaxation import optimize
 from splineviz.pointcloud.spline_kernels import compiled
 
-#: default angle (radians) one edge subtends on the osculating circle: at 0.5 the bonsai crop
-#: and the tooth have 39 % and 45 % of flying edges' triangles, Hausdorff distances 0.39 and
-#: 0.24 grid steps against its 1.02 and 1.58 (benchmarks/bench_spline_mesh.py); a chord of
-#: this angle stands off the surface by 3 % of its length
+#: default angle (radians) one edge subtends on the osculating circle: a chord of this angle
+#: stands off the surface by 3 % of its length (the triangle counts and Hausdorff distances
+#: it gives against flying edges: ``python -m splineviz.bench.spline_mesh``)
 DEFAULT_RHO = 0.5
 #: default edge-length bounds, in grid steps
 DEFAULT_MIN_LENGTH = 0.4
