@@ -22,6 +22,7 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 from splineviz.core.errors import SplinevizError
 from splineviz.gui.jobs import error_message
 from splineviz.gui.undo import undo_stack
+from splineviz.io.opening import data_name
 from splineviz.model import IsosurfaceNode, MeshNode, Scene, VolumeNode
 from splineviz.model.opening import OutsideFolder, noting_warnings, read_file
 from splineviz.model.session import SESSION_SUFFIX, apply_session, read_session_data, session_path
@@ -151,7 +152,7 @@ class Commands(QObject):
                 remember(what, data, value)
             self.opened.emit(path)
             if kind == "volume":
-                self._add_volume(data, Path(path).name, mode, path=path, read_options=raw,
+                self._add_volume(data, data_name(path), mode, path=path, read_options=raw,
                                  **iso)
             else:
                 self._add(mode, lambda: self.scene.add_points(data, Path(path).name,

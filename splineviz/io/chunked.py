@@ -99,8 +99,12 @@ def _volume_data(dask_array, spacing, origin, fmt, levels=(), source=None, **met
 # ------------------------------------------------------------------------------ Zarr
 
 
+#: the metadata files that make a folder a Zarr store (v3, v2 array, v2 group)
+ZARR_METADATA = ("zarr.json", ".zarray", ".zgroup")
+
+
 def _is_zarr_folder(path: Path) -> bool:
-    return any((path / n).is_file() for n in ("zarr.json", ".zarray", ".zgroup"))
+    return any((path / n).is_file() for n in ZARR_METADATA)
 
 
 def _ome_levels(path: Path):

@@ -31,6 +31,18 @@ class Opened:
     path: Path
 
 
+def data_name(path) -> str:
+    """The name a user knows the data at ``path`` by: the file's name, or the store's folder
+    when ``path`` is the metadata file of a Zarr store (``scan.zarr/zarr.json`` is
+    "scan.zarr")."""
+    from splineviz.io.chunked import ZARR_METADATA
+
+    p = Path(os.fspath(path))
+    if p.name in (*ZARR_METADATA, ".zattrs") and p.parent.name:
+        return p.parent.name
+    return p.name
+
+
 def open_path(path, *, repoint=None, allow_outside: bool = False, **volume_options) -> Opened:
     """Read ``path`` as a session (``.svs``), else as a volume, else as a point cloud.
 

@@ -132,7 +132,7 @@ def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
     (a session keeps its own camera). ``isovalue``/``model`` override every isosurface;
     ``allow_outside`` lets headers and sessions name data outside their folders;
     ``volume_options`` (``channel``, ``oblique``) go to the volume reader."""
-    from splineviz.io.opening import open_path
+    from splineviz.io.opening import data_name, open_path
 
     opened = open_path(path, repoint=repoint, allow_outside=allow_outside, **volume_options)
     scene = Scene()
@@ -140,7 +140,7 @@ def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
         apply_session(scene, opened.value,
                       read_session_data(opened.value, allow_outside=allow_outside))
     elif opened.kind == "volume":
-        scene.add_volume(opened.value, opened.path.name, path=str(opened.path))
+        scene.add_volume(opened.value, data_name(opened.path), path=str(opened.path))
         scene.frame(view="isometric")
     else:
         scene.add_points(opened.value, opened.path.name, path=str(opened.path))

@@ -155,3 +155,13 @@ def test_render_command_on_ome_zarr_matches_the_array(ome, tmp_path):
         assert main(["render", str(plain), *common, "--scheduler",
                      cluster.scheduler_address, "-o", str(tmp_path / "b.png")]) == 0
     np.testing.assert_array_equal(_read_png(tmp_path / "a.png"), _read_png(tmp_path / "b.png"))
+
+
+def test_a_store_opened_through_its_metadata_file_is_named_after_its_folder(ome):
+    from splineviz.model.opening import scene_from_path
+
+    path, _ = ome
+    meta = next(p for p in (path / n for n in ("zarr.json", ".zgroup")) if p.is_file())
+    scene = scene_from_path(meta)
+    assert [v.name for v in scene.volumes] == ["ball.ome.zarr"]
+    assert scene_from_path(path).volumes[0].name == "ball.ome.zarr"
