@@ -29,6 +29,7 @@ from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
 from splineviz.gui.dialogs import save_session_as
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
+from splineviz.gui.layout import ViewLayout
 from splineviz.gui.open_dialogs import open_chosen
 from splineviz.gui.panels import (
     AnalysisPanel,
@@ -101,7 +102,9 @@ class MainWindow(QMainWindow):
         self._build_status()
         # after the status bar: a split restored with the scene connects to its labels
         self.linked_views = LinkedViews(self)
-        self.setCentralWidget(self.linked_views.splitter)
+        self.view_layout = ViewLayout(self)  # View > Layout: the 3-D view and the slices
+        self.view_layout.add_menu(self.menuBar())
+        self.setCentralWidget(self.view_layout.widget)
         self.jobs.changed.connect(self._jobs_changed)
         self.jobs.error.connect(self.show_error)
         self.jobs.message.connect(lambda m: self.statusBar().showMessage(m, 4000))
@@ -445,6 +448,7 @@ class MainWindow(QMainWindow):
             box.close()
         self.plane_widgets.close()
         self.log.close_log()
+        self.view_layout.close()
         self.linked_views.close()
         self.view.close()
         super().closeEvent(event)

@@ -1,0 +1,154 @@
+"""The window's view layouts (View > Layout): the 3-D view alone, the 3-D view with the
+axial, coronal and sagittal slices (3D Slicer's "four-up"), or one slice alone.
+
+The layout is :attr:`splineviz.model.slices.SliceViewNode.layout`; :class:`ViewLayout`
+follows it. The central widget is a vertical splitter of two rows: the top row holds the
+3-D views (:class:`~splineviz.gui.split.LinkedViews`' splitter) and the axial slice, the
+bottom row the coronal and sagittal slices. A layout hides the panes it does not use (the
+3-D view keeps its widget and OpenGL context). The slice views are made when a layout
+first shows them, one per turn of the event loop (a new OpenGL context and its first
+paint each), so that no step holds the GUI thread long.
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Qt, QTimer
+from PySide6.QtGui import QAction, QActionGroup
+from PySide6.QtWidgets import QSplitter
+
+from splineviz.gui.slice_views import SliceViews
+
+#: (layout, single slice, menu text, tooltip) of View > Layout
+LAYOUT_CHOICES = (
+    ("3d", None, "&3-D only", "The 3-D view alone"),
+    ("four-up", None, "&Four-up: 3-D and three slices",
+     "The 3-D view with the axial, coronal and sagittal slices (3D Slicer's four-up)"),
+    ("one-slice", "axial", "&Axial slice", "The axial slice (normal to z) alone"),
+    ("one-slice", "coronal", "&Coronal slice", "The coronal slice (normal to y) alone"),
+    ("one-slice", "sagittal", "&Sagittal slice", "The sagittal slice (normal to x) alone"),
+)
+#: where each slice view sits: (row, column) of the two rows
+SLOTS = {"axial": (0, 1), "coronal": (1, 0), "sagittal": (1, 1)}
+
+
+class ViewLayout:
+    """The central widget and the slice views of a main window (see module docstring).
+
+    Parameters
+    ----------
+    window : splineviz.gui.main_window.MainWindow
+        Owner of the scene, the 3-D view (``view``), its split (``linked_views``), the
+        readout label and the error display.
+    """
+
+    def __init__(self, window):
+        self.window = window
+        self.slices = SliceViews(window.scene, window.view, window)
+        self.state = self.slices.state
+        self.widget = QSplitter(Qt.Orientation.Vertical, window)
+        self.widget.setObjectName("layout")
+        self.widget.setChildrenCollapsible(False)
+        self.rows = [QSplitter(Qt.Orientation.Horizontal), QSplitter(Qt.Orientation.Horizontal)]
+        for row in self.rows:
+            row.setChildrenCollapsible(False)
+            self.widget.addWidget(row)
+        self.rows[0].addWidget(window.linked_views.splitter)
+        self.rows[1].hide()
+        self._to_make: list[str] = []
+        self._make_timer = QTimer(self.widget)
+        self._make_timer.setSingleShot(True)
+        self._make_timer.setInterval(16)
+        self._make_timer.timeout.connect(self._make_next)
+        self.slices.readout.connect(window.readout_label.setText)
+        self.slices.error.connect(window.show_error)
+        self.state.events.layout.connect(self._apply)
+        self.state.events.single.connect(self._apply)
+        self.actions: dict[tuple, QAction] = {}
+
+    @property
+    def views(self) -> dict:
+        """The slice views made so far, by name."""
+        return self.slices.views
+
+    def set_layout(self, layout: str, single: str | None = None) -> None:
+        """Switch to a layout (see :data:`LAYOUT_CHOICES`)."""
+        if single is not None:
+            self.state.update(layout=layout, single=single)
+        else:
+            self.state.layout = layout
+
+    @property
+    def ready(self) -> bool:
+        """Whether every slice of the layout has its view."""
+        return all(name in self.views for name in self.state.shown)
+
+    def _apply(self, *_):
+        shown = self.state.shown
+        missing = [n for n in shown if n not in self.views and n not in self._to_make]
+        self._to_make.extend(missing)
+        if self._to_make and not self._make_timer.isActive():
+            self._make_timer.start()
+        self._show_panes()
+        key = (self.state.layout, self.state.single if self.state.layout == "one-slice"
+               else None)
+        action = self.actions.get(key)
+        if action is not None and not action.isChecked():
+            action.setChecked(True)
+
+    def _make_next(self) -> None:
+        if not self._to_make:
+            return
+        name = self._to_make.pop(0)
+        if name not in self.views:
+            row, col = SLOTS[name]
+            view = self.slices.make_view(name)
+            splitter = self.rows[row]
+            view.widget.hide()
+            # the slot's place: the axial view right of the 3-D view, the others in order
+            index = min(col, splitter.count())
+            splitter.insertWidget(index, view.widget)
+            self._show_panes()
+        if self._to_make:
+            self._make_timer.start()
+
+    def _show_panes(self) -> None:
+        shown = self.state.shown
+        three_d = self.state.layout != "one-slice"
+        self.window.linked_views.splitter.setVisible(three_d)
+        for name, view in self.views.items():
+            view.widget.setVisible(name in shown)
+        for row in self.rows:
+            row.setVisible(any(not row.widget(i).isHidden()
+                               for i in range(row.count())))
+        if self.state.layout == "four-up":
+            for row in self.rows:
+                total = sum(row.sizes()) or row.width()
+                if row.count() == 2:
+                    row.setSizes([total // 2, total - total // 2])
+            total = sum(self.widget.sizes()) or self.widget.height()
+            self.widget.setSizes([total // 2, total - total // 2])
+
+    def add_menu(self, menu_bar) -> None:
+        """View > Layout (in ``menu_bar``'s View menu): the choices of
+        :data:`LAYOUT_CHOICES`, one checked."""
+        view_menu = next(a.menu() for a in menu_bar.actions()
+                         if a.menu() is not None and a.text().replace("&", "") == "View")
+        menu = view_menu.addMenu("&Layout")
+        group = QActionGroup(menu)
+        group.setExclusive(True)
+        for layout, single, text, tip in LAYOUT_CHOICES:
+            action = QAction(text, menu)
+            action.setCheckable(True)
+            action.setToolTip(tip)
+            action.setStatusTip(tip)
+            action.triggered.connect(lambda _=False, la=layout, s=single:
+                                     self.set_layout(la, s))
+            group.addAction(action)
+            menu.addAction(action)
+            self.actions[(layout, single)] = action
+        self.actions[("3d", None)].setChecked(True)
+        self.menu = menu
+
+    def close(self) -> None:
+        self._make_timer.stop()
+        self.slices.close()

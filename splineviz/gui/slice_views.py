@@ -1,0 +1,581 @@
+"""The 2-D slice views: axial, coronal and sagittal views of a volume through its spline
+model, with the exact isosurface contour, a linked crosshair, a probe and a ruler.
+
+:class:`SliceViews` keeps the three :class:`SliceView` widgets and the 3-D view in step with
+one :class:`~splineviz.model.slices.SliceViewNode`: a change of its crosshair moves every
+slice and the slice planes' outline in the 3-D view; a change of the scene (isovalue,
+model, colour, visibility, smoothing) redraws the slices. Slices are computed in one worker
+thread (the spline is built there, which takes up to a second for the smooth models); the
+GUI thread only shows the results, and only the newest request of each view is computed.
+
+Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK's):
+
+* wheel: the next / previous slice (one grid step); Ctrl + wheel: zoom;
+* left click or drag: move the crosshair there (the other views follow);
+* Shift + left drag: a ruler (its length in world units, in the view and the status bar);
+* right drag: window (left / right) and level (up / down);
+* moving the mouse: the probe (position, spline value and gradient) in the status bar;
+* double click in the 3-D view: the crosshair moves to the isosurface point clicked.
+"""
+
+from __future__ import annotations
+
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+
+import numpy as np
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
+
+from splineviz.core import slice_sampling
+from splineviz.core.volume import Volume
+from splineviz.gui.view import _interactor_class, _render_window
+from splineviz.model import IsosurfaceNode, Scene, VolumeNode
+from splineviz.model.slices import AXES, SliceViewNode
+from splineviz.render.slice_view import SlicePlanesMarker, SliceScene
+
+#: splines kept built by the worker (a model switch back is immediate)
+SPLINE_CACHE = 4
+#: image samples per data grid step along each in-plane axis
+OVERSAMPLE = 2
+#: window change per pixel of a right drag, as a share of the window
+WINDOW_PER_PIXEL = 0.005
+#: zoom per wheel notch with Ctrl held
+ZOOM_STEP = 1.15
+#: background of the slice views
+BACKGROUND = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True, eq=False)
+class SliceRequest:
+    """What one slice view needs computed.
+
+    Attributes
+    ----------
+    volume : Volume, the samples (the volume's active data)
+    model : str and options : dict, the spline model of the image
+    axis, position : the slice
+    isos : tuple of (model, options, isovalue, colour) of the isosurfaces to contour
+    """
+
+    volume: object
+    model: str
+    options: tuple
+    axis: int
+    position: float
+    isos: tuple = field(default=())
+
+
+@dataclass(frozen=True, eq=False)
+class SliceResult:
+    """A computed slice: the grid, its ``(nv, nu)`` values, the contours and their colours."""
+
+    request: SliceRequest
+    grid: slice_sampling.SliceGrid
+    values: np.ndarray
+    curves: list
+    colors: list
+
+
+class SliceWorker(QObject):
+    """Computes slices in one thread, newest request per view first (see module docstring).
+
+    Signals
+    -------
+    computed(str, object)
+        A view's :class:`SliceResult` (in the GUI thread).
+    failed(str)
+        One sentence of an error.
+    """
+
+    computed = Signal(str, object)
+    failed = Signal(str)
+    _finished = Signal(str, object, object)
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="slices")
+        self._pending: dict[str, SliceRequest] = {}
+        self._running = False
+        self._closed = False
+        self._splines: dict[tuple, object] = {}
+        self._lock = threading.Lock()  # the spline cache, between the worker and the probe
+        self._finished.connect(self._done)
+
+    def request(self, name: str, req: SliceRequest) -> None:
+        """Compute ``req`` for view ``name`` (replaces a request of it not started yet)."""
+        if self._closed:
+            return
+        self._pending[name] = req
+        self._kick()
+
+    @property
+    def busy(self) -> bool:
+        return self._running or bool(self._pending)
+
+    def spline(self, volume, model: str, options: tuple):
+        """The spline built for these samples and model, or None if not built yet."""
+        with self._lock:
+            return self._splines.get((id(volume), model, options))
+
+    def _kick(self) -> None:
+        if self._running or not self._pending or self._closed:
+            return
+        name = next(iter(self._pending))
+        req = self._pending.pop(name)
+        self._running = True
+        future = self._pool.submit(self._compute, req)
+        future.add_done_callback(lambda f, n=name, r=req: self._finished.emit(n, r, f))
+
+    def _build(self, volume, model: str, options: tuple):
+        from splineviz.core.splines import build_spline
+
+        key = (id(volume), model, options)
+        with self._lock:
+            spline = self._splines.get(key)
+        if spline is None:
+            spline = build_spline(volume, model, **dict(options))
+            with self._lock:
+                self._splines[key] = spline
+                # a volume kept alive by the key's spline; the oldest go first
+                while len(self._splines) > SPLINE_CACHE:
+                    self._splines.pop(next(iter(self._splines)))
+        return spline
+
+    def _compute(self, req: SliceRequest) -> SliceResult:
+        spline = self._build(req.volume, req.model, req.options)
+        grid = slice_sampling.slice_grid(spline.bounds, req.volume.spacing, req.axis,
+                                         req.position, OVERSAMPLE)
+        values = slice_sampling.sample_slice(spline, grid)
+        curves, colors = [], []
+        for model, options, iso, color in req.isos:
+            s = self._build(req.volume, model, options)
+            for curve in slice_sampling.slice_contours(s, iso, req.axis, grid.position):
+                curves.append(curve)
+                colors.append(color)
+        return SliceResult(req, grid, values, curves, colors)
+
+    def _done(self, name: str, req: SliceRequest, future) -> None:
+        self._running = False
+        if self._closed:
+            return
+        exc = future.exception()
+        if exc is not None:
+            from splineviz.gui.jobs import error_message
+
+            self.failed.emit(error_message(exc))
+        elif name not in self._pending:  # an outdated result is not shown
+            self.computed.emit(name, future.result())
+        self._kick()
+
+    def wait(self, timeout_s: float = 60.0) -> bool:
+        """Test helper: run the event loop until no slice is pending."""
+        import time
+
+        from PySide6.QtWidgets import QApplication
+
+        end = time.perf_counter() + timeout_s
+        while self.busy and time.perf_counter() < end:
+            QApplication.processEvents()
+            time.sleep(0.005)
+        QApplication.processEvents()
+        return not self.busy
+
+    def close(self) -> None:
+        self._closed = True
+        self._pending.clear()
+        self._pool.shutdown(wait=False, cancel_futures=True)
+
+
+class SliceView(QObject):
+    """One slice view: a VTK interactor widget showing a :class:`SliceScene`.
+
+    Parameters
+    ----------
+    owner : SliceViews
+    name : "axial", "coronal" or "sagittal"
+    parent_widget : QWidget
+    """
+
+    def __init__(self, owner: SliceViews, name: str, parent_widget=None):
+        super().__init__(parent_widget)
+        self.owner = owner
+        self.name = name
+        self.plotter = _interactor_class()(parent_widget, auto_update=False,
+                                           multi_samples=0, rw=_render_window())
+        self.plotter.enable_anti_aliasing = None
+        self.plotter.setObjectName(f"slice-{name}")
+        self.plotter.setMinimumSize(120, 120)
+        self.plotter.set_background(BACKGROUND)
+        self.scene = SliceScene(self.plotter.renderer, name)
+        #: the result shown (None until the first one arrives)
+        self.result: SliceResult | None = None
+        self._drag: str | None = None
+        self._drag_from = None
+        self._window_from = (1.0, 0.0)
+        self._ruler_start = None
+        self._framed = False
+        self._closed = False
+        iren = self.plotter.iren.interactor
+        # VTK's default bindings (camera rotation, 'w'ireframe, ...) mean nothing here
+        iren.SetInteractorStyle(vtkInteractorStyleUser())
+        for event, slot in (("MouseWheelForwardEvent", lambda *_: self._wheel(1)),
+                            ("MouseWheelBackwardEvent", lambda *_: self._wheel(-1)),
+                            ("LeftButtonPressEvent", self._left_press),
+                            ("LeftButtonReleaseEvent", self._release),
+                            ("RightButtonPressEvent", self._right_press),
+                            ("RightButtonReleaseEvent", self._release),
+                            ("MouseMoveEvent", self._move)):
+            iren.AddObserver(event, slot)
+        self._render_timer = QTimer(self)
+        self._render_timer.setSingleShot(True)
+        self._render_timer.setInterval(0)
+        self._render_timer.timeout.connect(self._render_now)
+        self.plotter.installEventFilter(self)
+        self.plotter.setMouseTracking(True)
+
+    @property
+    def widget(self):
+        return self.plotter
+
+    @property
+    def position(self) -> float:
+        return self.owner.state.position(self.name)
+
+    def request_render(self) -> None:
+        if not self._closed:
+            self._render_timer.start()
+
+    def _render_now(self) -> None:
+        if not self._closed and self.plotter.isVisible():
+            self.plotter.render()
+
+    def reset_camera(self) -> None:
+        w, h = self.plotter.width(), self.plotter.height()
+        self.scene.reset_camera(w / max(h, 1))
+        self.request_render()
+
+    def show_result(self, result: SliceResult) -> None:
+        self.result = result
+        self.scene.set_image(result.grid, result.values)
+        self.scene.set_contours(result.curves, result.colors)
+        if not self._framed:
+            self._framed = True
+            self.reset_camera()
+        self.request_render()
+
+    # -- the mouse (VTK interactor observers) -------------------------------------------
+
+    def _event_plane(self) -> np.ndarray:
+        x, y = self.plotter.iren.interactor.GetEventPosition()
+        return self.scene.display_to_plane(x, y)
+
+    def _event_world(self) -> np.ndarray:
+        return self.scene.to_world(self._event_plane(), self.position)
+
+    def _wheel(self, steps: int) -> None:
+        if self.plotter.iren.interactor.GetControlKey():
+            self.scene.zoom(ZOOM_STEP ** steps)
+            self.request_render()
+            return
+        self.owner.scroll(self.name, steps)
+
+    def _left_press(self, *_):
+        if self.plotter.iren.interactor.GetShiftKey():
+            self._drag = "ruler"
+            self._ruler_start = self._event_world()
+            self.owner.set_ruler(self._ruler_start, self._ruler_start, self.name)
+            return
+        self._drag = "crosshair"
+        self.owner.move_crosshair(self._event_world())
+
+    def _right_press(self, *_):
+        self._drag = "window"
+        self._drag_from = np.asarray(self.plotter.iren.interactor.GetEventPosition(), float)
+        st = self.owner.state
+        self._window_from = (st.window, st.level)
+
+    def _release(self, *_):
+        self._drag = None
+
+    def _move(self, *_):
+        if self._drag == "crosshair":
+            self.owner.move_crosshair(self._event_world())
+        elif self._drag == "ruler":
+            self.owner.set_ruler(self._ruler_start, self._event_world(), self.name)
+        elif self._drag == "window":
+            d = np.asarray(self.plotter.iren.interactor.GetEventPosition(), float) \
+                - self._drag_from
+            window, level = self._window_from
+            self.owner.state.update(window=window * float(np.exp(WINDOW_PER_PIXEL * d[0])),
+                                    level=level + window * WINDOW_PER_PIXEL * d[1])
+        else:
+            self.owner.probe(self._event_world())
+
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
+        if obj is self.plotter:
+            if event.type() == QEvent.Type.Resize:
+                self.reset_camera()
+            elif event.type() == QEvent.Type.Leave:
+                self.owner.readout.emit("")
+        return False
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._render_timer.stop()
+            self.plotter.close()
+
+
+class SliceViews(QObject):
+    """The slice views of a scene and their link to the 3-D view (see module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    view3d : splineviz.gui.view.View3D or None
+        The 3-D view that shows the slice planes and takes double clicks.
+    parent : QObject, optional
+
+    Signals
+    -------
+    readout(str)
+        The probe's or the ruler's line for the status bar ("" when none).
+    error(str)
+    """
+
+    readout = Signal(str)
+    error = Signal(str)
+
+    def __init__(self, scene: Scene, view3d=None, parent=None):
+        super().__init__(parent)
+        self.scene = scene
+        self.view3d = view3d
+        self.state = SliceViewNode(id="slices")
+        self.views: dict[str, SliceView] = {}
+        self.worker = SliceWorker(self)
+        self.worker.computed.connect(self._computed)
+        self.worker.failed.connect(self.error.emit)
+        self._volume: VolumeNode | None = None
+        self._signature = None
+        self._requested: dict[str, tuple] = {}
+        self._closed = False
+        #: the ruler's ends (world) while one is shown, and the view it was drawn in
+        self.ruler: tuple | None = None
+        self.marker = SlicePlanesMarker(view3d.plotter.renderer) if view3d is not None \
+            else None
+        if view3d is not None:
+            view3d.plotter.installEventFilter(self)
+        self._refresh_timer = QTimer(self)
+        self._refresh_timer.setSingleShot(True)
+        self._refresh_timer.setInterval(0)
+        self._refresh_timer.timeout.connect(self.refresh)
+        self.state.events.crosshair.connect(self._crosshair_changed)
+        self.state.events.layout.connect(self._layout_changed)
+        self.state.events.single.connect(self._layout_changed)
+        for name in ("window", "level", "color_map"):
+            getattr(self.state.events, name).connect(self._window_changed)
+        self.state.events.volume_id.connect(lambda *_: self._schedule())
+        scene.changed.connect(self._schedule)
+        scene.selection.connect(self._schedule)
+
+    # -- views ---------------------------------------------------------------------------
+
+    def make_view(self, name: str, parent_widget=None) -> SliceView:
+        """The view of slice ``name`` (made on first use)."""
+        if name not in self.views:
+            view = SliceView(self, name, parent_widget)
+            self.views[name] = view
+            if self._volume is not None:
+                view.scene.set_extent(self._volume.active.bounds)
+                view.scene.set_crosshair(self.state.crosshair)
+            self._window_changed()
+            self._schedule()
+        return self.views[name]
+
+    @property
+    def volume(self) -> VolumeNode | None:
+        """The volume the slices show."""
+        return self._volume
+
+    def _pick_volume(self) -> VolumeNode | None:
+        vid = self.state.volume_id
+        if vid is not None and vid in self.scene:
+            node = self.scene.get(vid)
+            if isinstance(node, VolumeNode) and isinstance(node.active, Volume):
+                return node
+        sel = self.scene.selected
+        if isinstance(sel, IsosurfaceNode):
+            sel = self.scene.volume_of(sel)
+        if isinstance(sel, VolumeNode) and isinstance(sel.active, Volume):
+            return sel
+        for node in self.scene.volumes:
+            if isinstance(node.active, Volume):
+                return node
+        return None
+
+    def _isosurfaces(self, volume: VolumeNode) -> list[IsosurfaceNode]:
+        return [n for n in self.scene.isosurfaces_of(volume) if n.visible]
+
+    # -- following the scene -------------------------------------------------------------
+
+    def _schedule(self, *_):
+        if not self._closed:
+            self._refresh_timer.start()
+
+    def refresh(self) -> None:
+        """Recompute the slices when what they show changed (volume, models, isovalues,
+        colours); move the crosshair into a new volume."""
+        if self._closed:
+            return
+        volume = self._pick_volume()
+        if volume is not self._volume:
+            self._volume = volume
+            self._signature = None
+            self.ruler = None
+            if volume is not None:
+                self.state.fit(volume.active)
+                for view in self.views.values():
+                    view.scene.set_extent(volume.active.bounds)
+                    view.scene.set_ruler(None, None)
+                    view._framed = False
+        if volume is None:
+            self._update_marker()
+            return
+        isos = self._isosurfaces(volume)
+        signature = (id(volume.active),
+                     tuple((n.model, tuple(sorted(n.model_options().items())),
+                            float(n.isovalue), tuple(n.color)) for n in isos))
+        if signature != self._signature:
+            self._signature = signature
+            self._requested.clear()
+        self._request_all()
+        self._update_marker()
+
+    def _model(self) -> tuple[str, tuple]:
+        """The spline model of the image: the first visible isosurface's (else cubic C1)."""
+        from splineviz.model.scene import default_model
+
+        isos = self._isosurfaces(self._volume) if self._volume is not None else []
+        if isos:
+            return isos[0].model, tuple(sorted(isos[0].model_options().items()))
+        return default_model(), ()
+
+    def _request_all(self) -> None:
+        if self._volume is None:
+            return
+        model, options = self._model()
+        isos = tuple((n.model, tuple(sorted(n.model_options().items())), float(n.isovalue),
+                      tuple(n.color)) for n in self._isosurfaces(self._volume))
+        for name in self.state.shown:
+            view = self.views.get(name)
+            if view is None:
+                continue
+            pos = self.state.position(name)
+            key = (self._signature, pos)
+            if self._requested.get(name) == key:
+                continue
+            self._requested[name] = key
+            self.worker.request(name, SliceRequest(self._volume.active, model, options,
+                                                   AXES[name], pos, isos))
+
+    def _computed(self, name: str, result: SliceResult) -> None:
+        view = self.views.get(name)
+        if view is not None and not self._closed:
+            view.show_result(result)
+
+    # -- the state's events --------------------------------------------------------------
+
+    def _crosshair_changed(self, point) -> None:
+        for view in self.views.values():
+            view.scene.set_crosshair(point)
+            view.request_render()
+        self._request_all()
+        self._update_marker()
+
+    def _layout_changed(self, *_):
+        self._request_all()
+        self._update_marker()
+
+    def _window_changed(self, *_):
+        st = self.state
+        for view in self.views.values():
+            view.scene.set_window_level(st.window, st.level, st.color_map)
+            view.request_render()
+
+    def _update_marker(self) -> None:
+        if self.marker is None:
+            return
+        if self._volume is None:
+            self.marker.update(((0, 0),) * 3, self.state.crosshair, ())
+        else:
+            self.marker.update(self._volume.active.bounds, self.state.crosshair,
+                               self.state.shown)
+        self.view3d.request_render()
+
+    # -- what the views do ---------------------------------------------------------------
+
+    def scroll(self, name: str, steps: int) -> None:
+        """Move slice ``name`` by ``steps`` grid steps."""
+        if self._volume is not None:
+            self.state.scroll(name, steps, self._volume.active)
+
+    def move_crosshair(self, point) -> None:
+        """Move the crosshair to a world point (kept in the volume's box)."""
+        if self._volume is not None:
+            self.state.move_to(point, self._volume.active)
+
+    def probe(self, point) -> slice_sampling.Probe | None:
+        """Read the spline at a world point into the status bar (None before the image's
+        spline is built: the probe never builds one in the GUI thread)."""
+        if self._volume is None:
+            return None
+        model, options = self._model()
+        spline = self.worker.spline(self._volume.active, model, options)
+        if spline is None:
+            return None
+        lo, hi = np.asarray(spline.bounds, dtype=np.float64).T
+        if np.any(point < lo) or np.any(point > hi):
+            self.readout.emit("")
+            return None
+        result = slice_sampling.probe(spline, point)
+        self.readout.emit(f"{model}: {result.describe()}")
+        return result
+
+    def set_ruler(self, a, b, name: str) -> float:
+        """Show a ruler from ``a`` to ``b`` (world) in the view ``name``; returns its
+        length (world units)."""
+        self.ruler = (np.asarray(a, float), np.asarray(b, float), name)
+        for other, view in self.views.items():
+            view.scene.set_ruler(*((a, b) if other == name else (None, None)))
+            view.request_render()
+        length = float(np.linalg.norm(np.asarray(b, float) - np.asarray(a, float)))
+        self.readout.emit(f"ruler {length:.5g} (world units) from "
+                          f"({', '.join(f'{c:.4g}' for c in a)}) to "
+                          f"({', '.join(f'{c:.4g}' for c in b)})")
+        return length
+
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
+        # a double click on an isosurface in the 3-D view moves the crosshair there
+        if (self.view3d is not None and obj is self.view3d.plotter
+                and event.type() == QEvent.Type.MouseButtonDblClick
+                and event.button() == Qt.MouseButton.LeftButton):
+            p = event.position()
+            hit = self.view3d.pick(p.x(), p.y())
+            if hit is not None:
+                self.move_crosshair(hit["position"])
+        return False
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self._refresh_timer.stop()
+        self.scene.changed.disconnect(self._schedule)
+        self.scene.selection.disconnect(self._schedule)
+        if self.view3d is not None:
+            self.view3d.plotter.removeEventFilter(self)
+        self.worker.close()
+        for view in self.views.values():
+            view.close()
