@@ -217,6 +217,7 @@ class SliceView(QObject):
         self._ruler_start = None
         self._framed = False
         self._closed = False
+        self._wheel_ctrl = False
         iren = self.plotter.iren.interactor
         # VTK's default bindings (camera rotation, 'w'ireframe, ...) mean nothing here
         iren.SetInteractorStyle(vtkInteractorStyleUser())
@@ -275,7 +276,9 @@ class SliceView(QObject):
         return self.scene.to_world(self._event_plane(), self.position)
 
     def _wheel(self, steps: int) -> None:
-        if self.plotter.iren.interactor.GetControlKey():
+        # (VTK's Qt interactor passes no modifiers with a wheel event: the Qt event's, kept
+        # by :meth:`eventFilter`, tell a zoom)
+        if self._wheel_ctrl:
             self.scene.zoom(ZOOM_STEP ** steps)
             self.request_render()
             return
@@ -315,7 +318,9 @@ class SliceView(QObject):
 
     def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
         if obj is self.plotter:
-            if event.type() == QEvent.Type.Resize:
+            if event.type() == QEvent.Type.Wheel:
+                self._wheel_ctrl = bool(event.modifiers() & Qt.KeyboardModifier.ControlModifier)
+            elif event.type() == QEvent.Type.Resize:
                 self.reset_camera()
             elif event.type() == QEvent.Type.Leave:
                 self.owner.readout.emit("")

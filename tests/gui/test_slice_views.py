@@ -1,0 +1,260 @@
+"""End to end under Xvfb: the four-up layout (View > Layout) on the shared tooth CT, driven
+through the real interactors by Qt mouse and wheel events.
+
+* each slice view shows the spline sampled on its slice and the exact isosurface contour:
+  every contour vertex on the isosurface (within 1e-6 of the data range), on the slice, and
+  drawn where the picture shows it in the isosurface's colour;
+* the wheel moves a slice by one grid step (the picture changes), Ctrl + wheel zooms;
+* a click in one view moves the crosshair: the other views' slices and the 3-D view's slice
+  outlines follow; the probe and the ruler read the spline and world distances;
+* the layouts show and hide the views.
+
+The window stays open across the tests of this module.
+"""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pytestqt")
+pytest.importorskip("pyvistaqt")
+
+from interaction import (  # noqa: E402  (tests/gui helper, on sys.path via pytest)
+    LEFT,
+    NO_BUTTON,
+    _mouse,
+    drag_steps,
+    pump,
+    run_steps,
+    wheel_step,
+)
+from PySide6.QtCore import QEvent, QPoint, QPointF, Qt  # noqa: E402
+from PySide6.QtGui import QWheelEvent  # noqa: E402
+from PySide6.QtWidgets import QApplication  # noqa: E402
+
+from splineviz.model.slices import AXES  # noqa: E402
+
+ISO = 150.0
+
+
+@pytest.fixture(scope="module")
+def window(qapp, tmp_path_factory, shared_data):
+    from PySide6.QtCore import QSettings
+
+    from splineviz.gui.main_window import MainWindow
+
+    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope,
+                      str(tmp_path_factory.mktemp("settings")))
+    w = MainWindow()
+    w.show()
+    for dock in w.docks.values():
+        dock.hide()
+    w.resize(900, 700)
+    w.open_path(shared_data / "volumes" / "tooth.nrrd", block=True)
+    w.scene.isosurfaces[0].isovalue = ISO
+    pump(0.3)
+    # through the menu, as a user
+    w.view_layout.actions[("four-up", None)].trigger()
+    assert pump(30, lambda: w.view_layout.ready)
+    settle(w)
+    yield w
+    w.wait_idle()
+    w.close()
+    pump(0.1)
+    assert w.join_workers(30)
+
+
+def settle(w) -> None:
+    """Until every slice shows the newest result and has been drawn."""
+    assert w.view_layout.slices.worker.wait(120)
+    pump(0.2)
+
+
+def picture(view) -> np.ndarray:
+    """The view's last frame, (H, W, 3) uint8, row 0 at the top."""
+    view.plotter.render()
+    return np.asarray(view.plotter.screenshot(None, return_img=True))[..., :3]
+
+
+def qt_pos(view, display):
+    """Widget pixel of a VTK display pixel (y up)."""
+    return float(display[0]), float(view.plotter.height() - 1 - display[1])
+
+
+def centre(view):
+    return view.plotter.width() / 2.0, view.plotter.height() / 2.0
+
+
+def test_four_up_shows_the_three_slices_beside_the_3d_view(window):
+    lay = window.view_layout
+    assert set(lay.views) == {"axial", "coronal", "sagittal"}
+    assert window.view.plotter.isVisible()
+    for view in lay.views.values():
+        assert view.widget.isVisible() and view.result is not None
+        assert view.widget.width() > 150 and view.widget.height() > 150
+    # the 3-D view outlines the three slice planes through the crosshair
+    marker = lay.slices.marker
+    assert set(marker.outlines) == {"axial", "coronal", "sagittal"}
+    for name, outline in marker.outlines.items():
+        np.testing.assert_allclose(outline[:, AXES[name]], lay.state.crosshair[AXES[name]])
+
+
+def test_the_contour_lies_on_the_isosurface_and_in_the_picture(window):
+    lay = window.view_layout
+    iso = window.scene.isosurfaces[0]
+    vol = window.scene.volume_of(iso).active
+    lo, hi = vol.finite_range
+    spline = lay.slices.worker.spline(vol, iso.model,
+                                      tuple(sorted(iso.model_options().items())))
+    want = np.round(np.asarray(iso.color) * 255)
+    for name, view in lay.views.items():
+        result = view.result
+        assert result.curves, f"the {name} slice through the tooth cuts its surface"
+        pts = np.concatenate([c.points for c in result.curves])
+        assert np.max(np.abs(spline.evaluate(pts) - ISO)) <= 1e-6 * (hi - lo)
+        np.testing.assert_allclose(pts[:, AXES[name]], lay.state.position(name))
+        # the image is the spline on the slice
+        g = result.grid
+        j, i = len(g.vs) // 2, len(g.us) // 3
+        p = g.points()[j, i]
+        assert result.values[j, i] == pytest.approx(spline.evaluate(p[None])[0])
+        # drawn: near most vertices the picture has a pixel of the isosurface's colour
+        img = picture(view)
+        h, w = img.shape[:2]
+        ua, va = g.axes
+        seen = 0
+        sample = pts[:: max(1, len(pts) // 200)]
+        for q in sample:
+            x, y = view.scene.plane_to_display(q[[ua, va]])
+            r, c = int(round(h - 1 - y)), int(round(x))
+            patch = img[max(r - 2, 0):r + 3, max(c - 2, 0):c + 3].reshape(-1, 3)
+            seen += bool(np.any(np.abs(patch.astype(int) - want).max(axis=1) <= 40))
+        assert seen >= 0.9 * len(sample), f"{name}: contour drawn at {seen}/{len(sample)}"
+
+
+def test_wheel_scrolls_one_grid_step(window):
+    lay = window.view_layout
+    view = lay.views["axial"]
+    vol = lay.slices.volume.active
+    before = lay.state.crosshair
+    img0 = picture(view)
+    run_steps([lambda: wheel_step(view.widget, centre(view), 1)] * 3, 30)
+    settle(window)
+    after = lay.state.crosshair
+    assert after[2] == pytest.approx(before[2] + 3 * vol.spacing[2])
+    assert after[:2] == before[:2]
+    assert view.result.grid.position == pytest.approx(after[2])
+    # the coronal and sagittal views' crosshair (the axial trace) moved up with it
+    assert lay.views["coronal"].scene.crosshair[1] == pytest.approx(after[2])
+    assert np.abs(picture(view).astype(int) - img0).max() > 0
+    run_steps([lambda: wheel_step(view.widget, centre(view), -1)], 30)
+    settle(window)
+    assert lay.state.crosshair[2] == pytest.approx(before[2] + 2 * vol.spacing[2])
+
+
+def test_ctrl_wheel_zooms_and_leaves_the_slice(window):
+    lay = window.view_layout
+    view = lay.views["sagittal"]
+    cam = view.plotter.renderer.GetActiveCamera()
+    scale, point = cam.GetParallelScale(), lay.state.crosshair
+    local = QPointF(*centre(view))
+    event = QWheelEvent(local, view.widget.mapToGlobal(local), QPoint(0, 0), QPoint(0, 120),
+                        NO_BUTTON, Qt.KeyboardModifier.ControlModifier,
+                        Qt.ScrollPhase.NoScrollPhase, False)
+    QApplication.sendEvent(view.widget, event)
+    pump(0.1)
+    assert cam.GetParallelScale() < scale
+    assert lay.state.crosshair == point
+    view.reset_camera()
+
+
+def test_click_moves_the_crosshair_in_every_view(window):
+    lay = window.view_layout
+    axial = lay.views["axial"]
+    z = lay.state.crosshair[2]
+    target = axial.scene.plane_to_display((30.0, 60.0))
+    pos = qt_pos(axial, target)
+    run_steps([lambda: _mouse(axial.widget, QEvent.Type.MouseButtonPress, pos, LEFT, LEFT),
+               lambda: _mouse(axial.widget, QEvent.Type.MouseButtonRelease, pos, LEFT,
+                              NO_BUTTON)], 30)
+    settle(window)
+    x, y, z2 = lay.state.crosshair
+    # one pixel of the view in world units
+    px = 2.0 * axial.plotter.renderer.GetActiveCamera().GetParallelScale() \
+        / axial.plotter.height()
+    assert abs(x - 30.0) <= 1.5 * px and abs(y - 60.0) <= 1.5 * px and z2 == z
+    assert lay.views["coronal"].result.grid.position == pytest.approx(y)
+    assert lay.views["sagittal"].result.grid.position == pytest.approx(x)
+    np.testing.assert_allclose(lay.slices.marker.outlines["sagittal"][:, 0], x)
+    np.testing.assert_allclose(lay.slices.marker.outlines["coronal"][:, 1], y)
+    # a drag in the coronal view moves x and z, and y stays
+    cor = lay.views["coronal"]
+    a = qt_pos(cor, cor.scene.plane_to_display((40.0, 70.0)))
+    b = qt_pos(cor, cor.scene.plane_to_display((55.0, 90.0)))
+    run_steps(drag_steps(cor.widget, [a, b]), 30)
+    settle(window)
+    x3, y3, z3 = lay.state.crosshair
+    px = 2.0 * cor.plotter.renderer.GetActiveCamera().GetParallelScale() / cor.plotter.height()
+    assert abs(x3 - 55.0) <= 1.5 * px and abs(z3 - 90.0) <= 1.5 * px and y3 == y
+    assert lay.views["axial"].result.grid.position == pytest.approx(z3)
+
+
+def test_probe_reads_the_spline_under_the_mouse(window):
+    lay = window.view_layout
+    view = lay.views["axial"]
+    iso = window.scene.isosurfaces[0]
+    spline = lay.slices.worker.spline(lay.slices.volume.active, iso.model,
+                                      tuple(sorted(iso.model_options().items())))
+    pos = qt_pos(view, view.scene.plane_to_display((50.0, 45.0)))
+    _mouse(view.widget, QEvent.Type.MouseMove, pos, NO_BUTTON, NO_BUTTON)
+    pump(0.05)
+    text = window.readout_label.text()
+    point = view.scene.to_world(view._event_plane(), lay.state.position("axial"))
+    value = spline.evaluate(point[None])[0]
+    assert f"value {value:.5g}" in text and "gradient" in text
+
+
+def test_ruler_measures_world_distance(window):
+    lay = window.view_layout
+    view = lay.views["coronal"]
+    a = qt_pos(view, view.scene.plane_to_display((20.0, 30.0)))
+    b = qt_pos(view, view.scene.plane_to_display((60.0, 60.0)))
+    steps = drag_steps(view.widget, [a, b], modifiers=Qt.KeyboardModifier.ShiftModifier)
+    run_steps(steps, 30)
+    pump(0.1)
+    ends = view.scene.ruler
+    assert ends is not None
+    length = float(np.linalg.norm(ends[1] - ends[0]))
+    assert length == pytest.approx(50.0, abs=1.0)  # a 30-40-50 triangle, to a pixel
+    assert f"ruler {length:.5g}" in window.readout_label.text()
+    # the crosshair did not move with a ruler drag
+    assert view.owner.state.crosshair[1] == pytest.approx(view.result.grid.position)
+
+
+def test_layouts_show_and_hide_the_views(window):
+    lay = window.view_layout
+    lay.actions[("one-slice", "coronal")].trigger()
+    pump(0.2)
+    assert lay.views["coronal"].widget.isVisible()
+    assert not lay.views["axial"].widget.isVisible()
+    assert not window.view.plotter.isVisible()
+    lay.actions[("3d", None)].trigger()
+    pump(0.2)
+    assert window.view.plotter.isVisible()
+    assert not any(v.widget.isVisible() for v in lay.views.values())
+    assert lay.slices.marker.outlines == {}
+    lay.actions[("four-up", None)].trigger()
+    pump(0.2)
+    assert all(v.widget.isVisible() for v in lay.views.values())
+    settle(window)
+
+
+def test_window_level_by_right_drag(window):
+    lay = window.view_layout
+    view = lay.views["axial"]
+    w0, l0 = lay.state.window, lay.state.level
+    c = centre(view)
+    run_steps(drag_steps(view.widget, [c, (c[0] + 40, c[1])], button=Qt.MouseButton.RightButton),
+              30)
+    assert lay.state.window > w0 and lay.state.level == pytest.approx(l0)
+    assert view.scene.image_property.GetColorWindow() == pytest.approx(lay.state.window)
+    lay.state.update(window=w0, level=l0)
