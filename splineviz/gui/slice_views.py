@@ -229,10 +229,6 @@ class SliceView(QObject):
                             ("RightButtonReleaseEvent", self._release),
                             ("MouseMoveEvent", self._move)):
             iren.AddObserver(event, slot)
-        self._render_timer = QTimer(self)
-        self._render_timer.setSingleShot(True)
-        self._render_timer.setInterval(0)
-        self._render_timer.timeout.connect(self._render_now)
         self.plotter.installEventFilter(self)
         self.plotter.setMouseTracking(True)
 
@@ -245,8 +241,9 @@ class SliceView(QObject):
         return self.owner.state.position(self.name)
 
     def request_render(self) -> None:
+        """Render in a later turn of the event loop (:meth:`SliceViews.queue_render`)."""
         if not self._closed:
-            self._render_timer.start()
+            self.owner.queue_render(self)
 
     def _render_now(self) -> None:
         if not self._closed and self.plotter.isVisible():
@@ -329,7 +326,6 @@ class SliceView(QObject):
     def close(self) -> None:
         if not self._closed:
             self._closed = True
-            self._render_timer.stop()
             self.plotter.close()
 
 
@@ -376,6 +372,12 @@ class SliceViews(QObject):
         self._refresh_timer.setSingleShot(True)
         self._refresh_timer.setInterval(0)
         self._refresh_timer.timeout.connect(self.refresh)
+        #: views waiting to be rendered, one per turn of the event loop
+        self._to_render: list[SliceView] = []
+        self._render_timer = QTimer(self)
+        self._render_timer.setSingleShot(True)
+        self._render_timer.setInterval(0)
+        self._render_timer.timeout.connect(self._render_next)
         self.state.events.crosshair.connect(self._crosshair_changed)
         self.state.events.layout.connect(self._layout_changed)
         self.state.events.single.connect(self._layout_changed)
@@ -386,6 +388,26 @@ class SliceViews(QObject):
         scene.selection.connect(self._schedule)
 
     # -- views ---------------------------------------------------------------------------
+
+    def queue_render(self, view: SliceView) -> None:
+        """Render ``view`` soon. A crosshair move changes every view: rendered one per turn
+        of the event loop, not all in one (10-40 ms each on software GL, under load up to
+        90), so input and the other views' frames get in between."""
+        if view not in self._to_render:
+            self._to_render.append(view)
+        if not self._closed and not self._render_timer.isActive():
+            self._render_timer.start()
+
+    def _render_next(self) -> None:
+        if self._to_render and not self._closed:
+            self._to_render.pop(0)._render_now()
+        if self._to_render and not self._closed:
+            self._render_timer.start()
+
+    @property
+    def rendering(self) -> bool:
+        """Whether views are waiting to be rendered."""
+        return bool(self._to_render)
 
     def make_view(self, name: str, parent_widget=None) -> SliceView:
         """The view of slice ``name`` (made on first use)."""
@@ -577,6 +599,8 @@ class SliceViews(QObject):
             return
         self._closed = True
         self._refresh_timer.stop()
+        self._render_timer.stop()
+        self._to_render.clear()
         self.scene.changed.disconnect(self._schedule)
         self.scene.selection.disconnect(self._schedule)
         if self.view3d is not None:

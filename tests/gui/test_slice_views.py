@@ -66,7 +66,7 @@ def window(qapp, tmp_path_factory, shared_data):
 def settle(w) -> None:
     """Until every slice shows the newest result and has been drawn."""
     assert w.view_layout.slices.worker.wait(120)
-    pump(0.2)
+    assert pump(10, lambda: not w.view_layout.slices.rendering)
 
 
 def picture(view) -> np.ndarray:
@@ -258,3 +258,23 @@ def test_window_level_by_right_drag(window):
     assert lay.state.window > w0 and lay.state.level == pytest.approx(l0)
     assert view.scene.image_property.GetColorWindow() == pytest.approx(lay.state.window)
     lay.state.update(window=w0, level=l0)
+
+
+def test_double_click_in_the_3d_view_moves_the_crosshair_to_the_surface(window):
+    lay = window.view_layout
+    window.wait_for_refine(120)
+    pump(0.2)
+    view = window.view
+    w, h = view.plotter.width(), view.plotter.height()
+    hit, pos = None, None
+    for fx, fy in ((0.5, 0.5), (0.45, 0.4), (0.55, 0.6), (0.5, 0.3)):
+        pos = (fx * w, fy * h)
+        hit = view.pick(*pos)
+        if hit is not None:
+            break
+    assert hit is not None, "the tooth fills the middle of the 3-D view"
+    _mouse(view.plotter, QEvent.Type.MouseButtonDblClick, pos, LEFT, LEFT)
+    settle(window)
+    np.testing.assert_allclose(lay.state.crosshair, hit["position"], atol=1e-9)
+    for name, view2 in lay.views.items():
+        assert view2.result.grid.position == pytest.approx(hit["position"][AXES[name]])
