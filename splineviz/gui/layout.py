@@ -102,7 +102,9 @@ class ViewLayout:
             return
         name = self._to_make[0]
         if name not in self.views:
-            view = self.slices.make_view(name)
+            # made inside its row: a widget made without a parent is a window of its own,
+            # whose native window kept the mouse events after it moved into the row
+            view = self.slices.make_view(name, self.rows[SLOTS[name][0]])
             view.widget.hide()
         else:
             self._to_make.pop(0)

@@ -152,6 +152,10 @@ class SliceScene:
         self._ruler_label.GetTextProperty().SetFontSize(14)
         self._ruler_label.GetPositionCoordinate().SetCoordinateSystemToWorld()
         self._ruler_label.VisibilityOff()
+        for text in (self._label, self._ruler_label):
+            # readable over a bright image too
+            text.GetTextProperty().SetBackgroundColor(0.0, 0.0, 0.0)
+            text.GetTextProperty().SetBackgroundOpacity(0.55)
         for prop in (self._slice, self._contour_actor, self._cross_actor, self._ruler_actor):
             renderer.AddViewProp(prop)
         renderer.AddViewProp(self._label)
