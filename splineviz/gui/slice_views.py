@@ -15,7 +15,8 @@ Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK
 * Shift + left drag: a ruler (its length in world units, in the view and the status bar);
 * right drag: window (left / right) and level (up / down);
 * moving the mouse: the probe (position, spline value and gradient) in the status bar;
-* double click in the 3-D view: the crosshair moves to the isosurface point clicked.
+* double click in the 3-D view: the crosshair moves to the isosurface point clicked;
+  Shift + double click: one end of a ruler, then the other (shown in the 3-D view).
 """
 
 from __future__ import annotations
@@ -364,6 +365,7 @@ class SliceViews(QObject):
         self._closed = False
         #: the ruler's ends (world) while one is shown, and the view it was drawn in
         self.ruler: tuple | None = None
+        self._ruler_start = None
         self.marker = SlicePlanesMarker(view3d.plotter.renderer) if view3d is not None \
             else None
         if view3d is not None:
@@ -460,7 +462,9 @@ class SliceViews(QObject):
         if volume is not self._volume:
             self._volume = volume
             self._signature = None
-            self.ruler = None
+            self.ruler = self._ruler_start = None
+            if self.marker is not None:
+                self.marker.set_ruler(None, None)
             if volume is not None:
                 self.state.fit(volume.active)
                 for view in self.views.values():
@@ -571,26 +575,47 @@ class SliceViews(QObject):
         return result
 
     def set_ruler(self, a, b, name: str) -> float:
-        """Show a ruler from ``a`` to ``b`` (world) in the view ``name``; returns its
-        length (world units)."""
-        self.ruler = (np.asarray(a, float), np.asarray(b, float), name)
+        """Show a ruler from ``a`` to ``b`` (world) in the view ``name`` (a slice, or
+        ``"3d"``) and in the 3-D view; returns its length (world units)."""
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        self.ruler = (a, b, name)
         for other, view in self.views.items():
             view.scene.set_ruler(*((a, b) if other == name else (None, None)))
             view.request_render()
-        length = float(np.linalg.norm(np.asarray(b, float) - np.asarray(a, float)))
+        if self.marker is not None:
+            self.marker.set_ruler(a, b)
+            self.view3d.request_render()
+        length = float(np.linalg.norm(b - a))
         self.readout.emit(f"ruler {length:.5g} (world units) from "
                           f"({', '.join(f'{c:.4g}' for c in a)}) to "
                           f"({', '.join(f'{c:.4g}' for c in b)})")
         return length
 
+    def _ruler_point_3d(self, point) -> None:
+        """Shift + double click in the 3-D view: the first end of a new ruler, then its
+        second end."""
+        if self._ruler_start is None:
+            self._ruler_start = np.asarray(point, float)
+            self.set_ruler(self._ruler_start, self._ruler_start, "3d")
+            self.readout.emit("ruler from ({}); Shift + double click its other end".format(
+                ", ".join(f"{c:.4g}" for c in self._ruler_start)))
+        else:
+            start, self._ruler_start = self._ruler_start, None
+            self.set_ruler(start, point, "3d")
+
     def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
-        # a double click on an isosurface in the 3-D view moves the crosshair there
+        # a double click on an isosurface in the 3-D view moves the crosshair there; with
+        # Shift it places an end of the ruler
         if (self.view3d is not None and obj is self.view3d.plotter
                 and event.type() == QEvent.Type.MouseButtonDblClick
                 and event.button() == Qt.MouseButton.LeftButton):
             p = event.position()
             hit = self.view3d.pick(p.x(), p.y())
-            if hit is not None:
+            if hit is None:
+                return False
+            if event.modifiers() & Qt.KeyboardModifier.ShiftModifier:
+                self._ruler_point_3d(hit["position"])
+            else:
                 self.move_crosshair(hit["position"])
         return False
 

@@ -315,6 +315,39 @@ class SlicePlanesMarker:
         renderer.AddActor(self._actor)
         #: the outlines shown: slice name -> (5, 3) world points (closed rectangle)
         self.outlines: dict[str, np.ndarray] = {}
+        self._ruler_actor, self._ruler_mapper = _line_actor(3.0, RULER_COLOR)
+        self._ruler_actor.VisibilityOff()
+        renderer.AddActor(self._ruler_actor)
+        self._ruler_label = vtkTextActor()
+        prop = self._ruler_label.GetTextProperty()
+        prop.SetColor(*RULER_COLOR)
+        prop.SetFontSize(14)
+        prop.SetBackgroundColor(0.0, 0.0, 0.0)
+        prop.SetBackgroundOpacity(0.55)
+        self._ruler_label.GetPositionCoordinate().SetCoordinateSystemToWorld()
+        self._ruler_label.VisibilityOff()
+        renderer.AddViewProp(self._ruler_label)
+        #: the ruler's ends ``(2, 3)`` (world) while one is shown
+        self.ruler: np.ndarray | None = None
+
+    def set_ruler(self, a, b) -> None:
+        """A ruler between the world points ``a`` and ``b`` labelled with its length
+        (``a`` None: no ruler)."""
+        if a is None:
+            self.ruler = None
+            self._ruler_actor.VisibilityOff()
+            self._ruler_label.VisibilityOff()
+            return
+        a = np.asarray(a, dtype=np.float64)
+        b = a if b is None else np.asarray(b, dtype=np.float64)
+        self.ruler = np.stack([a, b])
+        self._ruler_mapper.SetInputData(_polylines3([self.ruler], [RULER_COLOR]))
+        length = float(np.linalg.norm(b - a))
+        self._ruler_actor.SetVisibility(length > 0)
+        self._ruler_label.SetInput(f"{length:.4g}")
+        mid = 0.5 * (a + b)
+        self._ruler_label.GetPositionCoordinate().SetValue(*map(float, mid))
+        self._ruler_label.SetVisibility(length > 0)
 
     def update(self, bounds, point, names) -> None:
         """Outline the slices ``names`` through the world ``point`` within the box
@@ -338,6 +371,8 @@ class SlicePlanesMarker:
 
     def close(self) -> None:
         self.renderer.RemoveActor(self._actor)
+        self.renderer.RemoveActor(self._ruler_actor)
+        self.renderer.RemoveViewProp(self._ruler_label)
 
 
 def _polylines3(lines, colors) -> vtkPolyData:

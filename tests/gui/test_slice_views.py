@@ -278,3 +278,33 @@ def test_double_click_in_the_3d_view_moves_the_crosshair_to_the_surface(window):
     np.testing.assert_allclose(lay.state.crosshair, hit["position"], atol=1e-9)
     for name, view2 in lay.views.items():
         assert view2.result.grid.position == pytest.approx(hit["position"][AXES[name]])
+
+
+def test_ruler_in_the_3d_view_between_two_surface_points(window):
+    lay = window.view_layout
+    window.wait_for_refine(120)
+    pump(0.2)
+    view = window.view
+    w, h = view.plotter.width(), view.plotter.height()
+    hits = []
+    for fx, fy in ((0.5, 0.35), (0.45, 0.3), (0.5, 0.6), (0.55, 0.65), (0.5, 0.5)):
+        hit = view.pick(fx * w, fy * h)
+        if hit is not None:
+            hits.append(((fx * w, fy * h), hit["position"]))
+    assert len(hits) >= 2
+    (p0, a), (p1, b) = hits[0], hits[-1]
+    shift = Qt.KeyboardModifier.ShiftModifier
+    _mouse(view.plotter, QEvent.Type.MouseButtonDblClick, p0, LEFT, LEFT, shift)
+    pump(0.05)
+    crosshair = lay.state.crosshair
+    _mouse(view.plotter, QEvent.Type.MouseButtonDblClick, p1, LEFT, LEFT, shift)
+    pump(0.1)
+    np.testing.assert_allclose(lay.slices.marker.ruler, [a, b])
+    length = float(np.linalg.norm(b - a))
+    assert f"ruler {length:.5g}" in window.readout_label.text()
+    assert lay.state.crosshair == crosshair  # a ruler end does not move the crosshair
+    # a ruler drawn in a slice shows in the 3-D view too
+    sag = lay.views["sagittal"]
+    c = centre(sag)
+    run_steps(drag_steps(sag.widget, [c, (c[0] + 30, c[1] + 20)], modifiers=shift), 30)
+    np.testing.assert_allclose(lay.slices.marker.ruler, sag.scene.ruler)
