@@ -55,7 +55,8 @@ class SliceRequest:
     Attributes
     ----------
     volume : Volume, the samples (the volume's active data)
-    model : str and options : dict, the spline model of the image
+    model : str, the spline model of the image
+    options : tuple of (name, value), the model's keyword arguments, sorted
     axis, position : the slice
     isos : tuple of (model, options, isovalue, colour) of the isosurfaces to contour
     """
@@ -219,9 +220,17 @@ class SliceView(QObject):
         self._framed = False
         self._closed = False
         self._wheel_ctrl = False
+        # VTK's and pyvista's bindings (camera rotation; single letters: w wireframe, r a
+        # perspective camera reset, e/q exit, ...) mean nothing here: a plain style, no
+        # pyvista key table and character events stopped before the style sees them
+        self.plotter.iren.clear_key_event_callbacks()
         iren = self.plotter.iren.interactor
-        # VTK's default bindings (camera rotation, 'w'ireframe, ...) mean nothing here
         iren.SetInteractorStyle(vtkInteractorStyleUser())
+
+        def swallow(_obj, _event):
+            iren.GetCommand(tag).SetAbortFlag(1)
+
+        tag = iren.AddObserver("CharEvent", swallow, 1.0)
         for event, slot in (("MouseWheelForwardEvent", lambda *_: self._wheel(1)),
                             ("MouseWheelBackwardEvent", lambda *_: self._wheel(-1)),
                             ("LeftButtonPressEvent", self._left_press),
@@ -472,6 +481,10 @@ class SliceViews(QObject):
                     view.scene.set_ruler(None, None)
                     view._framed = False
         if volume is None:
+            if self.state.shown and self.scene.volumes:
+                # chunked stores are rendered in bricks and have no in-memory spline
+                self.readout.emit("the slice views show volumes held in memory; "
+                                  f"{self.scene.volumes[0].name} is read in chunks")
             self._update_marker()
             return
         isos = self._isosurfaces(volume)

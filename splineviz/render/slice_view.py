@@ -124,6 +124,9 @@ class SliceScene:
         self.grid: SliceGrid | None = None
         #: the contour curves shown, as ``(M, 2)`` plane coordinates per curve
         self.contours: list[np.ndarray] = []
+        #: the crosshair's plane coordinates ``(u, v)`` and world point (None before one)
+        self.crosshair: tuple | None = None
+        self._point: np.ndarray | None = None
         self._extent = np.array([[0.0, 1.0], [0.0, 1.0]])
         self._image = vtkImageData()
         self._mapper = vtkImageSliceMapper()
@@ -251,7 +254,7 @@ class SliceScene:
         return level * _LIFT * span
 
     def _update_label(self) -> None:
-        point = getattr(self, "_point", None)
+        point = self._point
         if point is None:
             return
         axis_name = "xyz"[self.axis]

@@ -131,6 +131,41 @@ def test_the_contour_lies_on_the_isosurface_and_in_the_picture(window):
         assert seen >= 0.9 * len(sample), f"{name}: contour drawn at {seen}/{len(sample)}"
 
 
+
+def test_each_contour_is_the_3d_clip_plane_cross_section(window):
+    """A clip plane at each slice and its cross section (the curves the 3-D view draws for
+    it): the same curves as the slice's contour, by length and vertex by vertex."""
+    from splineviz.model import ClipPlaneNode
+    from splineviz.model.analysis import section_curves
+
+    lay = window.view_layout
+    scene = window.scene
+    iso = scene.isosurfaces[0]
+    vol = scene.volume_of(iso)
+    for name, view in lay.views.items():
+        axis = AXES[name]
+        origin = np.asarray(lay.state.crosshair, dtype=float)
+        normal = np.zeros(3)
+        normal[axis] = 1.0
+        plane = scene.add(ClipPlaneNode(volume_id=vol.id, origin=tuple(origin),
+                                        normal=tuple(normal), show_widget=False))
+        section = scene.add_section(iso, plane)
+        try:
+            curves = section_curves(scene, section)
+        finally:
+            scene.remove(plane)
+        mine = view.result.curves
+        assert len(curves) == len(mine)
+        assert sum(c.length for c in curves) == pytest.approx(sum(c.length for c in mine),
+                                                              rel=1e-6)
+        a = np.concatenate([c.points for c in curves])
+        b = np.concatenate([c.points for c in mine])
+        # the same seeding grid (the plane's origin differs only within the plane): the
+        # same vertices
+        assert len(a) == len(b)
+        np.testing.assert_allclose(np.sort(a, axis=0), np.sort(b, axis=0), atol=1e-6)
+    settle(window)
+
 def test_wheel_scrolls_one_grid_step(window):
     lay = window.view_layout
     view = lay.views["axial"]
@@ -308,3 +343,20 @@ def test_ruler_in_the_3d_view_between_two_surface_points(window):
     c = centre(sag)
     run_steps(drag_steps(sag.widget, [c, (c[0] + 30, c[1] + 20)], modifiers=shift), 30)
     np.testing.assert_allclose(lay.slices.marker.ruler, sag.scene.ruler)
+
+
+def test_single_letters_do_nothing_in_a_slice_view(window):
+    from PySide6.QtGui import QKeyEvent
+
+    lay = window.view_layout
+    view = lay.views["axial"]
+    cam = view.plotter.renderer.GetActiveCamera()
+    before = (cam.GetParallelProjection(), cam.GetParallelScale(), cam.GetPosition())
+    for key, text in ((Qt.Key.Key_W, "w"), (Qt.Key.Key_R, "r"), (Qt.Key.Key_E, "e"),
+                      (Qt.Key.Key_Q, "q")):
+        for kind in (QEvent.Type.KeyPress, QEvent.Type.KeyRelease):
+            QApplication.sendEvent(view.widget, QKeyEvent(kind, key, Qt.KeyboardModifier.NoModifier,
+                                                          text))
+    pump(0.1)
+    assert (cam.GetParallelProjection(), cam.GetParallelScale(), cam.GetPosition()) == before
+    assert view.widget.isVisible() and window.isVisible()
