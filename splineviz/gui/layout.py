@@ -6,15 +6,16 @@ follows it. The central widget is a vertical splitter of two rows: the top row h
 3-D views (:class:`~splineviz.gui.split.LinkedViews`' splitter) and the axial slice, the
 bottom row the coronal and sagittal slices. A layout hides the panes it does not use (the
 3-D view keeps its widget and OpenGL context). The slice views are made when a layout
-first shows them, one per turn of the event loop (a new OpenGL context and its first
-paint each), so that no step holds the GUI thread long.
+first shows them: black panes take their places at once (the 3-D view is resized once),
+then each view is made in one turn of the event loop and replaces its pane in the next
+(a new OpenGL context and its first paint), so that no step holds the GUI thread long.
 """
 
 from __future__ import annotations
 
 from PySide6.QtCore import Qt, QTimer
-from PySide6.QtGui import QAction, QActionGroup
-from PySide6.QtWidgets import QSplitter
+from PySide6.QtGui import QAction, QActionGroup, QColor, QPalette
+from PySide6.QtWidgets import QSplitter, QWidget
 
 from splineviz.gui.slice_views import SliceViews
 
@@ -54,7 +55,10 @@ class ViewLayout:
             self.widget.addWidget(row)
         self.rows[0].addWidget(window.linked_views.splitter)
         self.rows[1].hide()
+        #: slice views still to make (in steps), and the panes holding their places
         self._to_make: list[str] = []
+        self._stand_ins: dict[str, QWidget] = {}
+        self._sized = False
         self._make_timer = QTimer(self.widget)
         self._make_timer.setSingleShot(True)
         self._make_timer.setInterval(16)
@@ -83,9 +87,11 @@ class ViewLayout:
         return not self._to_make and all(name in self.views for name in self.state.shown)
 
     def _apply(self, *_):
-        shown = self.state.shown
-        missing = [n for n in shown if n not in self.views and n not in self._to_make]
-        self._to_make.extend(missing)
+        missing = [n for n in self.state.shown if n not in self.views
+                   and n not in self._stand_ins]
+        for name in missing:
+            self._make_room(name)
+            self._to_make.append(name)
         if self._to_make and not self._make_timer.isActive():
             self._make_timer.start()
         self._show_panes()
@@ -95,44 +101,58 @@ class ViewLayout:
         if action is not None and not action.isChecked():
             action.setChecked(True)
 
+    def _make_room(self, name: str) -> None:
+        """A plain black pane holds the slot of a view not made yet: the layout (and the 3-D
+        view's size) changes once, not again as each view arrives."""
+        pane = QWidget()
+        palette = pane.palette()
+        palette.setColor(QPalette.ColorRole.Window, QColor(0, 0, 0))
+        pane.setPalette(palette)
+        pane.setAutoFillBackground(True)
+        pane.setMinimumSize(120, 120)
+        row, col = SLOTS[name]
+        # the slot's place: the axial view right of the 3-D view, the others in order
+        self.rows[row].insertWidget(min(col, self.rows[row].count()), pane)
+        self._stand_ins[name] = pane
+
     def _make_next(self) -> None:
-        """One step of making the slice views: a view's widget (hidden, 50-110 ms on a busy
-        machine), then in the next turn its place in the layout and its first paint."""
+        """One step of making the slice views: a view's widget (hidden; 50-110 ms on a busy
+        machine), then in the next turn it takes its pane's place (its first paint)."""
         if not self._to_make:
             return
         name = self._to_make[0]
+        row = self.rows[SLOTS[name][0]]
         if name not in self.views:
             # made inside its row: a widget made without a parent is a window of its own,
             # whose native window kept the mouse events after it moved into the row
-            view = self.slices.make_view(name, self.rows[SLOTS[name][0]])
+            view = self.slices.make_view(name, row)
             view.widget.hide()
         else:
             self._to_make.pop(0)
+            pane = self._stand_ins.pop(name)
             view = self.views[name]
-            row, col = SLOTS[name]
-            splitter = self.rows[row]
-            if splitter.indexOf(view.widget) < 0:
-                # the slot's place: the axial view right of the 3-D view, the others in order
-                splitter.insertWidget(min(col, splitter.count()), view.widget)
+            row.replaceWidget(row.indexOf(pane), view.widget)
+            pane.deleteLater()
             self._show_panes()
         if self._to_make:
             self._make_timer.start()
 
     def _show_panes(self) -> None:
         shown = self.state.shown
-        three_d = self.state.layout != "one-slice"
-        self.window.linked_views.splitter.setVisible(three_d)
+        self.window.linked_views.splitter.setVisible(self.state.layout != "one-slice")
+        for name, pane in self._stand_ins.items():
+            pane.setVisible(name in shown)
         for name, view in self.views.items():
-            placed = view.widget.parent() in self.rows
-            view.widget.setVisible(placed and name in shown)
+            if name not in self._stand_ins:
+                view.widget.setVisible(name in shown)
         for row in self.rows:
-            row.setVisible(any(not row.widget(i).isHidden()
-                               for i in range(row.count())))
-        if self.state.layout == "four-up":
+            row.setVisible(any(not row.widget(i).isHidden() for i in range(row.count())))
+        if self.state.layout == "four-up" and not self._sized:
+            # halves once, when the layout is first shown; the user's splitter drags stay
+            self._sized = True
             for row in self.rows:
                 total = sum(row.sizes()) or row.width()
-                if row.count() == 2:
-                    row.setSizes([total // 2, total - total // 2])
+                row.setSizes([total // 2, total - total // 2])
             total = sum(self.widget.sizes()) or self.widget.height()
             self.widget.setSizes([total // 2, total - total // 2])
 
@@ -159,4 +179,5 @@ class ViewLayout:
 
     def close(self) -> None:
         self._make_timer.stop()
+        self._to_make.clear()
         self.slices.close()
