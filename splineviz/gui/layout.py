@@ -148,13 +148,23 @@ class ViewLayout:
         for row in self.rows:
             row.setVisible(any(not row.widget(i).isHidden() for i in range(row.count())))
         if self.state.layout == "four-up" and not self._sized:
-            # halves once, when the layout is first shown; the user's splitter drags stay
-            self._sized = True
-            for row in self.rows:
-                total = sum(row.sizes()) or row.width()
-                row.setSizes([total // 2, total - total // 2])
-            total = sum(self.widget.sizes()) or self.widget.height()
-            self.widget.setSizes([total // 2, total - total // 2])
+            # halves when the layout is first shown and again once its views are in their
+            # places (a view replacing its pane takes its own share; the splitter has laid
+            # it out in the next turn); later, the user's splitter drags stay
+            self._halve()
+            if not self._to_make:
+                self._sized = True
+                QTimer.singleShot(0, self._halve)
+
+    def _halve(self) -> None:
+        """The four panes of the four-up layout the same size."""
+        if self.state.layout != "four-up":
+            return
+        for splitter in (*self.rows, self.widget):
+            n = splitter.count()
+            total = sum(splitter.sizes()) or (splitter.height() if splitter is self.widget
+                                              else splitter.width())
+            splitter.setSizes([total // n] * (n - 1) + [total - (n - 1) * (total // n)])
 
     def add_menu(self, menu_bar) -> None:
         """View > Layout (in ``menu_bar``'s View menu): the choices of

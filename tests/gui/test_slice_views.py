@@ -91,6 +91,12 @@ def test_four_up_shows_the_three_slices_beside_the_3d_view(window):
     for view in lay.views.values():
         assert view.widget.isVisible() and view.result is not None
         assert view.widget.width() > 150 and view.widget.height() > 150
+    # four quarters: the 3-D view and each slice about as large as the others
+    sizes = [window.linked_views.splitter.size().toTuple()] + [
+        v.widget.size().toTuple() for v in lay.views.values()]
+    widths, heights = np.array(sizes).T
+    assert widths.max() - widths.min() <= 0.1 * widths.max()
+    assert heights.max() - heights.min() <= 0.1 * heights.max()
     # the 3-D view outlines the three slice planes through the crosshair
     marker = lay.slices.marker
     assert set(marker.outlines) == {"axial", "coronal", "sagittal"}
