@@ -18,6 +18,7 @@ from PySide6.QtGui import QAction, QActionGroup, QColor, QPalette
 from PySide6.QtWidgets import QSplitter, QWidget
 
 from splineviz.gui.slice_views import SliceViews
+from splineviz.model.slices import SLICE_COLORMAPS
 
 #: (layout, single slice, menu text, tooltip) of View > Layout
 LAYOUT_CHOICES = (
@@ -185,6 +186,26 @@ class ViewLayout:
             menu.addAction(action)
             self.actions[(layout, single)] = action
         self.actions[("3d", None)].setChecked(True)
+        menu.addSeparator()
+        maps = menu.addMenu("Slice &colour map")
+        maps_group = QActionGroup(maps)
+        for name in SLICE_COLORMAPS:
+            action = QAction(name, maps)
+            action.setCheckable(True)
+            action.setChecked(name == self.state.color_map)
+            action.triggered.connect(lambda _=False, n=name: setattr(self.state, "color_map", n))
+            maps_group.addAction(action)
+            maps.addAction(action)
+            self.actions[("color_map", name)] = action
+        self.state.events.color_map.connect(
+            lambda name: self.actions[("color_map", name)].setChecked(True))
+        reset = QAction("&Reset slice window / level", menu)
+        tip = "Window / level of the slices from the data (2-98 % of the samples)"
+        reset.setToolTip(tip)
+        reset.setStatusTip(tip)
+        reset.triggered.connect(self.slices.reset_window)
+        menu.addAction(reset)
+        self.actions[("reset_window", None)] = reset
         self.menu = menu
 
     def close(self) -> None:

@@ -13,7 +13,8 @@ Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK
 * wheel: the next / previous slice (one grid step); Ctrl + wheel: zoom;
 * left click or drag: move the crosshair there (the other views follow);
 * Shift + left drag: a ruler (its length in world units, in the view and the status bar);
-* right drag: window (left / right) and level (up / down);
+* right drag: window (left / right) and level (up / down); View > Layout resets them and
+  chooses the colour map;
 * moving the mouse: the probe (position, spline value and gradient) in the status bar;
 * double click in the 3-D view: the crosshair moves to the isosurface point clicked;
   Shift + double click: one end of a ruler, then the other (shown in the 3-D view).
@@ -564,6 +565,13 @@ class SliceViews(QObject):
         """Move slice ``name`` by ``steps`` grid steps."""
         if self._volume is not None:
             self.state.scroll(name, steps, self._volume.active)
+
+    def reset_window(self) -> None:
+        """Window / level from the shown volume's samples (the crosshair stays)."""
+        if self._volume is not None:
+            point = self.state.crosshair
+            self.state.fit(self._volume.active)
+            self.state.crosshair = point
 
     def move_crosshair(self, point) -> None:
         """Move the crosshair to a world point (kept in the volume's box)."""

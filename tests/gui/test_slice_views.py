@@ -298,7 +298,17 @@ def test_window_level_by_right_drag(window):
               30)
     assert lay.state.window > w0 and lay.state.level == pytest.approx(l0)
     assert view.scene.image_property.GetColorWindow() == pytest.approx(lay.state.window)
-    lay.state.update(window=w0, level=l0)
+    point = lay.state.crosshair
+    lay.actions[("reset_window", None)].trigger()
+    assert (lay.state.window, lay.state.level) == pytest.approx((w0, l0))
+    assert lay.state.crosshair == point
+    # a colour map from the menu: the picture changes from grey to colour
+    assert view.scene.color_map == "gray"
+    lay.actions[("color_map", "viridis")].trigger()
+    assert view.scene.color_map == "viridis"
+    img = picture(view).astype(int)
+    assert np.abs(img[..., 0] - img[..., 1]).max() > 40
+    lay.actions[("color_map", "gray")].trigger()
 
 
 def test_double_click_in_the_3d_view_moves_the_crosshair_to_the_surface(window):
