@@ -536,6 +536,8 @@ class SliceViews(QObject):
         for view in self.views.values():
             view.scene.set_crosshair(point)
             view.request_render()
+        if self.ruler is not None:
+            self._show_ruler()
         self._request_all()
         self._update_marker()
 
@@ -600,9 +602,7 @@ class SliceViews(QObject):
         ``"3d"``) and in the 3-D view; returns its length (world units)."""
         a, b = np.asarray(a, float), np.asarray(b, float)
         self.ruler = (a, b, name)
-        for other, view in self.views.items():
-            view.scene.set_ruler(*((a, b) if other == name else (None, None)))
-            view.request_render()
+        self._show_ruler()
         if self.marker is not None:
             self.marker.set_ruler(a, b)
             self.view3d.request_render()
@@ -611,6 +611,15 @@ class SliceViews(QObject):
                           f"({', '.join(f'{c:.4g}' for c in a)}) to "
                           f"({', '.join(f'{c:.4g}' for c in b)})")
         return length
+
+    def _show_ruler(self) -> None:
+        """The ruler in the slice view it was drawn in, while that view shows its plane."""
+        a, b, name = self.ruler if self.ruler is not None else (None, None, None)
+        for other, view in self.views.items():
+            here = other == name and abs(self.state.position(other) - a[AXES[other]]) <= \
+                1e-9 * max(1.0, abs(a[AXES[other]]))
+            view.scene.set_ruler(*((a, b) if here else (None, None)))
+            view.request_render()
 
     def _ruler_point_3d(self, point) -> None:
         """Shift + double click in the 3-D view: the first end of a new ruler, then its

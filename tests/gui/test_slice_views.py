@@ -269,6 +269,12 @@ def test_ruler_measures_world_distance(window):
     assert f"ruler {length:.5g}" in window.readout_label.text()
     # the crosshair did not move with a ruler drag
     assert view.owner.state.crosshair[1] == pytest.approx(view.result.grid.position)
+    # another coronal slice hides the ruler there (the 3-D view keeps it); back, it shows
+    point = lay.state.crosshair
+    lay.slices.scroll("coronal", 1)
+    assert view.scene.ruler is None and lay.slices.marker.ruler is not None
+    lay.state.crosshair = point
+    assert view.scene.ruler is not None
 
 
 def test_layouts_show_and_hide_the_views(window):
