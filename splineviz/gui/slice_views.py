@@ -376,6 +376,7 @@ class SliceViews(QObject):
         #: the ruler's ends (world) while one is shown, and the view it was drawn in
         self.ruler: tuple | None = None
         self._ruler_start = None
+        self._marker_key = None
         self.marker = SlicePlanesMarker(view3d.plotter.renderer) if view3d is not None \
             else None
         if view3d is not None:
@@ -552,13 +553,18 @@ class SliceViews(QObject):
             view.request_render()
 
     def _update_marker(self) -> None:
+        """The slice planes in the 3-D view; it renders again only when they changed (the
+        scene's changes that reach :meth:`refresh` include every camera move)."""
         if self.marker is None:
             return
-        if self._volume is None:
-            self.marker.update(((0, 0),) * 3, self.state.crosshair, ())
-        else:
-            self.marker.update(self._volume.active.bounds, self.state.crosshair,
-                               self.state.shown)
+        shown = self.state.shown if self._volume is not None else ()
+        bounds = self._volume.active.bounds if self._volume is not None else None
+        key = (bounds, self.state.crosshair, shown)
+        if key == self._marker_key:
+            return
+        self._marker_key = key
+        self.marker.update(bounds if bounds is not None else ((0, 0),) * 3,
+                           self.state.crosshair, shown)
         self.view3d.request_render()
 
     # -- what the views do ---------------------------------------------------------------

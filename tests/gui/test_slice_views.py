@@ -382,3 +382,18 @@ def test_single_letters_do_nothing_in_a_slice_view(window):
     pump(0.1)
     assert (cam.GetParallelProjection(), cam.GetParallelScale(), cam.GetPosition()) == before
     assert view.widget.isVisible() and window.isVisible()
+
+
+def test_a_camera_move_does_not_redraw_the_slice_planes(window, monkeypatch):
+    """Every camera move reaches the slice views (the scene's ``changed``): neither the
+    3-D view's slice planes nor the slices are redone for it."""
+    lay = window.view_layout
+    settle(window)
+    calls = []
+    monkeypatch.setattr(lay.slices.marker, "update", lambda *a: calls.append(a))
+    monkeypatch.setattr(lay.slices.worker, "request", lambda *a: calls.append(a))
+    cam = window.scene.camera
+    x, y, z = cam.position
+    cam.position = (x * 1.01, y, z)
+    pump(0.2)
+    assert calls == []
