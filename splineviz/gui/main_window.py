@@ -23,6 +23,7 @@ from splineviz.gui import opening, window_state
 from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
+from splineviz.gui.layout import ViewLayout
 from splineviz.gui.panels import (
     AnalysisPanel,
     ClippingPanel,
@@ -94,7 +95,9 @@ class MainWindow(QMainWindow):
         self._add_panel_toggles()
         # after the status bar: a split restored with the scene connects to its labels
         self.linked_views = LinkedViews(self)
-        self.setCentralWidget(self.linked_views.splitter)
+        self.view_layout = ViewLayout(self)  # View > Layout: the 3-D view and the slices
+        self.view_layout.add_menu(self.menuBar())
+        self.setCentralWidget(self.view_layout.widget)
         self.jobs.error.connect(self.show_error)
         self.jobs.message.connect(lambda m: self.statusBar().showMessage(m, 4000))
         self.view._refiner.error.connect(self.show_error)
@@ -320,6 +323,7 @@ class MainWindow(QMainWindow):
             box.close()
         self.plane_widgets.close()
         self.log.close_log()
+        self.view_layout.close()
         self.linked_views.close()
         self.view.close()
         super().closeEvent(event)

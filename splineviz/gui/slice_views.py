@@ -1,0 +1,523 @@
+"""The 2-D slice views: axial, coronal and sagittal views of a volume through its spline
+model, with the exact isosurface contour, a linked crosshair, a probe and a ruler.
+
+:class:`SliceViews` keeps the three :class:`SliceView` widgets and the 3-D view in step with
+one :class:`~splineviz.model.slices.SliceViewNode`: a change of its crosshair moves every
+slice and the slice planes' outline in the 3-D view; a change of the scene (isovalue,
+model, colour, visibility, smoothing) redraws the slices. Slices are computed in one worker
+thread (the spline is built there, which takes up to a second for the smooth models); the
+GUI thread only shows the results, and only the newest request of each view is computed
+(:mod:`splineviz.gui.slice_worker`).
+
+Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK's):
+
+* wheel: the next / previous slice (one grid step); Ctrl + wheel: zoom;
+* left click or drag: move the crosshair there (the other views follow);
+* Shift + left drag: a ruler (its length in world units, in the view and the status bar);
+* right drag: window (left / right) and level (up / down); View > Layout resets them and
+  chooses the colour map;
+* moving the mouse: the probe (position, spline value and gradient) in the status bar;
+* double click in the 3-D view: the crosshair moves to the isosurface point clicked;
+  Shift + double click: one end of a ruler, then the other (shown in the 3-D view).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
+
+from splineviz.core import slice_sampling
+from splineviz.core.volume import Volume
+from splineviz.gui.slice_worker import SliceRequest, SliceResult, SliceWorker
+from splineviz.gui.view import _interactor_class, _render_window
+from splineviz.model import IsosurfaceNode, Scene, VolumeNode
+from splineviz.model.slices import AXES, SliceViewNode
+from splineviz.render.slice_view import SlicePlanesMarker, SliceScene
+
+#: window change per pixel of a right drag, as a share of the window
+WINDOW_PER_PIXEL = 0.005
+#: zoom per wheel notch with Ctrl held
+ZOOM_STEP = 1.15
+#: background of the slice views
+BACKGROUND = (0.0, 0.0, 0.0)
+
+
+class SliceView(QObject):
+    """One slice view: a VTK interactor widget showing a :class:`SliceScene`.
+
+    Parameters
+    ----------
+    owner : SliceViews
+    name : "axial", "coronal" or "sagittal"
+    parent_widget : QWidget
+    """
+
+    def __init__(self, owner: SliceViews, name: str, parent_widget=None):
+        super().__init__(parent_widget)
+        self.owner = owner
+        self.name = name
+        self.plotter = _interactor_class()(parent_widget, auto_update=False,
+                                           multi_samples=0, rw=_render_window())
+        self.plotter.enable_anti_aliasing = None
+        self.plotter.setObjectName(f"slice-{name}")
+        self.plotter.setMinimumSize(120, 120)
+        self.plotter.set_background(BACKGROUND)
+        self.scene = SliceScene(self.plotter.renderer, name)
+        #: the result shown (None until the first one arrives)
+        self.result: SliceResult | None = None
+        self._drag: str | None = None
+        self._drag_from = None
+        self._window_from = (1.0, 0.0)
+        self._ruler_start = None
+        self._framed = False
+        self._closed = False
+        self._wheel_ctrl = False
+        # VTK's and pyvista's bindings (camera rotation; single letters: w wireframe, r a
+        # perspective camera reset, e/q exit, ...) mean nothing here: a plain style, no
+        # pyvista key table and character events stopped before the style sees them
+        self.plotter.iren.clear_key_event_callbacks()
+        iren = self.plotter.iren.interactor
+        iren.SetInteractorStyle(vtkInteractorStyleUser())
+
+        def swallow(_obj, _event):
+            iren.GetCommand(tag).SetAbortFlag(1)
+
+        tag = iren.AddObserver("CharEvent", swallow, 1.0)
+        for event, slot in (("MouseWheelForwardEvent", lambda *_: self._wheel(1)),
+                            ("MouseWheelBackwardEvent", lambda *_: self._wheel(-1)),
+                            ("LeftButtonPressEvent", self._left_press),
+                            ("LeftButtonReleaseEvent", self._release),
+                            ("RightButtonPressEvent", self._right_press),
+                            ("RightButtonReleaseEvent", self._release),
+                            ("MouseMoveEvent", self._move)):
+            iren.AddObserver(event, slot)
+        self.plotter.installEventFilter(self)
+        self.plotter.setMouseTracking(True)
+
+    @property
+    def widget(self):
+        return self.plotter
+
+    @property
+    def position(self) -> float:
+        return self.owner.state.position(self.name)
+
+    def request_render(self) -> None:
+        """Render in a later turn of the event loop (:meth:`SliceViews.queue_render`)."""
+        if not self._closed:
+            self.owner.queue_render(self)
+
+    def _render_now(self) -> None:
+        if not self._closed and self.plotter.isVisible():
+            self.plotter.render()
+
+    def reset_camera(self) -> None:
+        w, h = self.plotter.width(), self.plotter.height()
+        self.scene.reset_camera(w / max(h, 1))
+        self.request_render()
+
+    def show_result(self, result: SliceResult) -> None:
+        self.result = result
+        self.scene.set_image(result.grid, result.values)
+        self.scene.set_contours(result.curves, result.colors)
+        if not self._framed:
+            self._framed = True
+            self.reset_camera()
+        self.request_render()
+
+    # -- the mouse (VTK interactor observers) -------------------------------------------
+
+    def _event_plane(self) -> np.ndarray:
+        x, y = self.plotter.iren.interactor.GetEventPosition()
+        return self.scene.display_to_plane(x, y)
+
+    def _event_world(self) -> np.ndarray:
+        return self.scene.to_world(self._event_plane(), self.position)
+
+    def _wheel(self, steps: int) -> None:
+        # (VTK's Qt interactor passes no modifiers with a wheel event: the Qt event's, kept
+        # by :meth:`eventFilter`, tell a zoom)
+        if self._wheel_ctrl:
+            self.scene.zoom(ZOOM_STEP ** steps)
+            self.request_render()
+            return
+        self.owner.scroll(self.name, steps)
+
+    def _left_press(self, *_):
+        if self.plotter.iren.interactor.GetShiftKey():
+            self._drag = "ruler"
+            self._ruler_start = self._event_world()
+            self.owner.set_ruler(self._ruler_start, self._ruler_start, self.name)
+            return
+        self._drag = "crosshair"
+        self.owner.move_crosshair(self._event_world())
+
+    def _right_press(self, *_):
+        self._drag = "window"
+        self._drag_from = np.asarray(self.plotter.iren.interactor.GetEventPosition(), float)
+        st = self.owner.state
+        self._window_from = (st.window, st.level)
+
+    def _release(self, *_):
+        self._drag = None
+
+    def _move(self, *_):
+        if self._drag == "crosshair":
+            self.owner.move_crosshair(self._event_world())
+        elif self._drag == "ruler":
+            self.owner.set_ruler(self._ruler_start, self._event_world(), self.name)
+        elif self._drag == "window":
+            d = np.asarray(self.plotter.iren.interactor.GetEventPosition(), float) \
+                - self._drag_from
+            window, level = self._window_from
+            self.owner.state.update(window=window * float(np.exp(WINDOW_PER_PIXEL * d[0])),
+                                    level=level + window * WINDOW_PER_PIXEL * d[1])
+        else:
+            self.owner.probe(self._event_world())
+
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
+        if obj is self.plotter:
+            if event.type() == QEvent.Type.Wheel:
+                self._wheel_ctrl = bool(event.modifiers() & Qt.KeyboardModifier.ControlModifier)
+            elif event.type() == QEvent.Type.Resize:
+                self.reset_camera()
+            elif event.type() == QEvent.Type.Leave:
+                self.owner.readout.emit("")
+        return False
+
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self.plotter.close()
+
+
+class SliceViews(QObject):
+    """The slice views of a scene and their link to the 3-D view (see module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+    view3d : splineviz.gui.view.View3D or None
+        The 3-D view that shows the slice planes and takes double clicks.
+    parent : QObject, optional
+
+    Signals
+    -------
+    readout(str)
+        The probe's or the ruler's line for the status bar ("" when none).
+    error(str)
+    """
+
+    readout = Signal(str)
+    error = Signal(str)
+
+    def __init__(self, scene: Scene, view3d=None, parent=None):
+        super().__init__(parent)
+        self.scene = scene
+        self.view3d = view3d
+        self.state = SliceViewNode(id="slices")
+        self.views: dict[str, SliceView] = {}
+        self.worker = SliceWorker(self)
+        self.worker.computed.connect(self._computed)
+        self.worker.failed.connect(self.error.emit)
+        self._volume: VolumeNode | None = None
+        self._signature = None
+        self._requested: dict[str, tuple] = {}
+        self._closed = False
+        #: the ruler's ends (world) while one is shown, and the view it was drawn in
+        self.ruler: tuple | None = None
+        self._ruler_start = None
+        self._marker_key = None
+        self.marker = SlicePlanesMarker(view3d.plotter.renderer) if view3d is not None \
+            else None
+        if view3d is not None:
+            view3d.plotter.installEventFilter(self)
+        self._refresh_timer = QTimer(self)
+        self._refresh_timer.setSingleShot(True)
+        self._refresh_timer.setInterval(0)
+        self._refresh_timer.timeout.connect(self.refresh)
+        #: views waiting to be rendered, one per turn of the event loop
+        self._to_render: list[SliceView] = []
+        self._render_timer = QTimer(self)
+        self._render_timer.setSingleShot(True)
+        self._render_timer.setInterval(0)
+        self._render_timer.timeout.connect(self._render_next)
+        self.state.events.crosshair.connect(self._crosshair_changed)
+        self.state.events.layout.connect(self._layout_changed)
+        self.state.events.single.connect(self._layout_changed)
+        for name in ("window", "level", "color_map"):
+            getattr(self.state.events, name).connect(self._window_changed)
+        self.state.events.volume_id.connect(lambda *_: self._schedule())
+        scene.changed.connect(self._schedule)
+        scene.selection.connect(self._schedule)
+
+    # -- views ---------------------------------------------------------------------------
+
+    def queue_render(self, view: SliceView) -> None:
+        """Render ``view`` soon. A crosshair move changes every view: rendered one per turn
+        of the event loop, not all in one (10-40 ms each on software GL, under load up to
+        90), so input and the other views' frames get in between."""
+        if view not in self._to_render:
+            self._to_render.append(view)
+        if not self._closed and not self._render_timer.isActive():
+            self._render_timer.start()
+
+    def _render_next(self) -> None:
+        if self._to_render and not self._closed:
+            self._to_render.pop(0)._render_now()
+        if self._to_render and not self._closed:
+            self._render_timer.start()
+
+    @property
+    def rendering(self) -> bool:
+        """Whether views are waiting to be rendered."""
+        return bool(self._to_render)
+
+    def make_view(self, name: str, parent_widget=None) -> SliceView:
+        """The view of slice ``name`` (made on first use)."""
+        if name not in self.views:
+            view = SliceView(self, name, parent_widget)
+            self.views[name] = view
+            if self._volume is not None:
+                view.scene.set_extent(self._volume.active.bounds)
+                view.scene.set_crosshair(self.state.crosshair)
+            self._window_changed()
+            self._schedule()
+        return self.views[name]
+
+    @property
+    def volume(self) -> VolumeNode | None:
+        """The volume the slices show."""
+        return self._volume
+
+    def _pick_volume(self) -> VolumeNode | None:
+        vid = self.state.volume_id
+        if vid is not None and vid in self.scene:
+            node = self.scene.get(vid)
+            if isinstance(node, VolumeNode) and isinstance(node.active, Volume):
+                return node
+        sel = self.scene.selected
+        if isinstance(sel, IsosurfaceNode):
+            sel = self.scene.volume_of(sel)
+        if isinstance(sel, VolumeNode) and isinstance(sel.active, Volume):
+            return sel
+        for node in self.scene.volumes:
+            if isinstance(node.active, Volume):
+                return node
+        return None
+
+    def _isosurfaces(self, volume: VolumeNode) -> list[IsosurfaceNode]:
+        return [n for n in self.scene.isosurfaces_of(volume) if n.visible]
+
+    # -- following the scene -------------------------------------------------------------
+
+    def _schedule(self, *_):
+        if not self._closed:
+            self._refresh_timer.start()
+
+    def refresh(self) -> None:
+        """Recompute the slices when what they show changed (volume, models, isovalues,
+        colours); move the crosshair into a new volume."""
+        if self._closed:
+            return
+        volume = self._pick_volume()
+        if volume is not self._volume:
+            self._volume = volume
+            self._signature = None
+            self.ruler = self._ruler_start = None
+            if self.marker is not None:
+                self.marker.set_ruler(None, None)
+            if volume is not None:
+                self.state.fit(volume.active)
+                for view in self.views.values():
+                    view.scene.set_extent(volume.active.bounds)
+                    view.scene.set_ruler(None, None)
+                    view._framed = False
+        if volume is None:
+            if self.state.shown and self.scene.volumes:
+                # chunked stores are rendered in bricks and have no in-memory spline
+                self.readout.emit("the slice views show volumes held in memory; "
+                                  f"{self.scene.volumes[0].name} is read in chunks")
+            self._update_marker()
+            return
+        isos = self._isosurfaces(volume)
+        signature = (id(volume.active),
+                     tuple((n.model, tuple(sorted(n.model_options().items())),
+                            float(n.isovalue), tuple(n.color)) for n in isos))
+        if signature != self._signature:
+            self._signature = signature
+            self._requested.clear()
+        self._request_all()
+        self._update_marker()
+
+    def _model(self) -> tuple[str, tuple]:
+        """The spline model of the image: the first visible isosurface's (else cubic C1)."""
+        from splineviz.model.scene import default_model
+
+        isos = self._isosurfaces(self._volume) if self._volume is not None else []
+        if isos:
+            return isos[0].model, tuple(sorted(isos[0].model_options().items()))
+        return default_model(), ()
+
+    def _request_all(self) -> None:
+        if self._volume is None:
+            return
+        model, options = self._model()
+        isos = tuple((n.model, tuple(sorted(n.model_options().items())), float(n.isovalue),
+                      tuple(n.color)) for n in self._isosurfaces(self._volume))
+        for name in self.state.shown:
+            view = self.views.get(name)
+            if view is None:
+                continue
+            pos = self.state.position(name)
+            key = (self._signature, pos)
+            if self._requested.get(name) == key:
+                continue
+            self._requested[name] = key
+            self.worker.request(name, SliceRequest(self._volume.active, model, options,
+                                                   AXES[name], pos, isos))
+
+    def _computed(self, name: str, result: SliceResult) -> None:
+        view = self.views.get(name)
+        if view is not None and not self._closed:
+            view.show_result(result)
+
+    # -- the state's events --------------------------------------------------------------
+
+    def _crosshair_changed(self, point) -> None:
+        for view in self.views.values():
+            view.scene.set_crosshair(point)
+            view.request_render()
+        if self.ruler is not None:
+            self._show_ruler()
+        self._request_all()
+        self._update_marker()
+
+    def _layout_changed(self, *_):
+        self._request_all()
+        self._update_marker()
+
+    def _window_changed(self, *_):
+        st = self.state
+        for view in self.views.values():
+            view.scene.set_window_level(st.window, st.level, st.color_map)
+            view.request_render()
+
+    def _update_marker(self) -> None:
+        """The slice planes in the 3-D view; it renders again only when they changed (the
+        scene's changes that reach :meth:`refresh` include every camera move)."""
+        if self.marker is None:
+            return
+        shown = self.state.shown if self._volume is not None else ()
+        bounds = self._volume.active.bounds if self._volume is not None else None
+        key = (bounds, self.state.crosshair, shown)
+        if key == self._marker_key:
+            return
+        self._marker_key = key
+        self.marker.update(bounds if bounds is not None else ((0, 0),) * 3,
+                           self.state.crosshair, shown)
+        self.view3d.request_render()
+
+    # -- what the views do ---------------------------------------------------------------
+
+    def scroll(self, name: str, steps: int) -> None:
+        """Move slice ``name`` by ``steps`` grid steps."""
+        if self._volume is not None:
+            self.state.scroll(name, steps, self._volume.active)
+
+    def reset_window(self) -> None:
+        """Window / level from the shown volume's samples (the crosshair stays)."""
+        if self._volume is not None:
+            point = self.state.crosshair
+            self.state.fit(self._volume.active)
+            self.state.crosshair = point
+
+    def move_crosshair(self, point) -> None:
+        """Move the crosshair to a world point (kept in the volume's box)."""
+        if self._volume is not None:
+            self.state.move_to(point, self._volume.active)
+
+    def probe(self, point) -> slice_sampling.Probe | None:
+        """Read the spline at a world point into the status bar (None before the image's
+        spline is built: the probe never builds one in the GUI thread)."""
+        if self._volume is None:
+            return None
+        model, options = self._model()
+        spline = self.worker.spline(self._volume.active, model, options)
+        if spline is None:
+            return None
+        lo, hi = np.asarray(spline.bounds, dtype=np.float64).T
+        if np.any(point < lo) or np.any(point > hi):
+            self.readout.emit("")
+            return None
+        result = slice_sampling.probe(spline, point)
+        self.readout.emit(f"{model}: {result.describe()}")
+        return result
+
+    def set_ruler(self, a, b, name: str) -> float:
+        """Show a ruler from ``a`` to ``b`` (world) in the view ``name`` (a slice, or
+        ``"3d"``) and in the 3-D view; returns its length (world units)."""
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        self.ruler = (a, b, name)
+        self._show_ruler()
+        if self.marker is not None:
+            self.marker.set_ruler(a, b)
+            self.view3d.request_render()
+        length = float(np.linalg.norm(b - a))
+        self.readout.emit(f"ruler {length:.5g} (world units) from "
+                          f"({', '.join(f'{c:.4g}' for c in a)}) to "
+                          f"({', '.join(f'{c:.4g}' for c in b)})")
+        return length
+
+    def _show_ruler(self) -> None:
+        """The ruler in the slice view it was drawn in, while that view shows its plane."""
+        a, b, name = self.ruler if self.ruler is not None else (None, None, None)
+        for other, view in self.views.items():
+            here = other == name and abs(self.state.position(other) - a[AXES[other]]) <= \
+                1e-9 * max(1.0, abs(a[AXES[other]]))
+            view.scene.set_ruler(*((a, b) if here else (None, None)))
+            view.request_render()
+
+    def _ruler_point_3d(self, point) -> None:
+        """Shift + double click in the 3-D view: the first end of a new ruler, then its
+        second end."""
+        if self._ruler_start is None:
+            self._ruler_start = np.asarray(point, float)
+            self.set_ruler(self._ruler_start, self._ruler_start, "3d")
+            self.readout.emit("ruler from ({}); Shift + double click its other end".format(
+                ", ".join(f"{c:.4g}" for c in self._ruler_start)))
+        else:
+            start, self._ruler_start = self._ruler_start, None
+            self.set_ruler(start, point, "3d")
+
+    def eventFilter(self, obj, event):  # noqa: N802 (Qt naming)
+        # a double click on an isosurface in the 3-D view moves the crosshair there; with
+        # Shift it places an end of the ruler
+        if (self.view3d is not None and obj is self.view3d.plotter
+                and event.type() == QEvent.Type.MouseButtonDblClick
+                and event.button() == Qt.MouseButton.LeftButton):
+            p = event.position()
+            hit = self.view3d.pick(p.x(), p.y())
+            if hit is None:
+                return False
+            if event.modifiers() & Qt.KeyboardModifier.ShiftModifier:
+                self._ruler_point_3d(hit["position"])
+            else:
+                self.move_crosshair(hit["position"])
+        return False
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        self._refresh_timer.stop()
+        self._render_timer.stop()
+        self._to_render.clear()
+        self.scene.changed.disconnect(self._schedule)
+        self.scene.selection.disconnect(self._schedule)
+        if self.view3d is not None:
+            self.view3d.plotter.removeEventFilter(self)
+        self.worker.close()
+        for view in self.views.values():
+            view.close()
