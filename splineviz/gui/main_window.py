@@ -243,6 +243,12 @@ class MainWindow(QMainWindow):
         self.progress.setFormat(job.label)
         self.statusBar().showMessage(text)
 
+    def cancel_all(self) -> None:
+        """Esc: cancel the running jobs and the exact frames every view is computing."""
+        self.jobs.cancel_all()
+        for view in self.linked_views.views:
+            view.cancel_refine()
+
     def _view_busy(self, message: str) -> None:
         """"ray casting..." while exact frames are made; cleared when they are shown (unless
         a job's message is up)."""

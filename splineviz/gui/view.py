@@ -6,6 +6,15 @@ in the GUI thread within a time budget; the exact frames are made by a backgroun
 and shown when they still match the view. The camera is written back to the scene model
 after every render, so sessions and standard views see where the user looks. Under the
 cursor the view reports the world position and data value of the first isosurface hit.
+
+The GUI thread never waits on that work (issue 26): a preview it cannot make at once (the
+caster is busy or not built) leaves the last frame on screen; a change of view or state
+gives up the exact frame under way (its thread is left to end by itself) and starts the new
+one; the worker shows what it makes on the way (a preview of a new model or data, coarser
+images of a slow model). While an exact frame takes longer than :data:`OVERLAY_DELAY_MS`
+the view says what it computes and what it shows meanwhile
+(:class:`~splineviz.render.overlay.ViewOverlay`, and the ``busy`` signal for the status
+bar); :meth:`View3D.cancel_refine` (Esc) gives it up until the next change.
 """
 
 from __future__ import annotations
@@ -18,12 +27,16 @@ from PySide6.QtCore import QEvent, QObject, QTimer, Signal
 
 from splineviz.gui.jobs import JobRunner
 from splineviz.model import Scene
+from splineviz.render.overlay import ViewOverlay, describe
 from splineviz.render.scene_view import SceneView
 
 #: delay before exact frames are computed after the last change (debounce)
 REFINE_DELAY_MS = 120
 #: delay before the value under the cursor is looked up after the mouse stops
 READOUT_DELAY_MS = 40
+#: an exact frame under way for longer than this shows the overlay (shorter ones would
+#: only flash it)
+OVERLAY_DELAY_MS = 400
 #: OpenGL's GL_NEAREST (see :func:`_render_window`)
 _GL_NEAREST = 0x2600
 
@@ -125,6 +138,9 @@ class View3D(QObject):
     """
 
     frame_rendered = Signal(float)
+    #: a frame made on the way by the refining worker (layer, RenderedFrame), queued to
+    #: the GUI thread
+    _partial_frame = Signal(object, object)
     readout = Signal(str)
     busy = Signal(str)
     interacting = Signal(bool)
@@ -161,6 +177,10 @@ class View3D(QObject):
         self._camera_timer.timeout.connect(self._camera_to_model)
         self._syncing_camera = False
         self._refine_job = None
+        #: (view key, layer states) the running exact frames are for
+        self._refine_key = None
+        #: the key whose exact frames the user cancelled (Esc): not started again for it
+        self._cancelled_key = None
         self._refine_again = False
         self._refine_held = False
         self._closed = False
@@ -174,6 +194,13 @@ class View3D(QObject):
         self._readout_timer.setSingleShot(True)
         self._readout_timer.setInterval(READOUT_DELAY_MS)
         self._readout_timer.timeout.connect(self._update_readout)
+        self._overlay_timer = QTimer(self)
+        self._overlay_timer.setSingleShot(True)
+        self._overlay_timer.setInterval(OVERLAY_DELAY_MS)
+        self._overlay_timer.timeout.connect(self._update_overlay)
+        self._partial_frame.connect(self._show_partial)
+        #: what is being computed, written over the view (see module docstring)
+        self.overlay = ViewOverlay(self.plotter.renderer)
         self._cursor = None
         iren = self.plotter.iren.interactor
         iren.AddObserver("StartInteractionEvent", self._interaction_started)
@@ -300,19 +327,91 @@ class View3D(QObject):
         if not self._closed and not self._refine_held:
             self._refine_timer.start()
 
+    def _key(self) -> tuple:
+        """What the exact frames are for: the view and every layer's state."""
+        return (self.spline_scene.view_state().key(),
+                tuple(layer.state for layer in self.spline_scene.layers))
+
     def _start_refine(self) -> None:
         if self._closed or self.spline_scene is None or self._refine_held:
             return
-        if self._refine_job is not None:
-            self._refine_again = True
+        key = self._key()
+        if key == self._cancelled_key:
             return
+        self._cancelled_key = None
+        if self._refine_job is not None:
+            if key == self._refine_key:
+                self._refine_again = True
+                return
+            # the frames under way are of another view or state: give them up without
+            # waiting (their thread stops at its next step or is left to end by itself)
+            self._refine_job.cancel()
+            self._refine_job = None
         if not self.spline_scene.needs_refine():
+            self._update_overlay()
             return
         view = self.spline_scene.view_state()
-        self.busy.emit("ray casting...")
+        self._refine_key = key
         self._refine_job = self._refiner.run("rendering", self.spline_scene.refine, view,
-                                             on_done=self._refined, on_error=self._failed,
-                                             cancellable=False)
+                                             partial=self._partial_frame.emit,
+                                             on_done=self._refined, on_error=self._failed)
+        self._overlay_timer.start()
+        self._update_overlay()
+
+    def cancel_refine(self) -> None:
+        """Give up the exact frames under way (Esc): the shown frames stay, marked in the
+        overlay, and no exact frame is started until the view or a layer changes."""
+        if self._closed or self.spline_scene is None:
+            return
+        job = self._refine_job
+        if job is None and not self.spline_scene.needs_refine():
+            return
+        self._cancelled_key = self._key()
+        self._refine_timer.stop()
+        self._refine_again = False
+        if job is not None:
+            job.cancel()
+            self._refine_job = None
+        self._overlay_timer.stop()
+        self._update_overlay()
+
+    def _show_partial(self, layer, rf) -> None:
+        """A frame the worker made on the way: shown unless the view already shows a finer
+        one of the same state."""
+        if self._closed or self.spline_scene is None:
+            return
+        shown = self.spline_scene.shown_frame(layer)
+        if shown is not None and shown.state == rf.state and shown.view.key() == rf.view.key() \
+                and shown.scale > rf.scale:
+            return
+        if self.spline_scene.apply([(layer, rf)]):
+            self._update_overlay()
+            self._render_now()
+
+    def _update_overlay(self) -> None:
+        """The overlay and the status message: what the exact frames under way are of, and
+        what is shown meanwhile (see :func:`splineviz.render.overlay.describe`)."""
+        if self._closed or self.spline_scene is None:
+            return
+        job = self._refine_job
+        cancelled = self._cancelled_key is not None
+        lines = []
+        if cancelled or (job is not None and not self._overlay_timer.isActive()):
+            fraction = None if job is None else job.fraction
+            for layer in self.spline_scene.layers:
+                rf = self.spline_scene.shown_frame(layer)
+                exact = rf is not None and rf.final and rf.state == layer.state
+                if not layer.visible or (exact and (not cancelled or rf.view.key()
+                                                    == self._cancelled_key[0])):
+                    continue
+                lines.append(describe(layer, rf, fraction, cancelled))
+        if lines:
+            status = lines[0]
+        else:
+            status = "ray casting..." if job is not None else ""
+        self.busy.emit(status)
+        if self.overlay.set_text("\n".join(lines)):
+            self.request_render()
 
     def _refined(self, results) -> None:
         if not self._closed and self.spline_scene.apply(results):
@@ -325,10 +424,14 @@ class View3D(QObject):
 
     def _refine_ended(self) -> None:
         job = self._refine_job
-        if self._closed or job is None or job.active:
+        if self._closed:
+            return
+        if job is not None and job.active:
+            self._update_overlay()  # its progress
             return
         self._refine_job = None
-        self.busy.emit("")
+        self._overlay_timer.stop()
+        self._update_overlay()
         if self._refine_again or self.spline_scene.needs_refine():
             self._refine_again = False
             self._refine_timer.start()
@@ -431,6 +534,7 @@ class View3D(QObject):
             self._readout_timer.stop()
             self._camera_timer.stop()
             self._render_timer.stop()
+            self._overlay_timer.stop()
             self._refiner.close()
             if self.scene_view is not None:
                 self.scene.changed.disconnect(self.request_render)

@@ -380,7 +380,7 @@ class SplineScene:
                 return True
         return False
 
-    def refine(self, view: ViewState | None = None, cancelled=None, job=None):
+    def refine(self, view: ViewState | None = None, cancelled=None, job=None, partial=None):
         """Exact frames of all visible layers that show a preview (thread safe).
 
         Parameters
@@ -389,30 +389,62 @@ class SplineScene:
             The view to render for (taken now when None; the caller takes it in the main
             thread before starting a worker).
         cancelled : callable or None
-            Returns True to stop between layers.
-        job : object with ``progress(fraction, message)``, optional
+            Returns True to stop between layers (and between the steps of a layer).
+        job : object with ``progress(fraction, message)`` and ``cancelled``, optional
             Told the bricks done of a chunked volume's frame (the GUI's job runner passes
-            its job); such a frame is also given up once the view moved on (bricks still
-            out are cancelled) and refined again for the new view.
+            its job) and the steps done of a frame cast coarse to fine; such a frame is also
+            given up once the view moved on (bricks still out are cancelled) and refined
+            again for the new view.
+        partial : callable, optional
+            ``partial(layer, RenderedFrame)``, called in this thread with the frames made on
+            the way: a preview first when the shown frame is of another state of the layer
+            (its model or data changed), then each coarser step of
+            :meth:`IsosurfaceLayer.exact_scales`. None: exact frames only.
 
         Returns
         -------
         list of (layer, RenderedFrame)
         """
         view = self.view_state() if view is None else view
+
+        def given_up():
+            return ((cancelled is not None and cancelled())
+                    or bool(getattr(job, "cancelled", False))
+                    or self._latest_key not in (None, view.key()))
+
         out = []
         for layer in list(self.layers):
-            if cancelled is not None and cancelled():
+            if given_up():
                 break
             lv = self._views.get(id(layer))
             if lv is None or not layer.visible:
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
-            rf = layer.compute(view, progress=_brick_progress(job, layer),
-                               cancelled=lambda: self._latest_key not in (None, view.key()))
-            if rf is not None:
+            shown = lv.shown
+            if partial is not None and (shown is None or shown.state != layer.state):
+                rf = layer.compute(view, scale=PREVIEW_LEVELS[4], preview=True)
+                if rf is not None:
+                    _prepare(rf)
+                    partial(layer, rf)
+            scales = layer.exact_scales() if partial is not None else (1.0,)
+            total = sum(s * s for s in scales)
+            rf = None
+            for i, scale in enumerate(scales):
+                if job is not None and len(scales) > 1:
+                    job.progress(sum(s * s for s in scales[:i]) / total,
+                                 f"{layer.name}: {scale:.3g} of full resolution")
+                if i and given_up():
+                    rf = None
+                    break
+                rf = layer.compute(view, scale=scale, progress=_brick_progress(job, layer),
+                                   cancelled=given_up)
+                if rf is None:
+                    break
                 _prepare(rf)  # the textures, here in the worker, not in the GUI thread
+                if not rf.final:
+                    partial(layer, rf)
+            if rf is not None and rf.final:
                 out.append((layer, rf))
         return out
 

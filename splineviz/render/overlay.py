@@ -1,0 +1,107 @@
+"""What a view is computing, written over the view: :class:`ViewOverlay` and :func:`describe`.
+
+While the exact frame of a layer is being computed the view shows an older picture: a
+preview from a cheaper model, a coarser image of the exact surface, or the last picture of a
+state that changed since (stale). :func:`describe` says which, per layer, in one line
+(``"computing <model> (n %) - <what is shown> - Esc cancels"``); :class:`ViewOverlay` shows
+those lines in a corner of the view, as VTK text, so screenshots show it too.
+"""
+
+from __future__ import annotations
+
+#: font size of the overlay, points
+FONT_SIZE = 15
+#: overlay text and background colours
+TEXT_COLOR = (1.0, 0.93, 0.55)
+BACKGROUND = (0.05, 0.05, 0.08)
+
+
+def model_label(name: str) -> str:
+    """The label users see for the spline model ``name`` (the name itself when unknown)."""
+    from splineviz.core.splines.registry import MODELS
+
+    spec = MODELS.get(name)
+    return name if spec is None else spec.label
+
+
+def shown_description(layer, rf) -> str:
+    """What the view shows of ``layer`` (a :class:`~splineviz.render.isosurface.
+    IsosurfaceLayer`) while its exact frame is due: ``rf`` is the shown
+    :class:`~splineviz.render.isosurface.RenderedFrame` or None."""
+    if rf is None:
+        return "nothing shown yet"
+    if rf.state != layer.state:
+        return f"stale picture of {model_label(rf.model)}" if rf.model else "stale picture"
+    share = f"{rf.scale:.0%} resolution"
+    if rf.path == "preview":
+        return f"preview from {model_label(rf.model)}, {share}"
+    return f"coarser image, {share}" if not rf.final else "exact picture of another view"
+
+
+def describe(layer, rf, fraction: float | None, cancelled: bool) -> str:
+    """One line about ``layer``'s frame being computed (see module docstring).
+
+    Parameters
+    ----------
+    layer : IsosurfaceLayer
+    rf : RenderedFrame or None
+        The frame shown now.
+    fraction : float in [0, 1] or None
+        Of the exact frame done (None: not known).
+    cancelled : bool
+        The user gave up the exact frame (Esc): it is not computed until the next change.
+    """
+    label = model_label(layer.model)
+    shown = shown_description(layer, rf)
+    if cancelled:
+        return f"{label}: cancelled - showing {shown} (any change or Ctrl+R computes it)"
+    percent = "" if fraction is None else f" ({100 * fraction:.0f} %)"
+    return f"computing {label}{percent} - {shown} - Esc cancels"
+
+
+class ViewOverlay:
+    """Lines of text in the top left corner of a VTK renderer, hidden when empty.
+
+    Parameters
+    ----------
+    renderer : vtkRenderer
+    """
+
+    def __init__(self, renderer):
+        from vtkmodules.vtkRenderingCore import vtkTextActor
+
+        self.renderer = renderer
+        self.actor = vtkTextActor()
+        prop = self.actor.GetTextProperty()
+        prop.SetFontSize(FONT_SIZE)
+        prop.SetColor(*TEXT_COLOR)
+        prop.SetBackgroundColor(*BACKGROUND)
+        prop.SetBackgroundOpacity(0.7)
+        prop.SetVerticalJustificationToTop()
+        coord = self.actor.GetPositionCoordinate()
+        coord.SetCoordinateSystemToNormalizedViewport()
+        coord.SetValue(0.01, 0.98)
+        self.actor.SetPickable(False)
+        self.actor.SetVisibility(False)
+        renderer.AddViewProp(self.actor)
+        self._text = ""
+
+    @property
+    def text(self) -> str:
+        return self._text
+
+    @property
+    def visible(self) -> bool:
+        return bool(self._text)
+
+    def set_text(self, text: str) -> bool:
+        """Show ``text`` ("" hides the overlay); True when it changed (render to show it)."""
+        if text == self._text:
+            return False
+        self._text = text
+        self.actor.SetInput(text or " ")
+        self.actor.SetVisibility(bool(text))
+        return True
+
+    def close(self) -> None:
+        self.renderer.RemoveViewProp(self.actor)
