@@ -313,7 +313,10 @@ class IsosurfaceLayer:
         self._exact = None
         if not keep_fast:
             self._fast = None
+        # a new cache and lock: a worker still colouring a frame of the old model with
+        # its spline (a plugin's may take any time) holds up no frame of the new one
         self._splines = {}
+        self._spline_lock = threading.Lock()
 
     def set_model(self, model: str, options: dict | None = None) -> None:
         """Switch the spline model (``options``: its keyword arguments, e.g. ``k``)."""
@@ -590,8 +593,9 @@ class IsosurfaceLayer:
             return None
         if color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
             return self.hit_scalars(frame)  # from the frame alone
+        lock = self._spline_lock
         if blocking:
-            with self._spline_lock:
+            with lock:
                 return self.hit_scalars(frame)
         needed = {"own": self._cast[0]}
         if color_by == "volume":
@@ -602,12 +606,12 @@ class IsosurfaceLayer:
             spec = MODELS.get(model)
             if which not in self._splines or spec is None or spec.kernel_define is None:
                 return None
-        if not self._spline_lock.acquire(blocking=False):
+        if not lock.acquire(blocking=False):
             return None
         try:
             return self.hit_scalars(frame)
         finally:
-            self._spline_lock.release()
+            lock.release()
 
 
 def _layer_call(write):
