@@ -37,6 +37,9 @@ READOUT_DELAY_MS = 40
 #: an exact frame under way for longer than this shows the overlay (shorter ones would
 #: only flash it)
 OVERLAY_DELAY_MS = 400
+#: a coarser image of the exact surface replaces a finer preview of a cheaper model from
+#: this resolution factor on (below it the preview shows more)
+PARTIAL_OVER_PREVIEW = 0.5
 #: OpenGL's GL_NEAREST (see :func:`_render_window`)
 _GL_NEAREST = 0x2600
 
@@ -377,12 +380,14 @@ class View3D(QObject):
 
     def _show_partial(self, layer, rf) -> None:
         """A frame the worker made on the way: shown unless the view already shows a finer
-        one of the same state."""
+        one of the same state (a cheaper model's, though, gives way to the exact model's
+        from :data:`PARTIAL_OVER_PREVIEW` of the full resolution)."""
         if self._closed or self.spline_scene is None:
             return
         shown = self.spline_scene.shown_frame(layer)
         if shown is not None and shown.state == rf.state and shown.view.key() == rf.view.key() \
-                and shown.scale > rf.scale:
+                and shown.scale > rf.scale and not (shown.path == "preview" != rf.path
+                                                    and rf.scale >= PARTIAL_OVER_PREVIEW):
             return
         if self.spline_scene.apply([(layer, rf)]):
             self._update_overlay()
@@ -406,7 +411,7 @@ class View3D(QObject):
                     continue
                 lines.append(describe(layer, rf, fraction, cancelled))
         if lines:
-            status = lines[0]
+            status = lines[0].replace("\n", " - ")
         else:
             status = "ray casting..." if job is not None else ""
         self.busy.emit(status)

@@ -2,9 +2,9 @@
 
 While the exact frame of a layer is being computed the view shows an older picture: a
 preview from a cheaper model, a coarser image of the exact surface, or the last picture of a
-state that changed since (stale). :func:`describe` says which, per layer, in one line
-(``"computing <model> (n %) - <what is shown> - Esc cancels"``); :class:`ViewOverlay` shows
-those lines in a corner of the view, as VTK text, so screenshots show it too.
+state that changed since (stale). :func:`describe` says which, per layer, in two lines
+(``"computing <model> (n %) - Esc cancels"``, ``"showing <what>"``); :class:`ViewOverlay`
+shows them in a corner of the view, as VTK text, so screenshots show it too.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def shown_description(layer, rf) -> str:
 
 
 def describe(layer, rf, fraction: float | None, cancelled: bool) -> str:
-    """One line about ``layer``'s frame being computed (see module docstring).
+    """Two lines about ``layer``'s frame being computed (see module docstring).
 
     Parameters
     ----------
@@ -52,11 +52,11 @@ def describe(layer, rf, fraction: float | None, cancelled: bool) -> str:
         The user gave up the exact frame (Esc): it is not computed until the next change.
     """
     label = model_label(layer.model)
-    shown = shown_description(layer, rf)
+    shown = f"showing {shown_description(layer, rf)}"
     if cancelled:
-        return f"{label}: cancelled - showing {shown} (any change or Ctrl+R computes it)"
+        return f"{label}: cancelled (any change computes it again)\n{shown}"
     percent = "" if fraction is None else f" ({100 * fraction:.0f} %)"
-    return f"computing {label}{percent} - {shown} - Esc cancels"
+    return f"computing {label}{percent} - Esc cancels\n{shown}"
 
 
 class ViewOverlay:

@@ -399,7 +399,8 @@ class SplineScene:
             ``partial(layer, RenderedFrame)``, called in this thread with the frames made on
             the way: a preview first when the shown frame is of another state of the layer
             (its model or data changed), then each coarser step of
-            :meth:`IsosurfaceLayer.exact_scales`. None: exact frames only.
+            :meth:`IsosurfaceLayer.exact_scales` (for such a slow model the preview is of
+            full resolution). None: exact frames only.
 
         Returns
         -------
@@ -422,12 +423,16 @@ class SplineScene:
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
             shown = lv.shown
-            if partial is not None and (shown is None or shown.state != layer.state):
-                rf = layer.compute(view, scale=PREVIEW_LEVELS[4], preview=True)
+            scales = layer.exact_scales() if partial is not None else (1.0,)
+            # a slow model: a sharp preview from the cheaper caster while it is cast
+            slow = len(scales) > 1
+            if partial is not None and (shown is None or shown.state != layer.state
+                                        or (slow and shown.scale < 1.0)):
+                rf = layer.compute(view, scale=1.0 if slow else PREVIEW_LEVELS[4],
+                                   preview=True)
                 if rf is not None:
                     _prepare(rf)
                     partial(layer, rf)
-            scales = layer.exact_scales() if partial is not None else (1.0,)
             total = sum(s * s for s in scales)
             rf = None
             for i, scale in enumerate(scales):
