@@ -13,7 +13,7 @@ gives up the exact frame under way (its thread is left to end by itself) and sta
 one; the worker shows what it makes on the way (a preview of a new model or data, coarser
 images of a slow model). While an exact frame takes longer than :data:`OVERLAY_DELAY_MS`
 the view says what it computes and what it shows meanwhile
-(:class:`~splineviz.render.overlay.ViewOverlay`, and the ``busy`` signal for the status
+(:class:`~splineviz.gui.overlay.ViewOverlay`, and the ``busy`` signal for the status
 bar); :meth:`View3D.cancel_refine` (Esc) gives it up until the next change.
 """
 
@@ -26,8 +26,9 @@ import numpy as np
 from PySide6.QtCore import QEvent, QObject, QTimer, Signal
 
 from splineviz.gui.jobs import JobRunner
+from splineviz.gui.overlay import ViewOverlay
 from splineviz.model import Scene
-from splineviz.render.overlay import ViewOverlay, describe
+from splineviz.render.overlay import describe
 from splineviz.render.scene_view import SceneView
 
 #: delay before exact frames are computed after the last change (debounce)
@@ -141,9 +142,9 @@ class View3D(QObject):
     """
 
     frame_rendered = Signal(float)
-    #: a frame made on the way by the refining worker (layer, RenderedFrame), queued to
-    #: the GUI thread
-    _partial_frame = Signal(object, object)
+    #: a frame made on the way by the refining worker (serial number of the job, layer,
+    #: RenderedFrame), queued to the GUI thread
+    _partial_frame = Signal(int, object, object)
     readout = Signal(str)
     busy = Signal(str)
     interacting = Signal(bool)
@@ -180,6 +181,8 @@ class View3D(QObject):
         self._camera_timer.timeout.connect(self._camera_to_model)
         self._syncing_camera = False
         self._refine_job = None
+        #: counts the refine jobs started: frames on the way of an older one are dropped
+        self._refine_serial = 0
         #: (view key, layer states) the running exact frames are for
         self._refine_key = None
         #: the key whose exact frames the user cancelled (Esc): not started again for it
@@ -203,7 +206,7 @@ class View3D(QObject):
         self._overlay_timer.timeout.connect(self._update_overlay)
         self._partial_frame.connect(self._show_partial)
         #: what is being computed, written over the view (see module docstring)
-        self.overlay = ViewOverlay(self.plotter.renderer)
+        self.overlay = ViewOverlay(self.plotter)
         self._cursor = None
         iren = self.plotter.iren.interactor
         iren.AddObserver("StartInteractionEvent", self._interaction_started)
@@ -327,8 +330,11 @@ class View3D(QObject):
             self._refine_timer.start()
 
     def _schedule_refine(self) -> None:
-        if not self._closed and not self._refine_held:
-            self._refine_timer.start()
+        if self._closed or self._refine_held:
+            return
+        if self._cancelled_key is not None and self._key() == self._cancelled_key:
+            return  # cancelled (Esc) until something changes
+        self._refine_timer.start()
 
     def _key(self) -> tuple:
         """What the exact frames are for: the view and every layer's state."""
@@ -355,9 +361,11 @@ class View3D(QObject):
             return
         view = self.spline_scene.view_state()
         self._refine_key = key
-        self._refine_job = self._refiner.run("rendering", self.spline_scene.refine, view,
-                                             partial=self._partial_frame.emit,
-                                             on_done=self._refined, on_error=self._failed)
+        self._refine_serial += 1
+        self._refine_job = self._refiner.run(
+            "rendering", self.spline_scene.refine, view,
+            partial=functools.partial(self._partial_frame.emit, self._refine_serial),
+            on_done=self._refined, on_error=self._failed)
         self._overlay_timer.start()
         self._update_overlay()
 
@@ -378,11 +386,12 @@ class View3D(QObject):
         self._overlay_timer.stop()
         self._update_overlay()
 
-    def _show_partial(self, layer, rf) -> None:
+    def _show_partial(self, serial: int, layer, rf) -> None:
         """A frame the worker made on the way: shown unless the view already shows a finer
         one of the same state (a cheaper model's, though, gives way to the exact model's
         from :data:`PARTIAL_OVER_PREVIEW` of the full resolution)."""
-        if self._closed or self.spline_scene is None:
+        if self._closed or self.spline_scene is None or self._refine_job is None \
+                or serial != self._refine_serial:
             return
         shown = self.spline_scene.shown_frame(layer)
         if shown is not None and shown.state == rf.state and shown.view.key() == rf.view.key() \
@@ -415,8 +424,7 @@ class View3D(QObject):
         else:
             status = "ray casting..." if job is not None else ""
         self.busy.emit(status)
-        if self.overlay.set_text("\n".join(lines)):
-            self.request_render()
+        self.overlay.set_text("\n".join(lines))
 
     def _refined(self, results) -> None:
         if not self._closed and self.spline_scene.apply(results):
@@ -439,7 +447,7 @@ class View3D(QObject):
         self._update_overlay()
         if self._refine_again or self.spline_scene.needs_refine():
             self._refine_again = False
-            self._refine_timer.start()
+            self._schedule_refine()
 
     @property
     def refining(self) -> bool:

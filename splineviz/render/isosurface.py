@@ -26,6 +26,7 @@ view keeps its last frame.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 import warnings
@@ -115,10 +116,44 @@ class _Caster:
 
     rc: object
     lock: threading.Lock = field(default_factory=threading.Lock)
+    #: ((view width, height), scale) of the frames cast so far: PoCL compiles the kernel
+    #: anew for each new frame size (0.2-0.7 s), which the GUI thread leaves to workers
+    #: for a fallback caster
+    sizes: set = field(default_factory=set)
+
+    def scale_cast(self, size, scale: float) -> float | None:
+        """The largest resolution factor not above ``scale`` this caster has cast a frame
+        of view ``size`` at, or None."""
+        return max((s for v, s in self.sizes if v == tuple(size) and s <= scale), default=None)
 
     @property
     def path(self) -> str:
         return self.rc.stats.get("path", "numpy")
+
+
+class _DeviceUse:
+    """How many worker threads cast on the OpenCL device now (thread safe). The GUI thread
+    casts no preview meanwhile: its kernel would queue behind theirs on the device (a
+    worker's full frame took the GUI thread's 20 ms preview to 80-140 ms on PoCL)."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._count = 0
+
+    def __enter__(self):
+        with self._lock:
+            self._count += 1
+
+    def __exit__(self, *exc):
+        with self._lock:
+            self._count -= 1
+
+    @property
+    def busy(self) -> bool:
+        return self._count > 0
+
+
+_WORKERS_ON_DEVICE = _DeviceUse()
 
 
 #: node properties whose change needs new frames (any other changes only the shading
@@ -482,16 +517,26 @@ class IsosurfaceLayer:
         if not usable and blocking:
             exact, fast = self._build()
             usable = [c for c in (exact, fast) if c is fast or c.path == "opencl"]
+        if not blocking:
+            # the GUI thread casts on the device only: a NumPy-path frame (no OpenCL device)
+            # takes the thread for as long as it computes
+            usable = [c for c in usable if c.path == "opencl"]
         return usable
 
     def exact_scales(self) -> tuple[float, ...]:
         """The resolution factors a worker casts the exact frame at, one after the other:
-        :data:`COARSE_TO_FINE` for a model without an OpenCL kernel (minutes per frame are
-        possible: each step is shown and can be given up), else one full frame."""
+        :data:`COARSE_TO_FINE` on the NumPy path (a model without an OpenCL kernel, or no
+        device: minutes per frame are possible, so each step is shown and can be given up),
+        else one full frame."""
         from splineviz.core.splines.registry import MODELS
 
-        spec = MODELS.get(self.node.model)
-        return COARSE_TO_FINE if spec is not None and spec.kernel_define is None else (1.0,)
+        exact = self._exact
+        if exact is not None:
+            slow = exact.path == "numpy"
+        else:
+            spec = MODELS.get(self.node.model)
+            slow = self._device == "numpy" or (spec is not None and spec.kernel_define is None)
+        return COARSE_TO_FINE if slow else (1.0,)
 
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
                 blocking: bool = True, progress=None,
@@ -534,13 +579,23 @@ class IsosurfaceLayer:
             return self._compute(view, scale, preview, blocking, progress, cancelled)
 
     def _compute(self, view, scale, preview, blocking, progress, cancelled):
-        w, h = view.size
-        sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
+        if not blocking and _WORKERS_ON_DEVICE.busy:
+            return None
         candidates = self._candidates(preview, blocking)
+        if not blocking:
+            # a fallback caster (not this model's own) only at a size it has cast before
+            # (a new size compiles the kernel: not in the GUI thread), the largest one not
+            # above the one asked for
+            candidates = [c for c in candidates
+                          if c is self._exact or c.scale_cast(view.size, scale) is not None]
         caster = next((c for i, c in enumerate(candidates)
                        if c.lock.acquire(blocking=blocking and i == 0)), None)
         if caster is None:
             return None
+        if not blocking and caster is not self._exact:
+            scale = caster.scale_cast(view.size, scale)
+        w, h = view.size
+        sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
         try:
             state = self.state
             if caster is not self._exact and caster is not self._fast and not blocking:
@@ -561,10 +616,12 @@ class IsosurfaceLayer:
                 extra = {"progress": progress, "cancelled": cancelled}
             else:
                 extra = {"hessian": kernel_derivs}
+            on_device = blocking and caster.path == "opencl"
             try:
-                frame = rc.render(view.camera, size=(sw, sh),
-                                  clip_planes=tuple(view.clip_planes) + self.clip_planes,
-                                  **extra).load()
+                with _WORKERS_ON_DEVICE if on_device else contextlib.nullcontext():
+                    frame = rc.render(view.camera, size=(sw, sh),
+                                      clip_planes=tuple(view.clip_planes) + self.clip_planes,
+                                      **extra).load()
             except SplinevizError as exc:
                 from splineviz.compute.bricked import RenderCancelled
 
@@ -572,19 +629,21 @@ class IsosurfaceLayer:
                     return None
                 raise
             seconds = time.perf_counter() - t
+            caster.sizes.add((tuple(view.size), scale))
             stats = dict(rc.stats)
         finally:
             caster.lock.release()
         path = stats.get("path", "numpy") if exact else "preview"
         self.last_stats = stats
-        scalars = self._scalars(frame, blocking)
+        scalars = self._scalars(frame, blocking, cheap=path == "preview")
         return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats,
                              scalars=scalars, model=rc.model)
 
-    def _scalars(self, frame: Frame, blocking: bool) -> np.ndarray | None:
-        """:meth:`hit_scalars` under the spline cache's lock; in the GUI thread (not
-        ``blocking``) only when that lock is free and no spline must be built or evaluated
-        without a kernel, else None."""
+    def _scalars(self, frame: Frame, blocking: bool, cheap: bool) -> np.ndarray | None:
+        """:meth:`hit_scalars` under the spline cache's lock, or None: for a preview
+        (``cheap``) when a spline without a kernel would be evaluated (a plugin's may take
+        any time), and in the GUI thread (not ``blocking``) also when the lock is taken or
+        a spline must be built."""
         from splineviz.core.colour_by import DERIVATIVE_FIELDS
         from splineviz.core.splines.registry import MODELS
 
@@ -594,9 +653,6 @@ class IsosurfaceLayer:
         if color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
             return self.hit_scalars(frame)  # from the frame alone
         lock = self._spline_lock
-        if blocking:
-            with lock:
-                return self.hit_scalars(frame)
         needed = {"own": self._cast[0]}
         if color_by == "volume":
             needed["other"] = self._cast[0]
@@ -604,8 +660,13 @@ class IsosurfaceLayer:
             needed["reference"] = self._color_reference[1]
         for which, model in needed.items():
             spec = MODELS.get(model)
-            if which not in self._splines or spec is None or spec.kernel_define is None:
+            if (cheap or not blocking) and (spec is None or spec.kernel_define is None):
                 return None
+            if not blocking and which not in self._splines:
+                return None
+        if blocking:
+            with lock:
+                return self.hit_scalars(frame)
         if not lock.acquire(blocking=False):
             return None
         try:

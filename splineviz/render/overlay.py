@@ -1,19 +1,13 @@
-"""What a view is computing, written over the view: :class:`ViewOverlay` and :func:`describe`.
+"""What a view is computing, in words: :func:`describe` (shown over the view by
+:class:`splineviz.gui.overlay.ViewOverlay`).
 
 While the exact frame of a layer is being computed the view shows an older picture: a
 preview from a cheaper model, a coarser image of the exact surface, or the last picture of a
 state that changed since (stale). :func:`describe` says which, per layer, in two lines
-(``"computing <model> (n %) - Esc cancels"``, ``"showing <what>"``); :class:`ViewOverlay`
-shows them in a corner of the view, as VTK text, so screenshots show it too.
+(``"computing <model> (n %) - Esc cancels"``, ``"showing <what>"``).
 """
 
 from __future__ import annotations
-
-#: font size of the overlay, points
-FONT_SIZE = 15
-#: overlay text and background colours
-TEXT_COLOR = (1.0, 0.93, 0.55)
-BACKGROUND = (0.05, 0.05, 0.08)
 
 
 def model_label(name: str) -> str:
@@ -57,51 +51,3 @@ def describe(layer, rf, fraction: float | None, cancelled: bool) -> str:
         return f"{label}: cancelled (any change computes it again)\n{shown}"
     percent = "" if fraction is None else f" ({100 * fraction:.0f} %)"
     return f"computing {label}{percent} - Esc cancels\n{shown}"
-
-
-class ViewOverlay:
-    """Lines of text in the top left corner of a VTK renderer, hidden when empty.
-
-    Parameters
-    ----------
-    renderer : vtkRenderer
-    """
-
-    def __init__(self, renderer):
-        from vtkmodules.vtkRenderingCore import vtkTextActor
-
-        self.renderer = renderer
-        self.actor = vtkTextActor()
-        prop = self.actor.GetTextProperty()
-        prop.SetFontSize(FONT_SIZE)
-        prop.SetColor(*TEXT_COLOR)
-        prop.SetBackgroundColor(*BACKGROUND)
-        prop.SetBackgroundOpacity(0.7)
-        prop.SetVerticalJustificationToTop()
-        coord = self.actor.GetPositionCoordinate()
-        coord.SetCoordinateSystemToNormalizedViewport()
-        coord.SetValue(0.01, 0.98)
-        self.actor.SetPickable(False)
-        self.actor.SetVisibility(False)
-        renderer.AddViewProp(self.actor)
-        self._text = ""
-
-    @property
-    def text(self) -> str:
-        return self._text
-
-    @property
-    def visible(self) -> bool:
-        return bool(self._text)
-
-    def set_text(self, text: str) -> bool:
-        """Show ``text`` ("" hides the overlay); True when it changed (render to show it)."""
-        if text == self._text:
-            return False
-        self._text = text
-        self.actor.SetInput(text or " ")
-        self.actor.SetVisibility(bool(text))
-        return True
-
-    def close(self) -> None:
-        self.renderer.RemoveViewProp(self.actor)

@@ -315,7 +315,9 @@ class SplineScene:
                 scale, fast = self._preview_scale(layer, lv, view)
                 t_preview = time.perf_counter()
                 rf = layer.compute(view, scale=scale, preview=fast, blocking=False)
-                if rf is not None:  # else a worker holds the caster: keep the old frame
+                if rf is None:  # a worker holds the caster: keep the old frame, and the scale
+                    lv.preview_seconds = None
+                else:
                     size = rf.frame.hit.shape
                     lv.preview_scale = rf.scale  # the next step starts from the level cast
                     self._show(layer, rf)
@@ -424,13 +426,15 @@ class SplineScene:
                 continue
             shown = lv.shown
             scales = layer.exact_scales() if partial is not None else (1.0,)
-            # a slow model: a sharp preview from the cheaper caster while it is cast
+            # a slow model: a sharp preview from the cheaper caster while it is cast (after
+            # one of a preview size: the GUI thread previews from it while the camera moves)
             slow = len(scales) > 1
             if partial is not None and (shown is None or shown.state != layer.state
                                         or (slow and shown.scale < 1.0)):
-                rf = layer.compute(view, scale=1.0 if slow else PREVIEW_LEVELS[4],
-                                   preview=True)
-                if rf is not None:
+                for size in (PREVIEW_LEVELS[4], 1.0) if slow else (PREVIEW_LEVELS[4],):
+                    rf = layer.compute(view, scale=size, preview=True)
+                    if rf is None or given_up():
+                        break
                     _prepare(rf)
                     partial(layer, rf)
             total = sum(s * s for s in scales)

@@ -53,6 +53,7 @@ class SleepingSpline(TrilinearSpline):
 
 @pytest.fixture
 def slow_model():
+    MODELS.names()  # the installed plugins first: the snapshot restores them
     snapshot = dict(MODELS)
     api = plugins.PluginAPI("sleeptest")
     api.add_model(SLOW_MODEL, SleepingSpline, label=SLOW_LABEL, degree=1, smoothness="C0")

@@ -34,6 +34,7 @@ class SleepingSpline(TrilinearSpline):
 
 @pytest.fixture
 def slow_model():
+    MODELS.names()  # the installed plugins first: the snapshot restores them
     snapshot = dict(MODELS)
     api = plugins.PluginAPI("sleeptest")
     api.add_model(SLOW_MODEL, SleepingSpline, label="Sleeping", degree=1, smoothness="C0")
@@ -69,14 +70,19 @@ def test_a_stuck_exact_frame_never_holds_up_a_preview_or_another_model(layer, sl
     time.sleep(0.2)
     assert stuck.is_alive()
 
-    # the GUI thread's preview of the new state: at once, from the cheaper kernel caster,
-    # not coloured (no evaluation of the sleeping spline)
+    # the GUI thread's preview of the new state: at once, from the cheaper kernel caster
+    # (at a size it has cast: a new one compiles its kernel), not coloured (no evaluation
+    # of the sleeping spline)
     layer.set_color_by("gradient-magnitude")
+    assert layer.compute(_view(31.0), scale=0.5, preview=True, blocking=False) is None
     t = time.perf_counter()
-    rf = layer.compute(_view(31.0), scale=0.5, preview=True, blocking=False)
+    rf = layer.compute(_view(31.0), scale=1.0, preview=True, blocking=False)
     assert time.perf_counter() - t < NO_WAIT_S
     assert rf is not None and rf.model == "trilinear" and rf.path == "preview"
     assert rf.state == layer.state and not rf.final and rf.scalars is None
+    assert layer.compute(_view(31.0), scale=0.5, preview=True) is not None  # in a worker
+    rf = layer.compute(_view(32.0), scale=0.5, preview=True, blocking=False)
+    assert rf is not None and rf.model == "trilinear"
     # an exact frame of the sleeping model is not made in the GUI thread
     t = time.perf_counter()
     assert layer.compute(view, blocking=False) is None
