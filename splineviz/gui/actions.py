@@ -148,8 +148,9 @@ def build_actions(window) -> dict[str, QAction]:
     acts["add plane"] = _action(window, "Add &clip plane", lambda: window.clip_panel.add_plane(),
                                 menu=t, icon_name="clip-plane",
                                 tip="A clip plane through the centre of the data")
-    acts["cancel"] = _action(window, "&Cancel running jobs", window.jobs.cancel_all, menu=t,
-                             shortcut="Esc", icon_name="cancel")
+    acts["cancel"] = _action(window, "&Cancel running jobs", window.cancel_all, menu=t,
+                             shortcut="Esc", icon_name="cancel",
+                             tip="Stop the running jobs and the exact frames being computed")
 
     h = window.menuBar().addMenu("&Help")
     _action(window, "&Keyboard and mouse", lambda: dialogs.show_help(window), menu=h, shortcut="F1")

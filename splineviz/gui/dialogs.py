@@ -33,7 +33,7 @@ r: reset the camera to all data &nbsp; v: isometric view<br><br>
 Ctrl+N new scene, Ctrl+O open, Ctrl+S save session, Ctrl+Shift+S save session as,
 Ctrl+E export screenshot, Ctrl+Z undo, Ctrl+Shift+Z redo (a slider drag is one step),
 Ctrl+1/2/3 look down +X/+Y/+Z (with Shift: -X/-Y/-Z), Ctrl+0 isometric, F7 split view
-(two linked views), Esc cancel jobs"""
+(two linked views), Esc cancel jobs and the exact frames being computed"""
 
 
 class ScreenshotDialog(QDialog):

@@ -331,6 +331,8 @@ class JobRunner(QObject):
         self.jobs: list[Job] = []
         self.closed = False
         self._left: list[Job] = []
+        #: cancelled jobs detached while their thread still ran (joined on close too)
+        self._detached: list[Job] = []
 
     def run(self, label: str, func, *args, on_done=None, on_error=None,
             cancellable: bool = True, process: bool = False, **kwargs) -> Job:
@@ -356,6 +358,9 @@ class JobRunner(QObject):
             return
         if job in self.jobs:
             self.jobs.remove(job)
+        self._detached = [j for j in self._detached if j._thread.is_alive()]
+        if job.state == "cancelled" and job._thread.is_alive():
+            self._detached.append(job)
         if job.state == "cancelled":
             self.message.emit(f"{job.label}: cancelled")
         self.changed.emit()
@@ -374,7 +379,7 @@ class JobRunner(QObject):
         for job in list(self.jobs):
             job._cancel.set()
         self.closed = True
-        self._left = [j for j in self.jobs if j._thread.is_alive()]
+        self._left = [j for j in self.jobs + self._detached if j._thread.is_alive()]
         self.jobs.clear()
 
     def join(self, timeout_s: float) -> bool:

@@ -174,6 +174,12 @@ class MainWindow(QMainWindow):
 
     # -- title, messages--------------------------------------------------------------------
 
+    def cancel_all(self) -> None:
+        """Esc: cancel the running jobs and the exact frames every view is computing."""
+        self.jobs.cancel_all()
+        for view in self.linked_views.views:
+            view.cancel_refine()
+
     def update_title(self) -> None:
         name = self.session_file.name if self.session_file else "untitled"
         self.setWindowTitle(f"{name}{' *' if self.scene.modified else ''} — splineviz")

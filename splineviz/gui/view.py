@@ -6,6 +6,15 @@ in the GUI thread within a time budget; the exact frames are made by a backgroun
 and shown when they still match the view. The camera is written back to the scene model
 after every render, so sessions and standard views see where the user looks. Under the
 cursor the view reports the world position and data value of the first isosurface hit.
+
+The GUI thread never waits on that work (issue 26): a preview it cannot make at once (the
+caster is busy or not built) leaves the last frame on screen; a change of view or state
+gives up the exact frame under way (its thread is left to end by itself) and starts the new
+one; the worker shows what it makes on the way (a preview of a new model or data, coarser
+images of a slow model). While an exact frame takes longer than :data:`OVERLAY_DELAY_MS`
+the view says what it computes and what it shows meanwhile
+(:class:`~splineviz.gui.overlay.ViewOverlay`, and the ``busy`` signal for the status
+bar); :meth:`View3D.cancel_refine` (Esc) gives it up until the next change.
 """
 
 from __future__ import annotations
@@ -17,7 +26,9 @@ import numpy as np
 from PySide6.QtCore import QEvent, QObject, QTimer, Signal
 
 from splineviz.gui.jobs import JobRunner
+from splineviz.gui.overlay import ViewOverlay
 from splineviz.model import Scene
+from splineviz.render.overlay import describe
 from splineviz.render.scene_view import SceneView
 
 #: delay before exact frames are computed after the last change (debounce)
@@ -27,6 +38,12 @@ REFINE_DELAY_MS = 120
 VIEW_KEYS = {"r": None, "v": "isometric"}
 #: delay before the value under the cursor is looked up after the mouse stops
 READOUT_DELAY_MS = 40
+#: an exact frame under way for longer than this shows the overlay (shorter ones would
+#: only flash it)
+OVERLAY_DELAY_MS = 400
+#: a coarser image of the exact surface replaces a finer preview of a cheaper model from
+#: this resolution factor on (below it the preview shows more)
+PARTIAL_OVER_PREVIEW = 0.5
 #: OpenGL's GL_NEAREST (see :func:`_render_window`)
 _GL_NEAREST = 0x2600
 
@@ -128,6 +145,9 @@ class View3D(QObject):
     """
 
     frame_rendered = Signal(float)
+    #: a frame made on the way by the refining worker (serial number of the job, layer,
+    #: RenderedFrame), queued to the GUI thread
+    _partial_frame = Signal(int, object, object)
     readout = Signal(str)
     busy = Signal(str)
     interacting = Signal(bool)
@@ -164,6 +184,12 @@ class View3D(QObject):
         self._camera_timer.timeout.connect(self._camera_to_model)
         self._syncing_camera = False
         self._refine_job = None
+        #: counts the refine jobs started: frames on the way of an older one are dropped
+        self._refine_serial = 0
+        #: (view key, layer states) the running exact frames are for
+        self._refine_key = None
+        #: the key whose exact frames the user cancelled (Esc): not started again for it
+        self._cancelled_key = None
         self._refine_again = False
         self._refine_held = False
         self._closed = False
@@ -177,6 +203,13 @@ class View3D(QObject):
         self._readout_timer.setSingleShot(True)
         self._readout_timer.setInterval(READOUT_DELAY_MS)
         self._readout_timer.timeout.connect(self._update_readout)
+        self._overlay_timer = QTimer(self)
+        self._overlay_timer.setSingleShot(True)
+        self._overlay_timer.setInterval(OVERLAY_DELAY_MS)
+        self._overlay_timer.timeout.connect(self._update_overlay)
+        self._partial_frame.connect(self._show_partial)
+        #: what is being computed, written over the view (see module docstring)
+        self.overlay = ViewOverlay(self.plotter)
         self._cursor = None
         iren = self.plotter.iren.interactor
         iren.AddObserver("StartInteractionEvent", self._interaction_started)
@@ -321,22 +354,101 @@ class View3D(QObject):
             self._refine_timer.start()
 
     def _schedule_refine(self) -> None:
-        if not self._closed and not self._refine_held:
-            self._refine_timer.start()
+        if self._closed or self._refine_held:
+            return
+        if self._cancelled_key is not None and self._key() == self._cancelled_key:
+            return  # cancelled (Esc) until something changes
+        self._refine_timer.start()
+
+    def _key(self) -> tuple:
+        """What the exact frames are for: the view and every layer's state."""
+        return (self.spline_scene.view_state().key(),
+                tuple(layer.state for layer in self.spline_scene.layers))
 
     def _start_refine(self) -> None:
         if self._closed or self.spline_scene is None or self._refine_held:
             return
-        if self._refine_job is not None:
-            self._refine_again = True
+        key = self._key()
+        if key == self._cancelled_key:
             return
+        self._cancelled_key = None
+        if self._refine_job is not None:
+            if key == self._refine_key:
+                self._refine_again = True
+                return
+            # the frames under way are of another view or state: give them up without
+            # waiting (their thread stops at its next step or is left to end by itself)
+            self._refine_job.cancel()
+            self._refine_job = None
         if not self.spline_scene.needs_refine():
+            self._update_overlay()
             return
         view = self.spline_scene.view_state()
-        self.busy.emit("ray casting...")
-        self._refine_job = self._refiner.run("rendering", self.spline_scene.refine, view,
-                                             on_done=self._refined, on_error=self._failed,
-                                             cancellable=False)
+        self._refine_key = key
+        self._refine_serial += 1
+        self._refine_job = self._refiner.run(
+            "rendering", self.spline_scene.refine, view,
+            partial=functools.partial(self._partial_frame.emit, self._refine_serial),
+            on_done=self._refined, on_error=self._failed)
+        self._overlay_timer.start()
+        self._update_overlay()
+
+    def cancel_refine(self) -> None:
+        """Give up the exact frames under way (Esc): the shown frames stay, marked in the
+        overlay, and no exact frame is started until the view or a layer changes."""
+        if self._closed or self.spline_scene is None:
+            return
+        job = self._refine_job
+        if job is None and not self.spline_scene.needs_refine():
+            return
+        self._cancelled_key = self._key()
+        self._refine_timer.stop()
+        self._refine_again = False
+        if job is not None:
+            job.cancel()
+            self._refine_job = None
+        self._overlay_timer.stop()
+        self._update_overlay()
+
+    def _show_partial(self, serial: int, layer, rf) -> None:
+        """A frame the worker made on the way: shown unless the view already shows a finer
+        one of the same state (a cheaper model's, though, gives way to the exact model's
+        from :data:`PARTIAL_OVER_PREVIEW` of the full resolution)."""
+        if self._closed or self.spline_scene is None or self._refine_job is None \
+                or serial != self._refine_serial:
+            return
+        shown = self.spline_scene.shown_frame(layer)
+        if shown is not None and shown.state == rf.state and shown.view.key() == rf.view.key() \
+                and shown.scale > rf.scale and not (shown.path == "preview" != rf.path
+                                                    and rf.scale >= PARTIAL_OVER_PREVIEW):
+            return
+        if self.spline_scene.apply([(layer, rf)]):
+            self._update_overlay()
+            self._render_now()
+
+    def _update_overlay(self) -> None:
+        """The overlay and the status message: what the exact frames under way are of, and
+        what is shown meanwhile (see :func:`splineviz.render.overlay.describe`)."""
+        if self._closed or self.spline_scene is None:
+            return
+        job = self._refine_job
+        cancelled = self._cancelled_key is not None
+        lines = []
+        if cancelled or (job is not None and not self._overlay_timer.isActive()):
+            fraction = None if job is None else job.fraction
+            for layer in self.spline_scene.layers:
+                rf = self.spline_scene.shown_frame(layer)
+                exact = rf is not None and rf.final and rf.state == layer.state
+                if not layer.visible or (exact and (not cancelled or rf.view.key()
+                                                    == self._cancelled_key[0])):
+                    continue
+                lines.append(describe(layer, rf, fraction, cancelled))
+        if lines:
+            status = lines[0].replace("\n", " - ")
+        else:
+            status = "ray casting..." if job is not None else ""
+        self.busy.emit(status)
+        self.overlay.set_text("\n".join(lines))
 
     def _refined(self, results) -> None:
         if not self._closed and self.spline_scene.apply(results):
@@ -349,13 +461,17 @@ class View3D(QObject):
 
     def _refine_ended(self) -> None:
         job = self._refine_job
-        if self._closed or job is None or job.active:
+        if self._closed:
+            return
+        if job is not None and job.active:
+            self._update_overlay()  # its progress
             return
         self._refine_job = None
-        self.busy.emit("")
+        self._overlay_timer.stop()
+        self._update_overlay()
         if self._refine_again or self.spline_scene.needs_refine():
             self._refine_again = False
-            self._refine_timer.start()
+            self._schedule_refine()
 
     @property
     def refining(self) -> bool:
@@ -455,6 +571,7 @@ class View3D(QObject):
             self._readout_timer.stop()
             self._camera_timer.stop()
             self._render_timer.stop()
+            self._overlay_timer.stop()
             self._refiner.close()
             if self.scene_view is not None:
                 self.scene.changed.disconnect(self.request_render)

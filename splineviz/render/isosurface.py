@@ -5,19 +5,28 @@ opacity, material, colour by) and holds the volume's data and the ray casters th
 frames. Views (:class:`~splineviz.render.scene.
 SplineScene`) ask it for frames of *their* camera and size with :meth:`IsosurfaceLayer.compute`
 and show them with a :class:`~splineviz.render.quad.FrameQuad`; several views (the window,
-an off-screen export) can show one layer. ``compute`` may run in a worker thread: the ray
-casters are guarded by a lock.
+an off-screen export) can show one layer. ``compute`` may run in a worker thread: each ray
+caster has its own lock, so a new model's caster never waits for a worker still casting
+with the old one.
 
-Preview: tetrahedral models without an OpenCL kernel render through the NumPy reference
-(seconds per frame). While the camera moves, a layer can render a *preview* at reduced
-resolution, with the trilinear OpenCL kernel when its own model has none (same data, same
-isovalue; the surfaces differ by the model error only); the exact frame follows when the
-interaction ends (thesis §6.3: interactive rates for the trilinear model, exact pictures for
-the smooth ones).
+Preview: models without an OpenCL kernel (plugins) render through the NumPy reference
+(seconds to minutes per frame). While the camera moves, and after a change of model, a
+layer renders a *preview* at reduced resolution with a cheaper caster (:attr:`RenderedFrame.
+model` says which): the trilinear OpenCL kernel, or the previous model's kernel caster right
+after a model switch (same data, same isovalue; the surfaces differ by the model error
+only). The exact frame follows in a worker (thesis §6.3: interactive rates for the
+trilinear model, exact pictures for the smooth ones); a model without a kernel is cast
+coarse to fine there (:meth:`IsosurfaceLayer.exact_scales`), each step shown.
+
+The GUI thread calls :meth:`compute` with ``blocking=False``: it takes no lock it would
+have to wait for, builds no caster and evaluates no spline of a model without a kernel
+(a plugin's evaluation may take any time); without a free caster it returns None and the
+view keeps its last frame.
 """
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import time
 import warnings
@@ -72,6 +81,8 @@ class RenderedFrame:
     mean_depth: float = 1.0
     #: (H, W) colour-by scalars at the hits (NaN elsewhere), None when not coloured by one
     scalars: np.ndarray | None = None
+    #: the spline model that cast the frame (a preview's may be a cheaper one)
+    model: str = ""
 
     @property
     def final(self) -> bool:
@@ -91,6 +102,58 @@ def make_caster(volume, model: str, device=None, options=None):
     from splineviz.compute.raycast import RayCaster
 
     return RayCaster(volume, model=model, device=device, **dict(options or {}))
+
+
+#: resolution factors of the exact frame of a model without an OpenCL kernel, cast one after
+#: the other in the worker: each step is shown (a coarser image of the exact surface) and
+#: is a point where the frame can be given up; the steps before the last add a third
+COARSE_TO_FINE = (0.125, 0.25, 0.5, 1.0)
+
+
+@dataclass(eq=False)
+class _Caster:
+    """A ray caster and the lock of its use (one lock per caster, see module docstring)."""
+
+    rc: object
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    #: ((view width, height), scale) of the frames cast so far: PoCL compiles the kernel
+    #: anew for each new frame size (0.2-0.7 s), which the GUI thread leaves to workers
+    #: for a fallback caster
+    sizes: set = field(default_factory=set)
+
+    def scale_cast(self, size, scale: float) -> float | None:
+        """The largest resolution factor not above ``scale`` this caster has cast a frame
+        of view ``size`` at, or None."""
+        return max((s for v, s in self.sizes if v == tuple(size) and s <= scale), default=None)
+
+    @property
+    def path(self) -> str:
+        return self.rc.stats.get("path", "numpy")
+
+
+class _DeviceUse:
+    """How many worker threads cast on the OpenCL device now (thread safe). The GUI thread
+    casts no preview meanwhile: its kernel would queue behind theirs on the device (a
+    worker's full frame took the GUI thread's 20 ms preview to 80-140 ms on PoCL)."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._count = 0
+
+    def __enter__(self):
+        with self._lock:
+            self._count += 1
+
+    def __exit__(self, *exc):
+        with self._lock:
+            self._count -= 1
+
+    @property
+    def busy(self) -> bool:
+        return self._count > 0
+
+
+_WORKERS_ON_DEVICE = _DeviceUse()
 
 
 #: node properties whose change needs new frames (any other changes only the shading
@@ -142,10 +205,10 @@ class IsosurfaceLayer:
         self.node = node
         self.visible = True
         self._device = device
-        # one lock per caster: a preview (GUI thread) never waits for an exact frame that a
-        # worker thread is computing with the other caster
-        self._lock = threading.RLock()
-        self._preview_lock = threading.RLock()
+        #: makes casters (in workers only); the casters' own locks guard their use
+        self._build_lock = threading.Lock()
+        #: guards the cache of colour-by splines (``_splines``)
+        self._spline_lock = threading.Lock()
         self._listeners = []
         self._volume = volume
         #: (model, options) the casters and splines are made for
@@ -153,8 +216,11 @@ class IsosurfaceLayer:
         #: clip planes of this layer alone, added to the view's (see :meth:`set_clip_planes`)
         self.clip_planes: tuple = ()
         self._version = 0
-        self._caster = None
-        self._preview = None
+        #: the caster of the node's model, and a cheaper kernel caster for previews
+        self._exact: _Caster | None = None
+        self._fast: _Caster | None = None
+        #: counts the droppings of casters: a caster built meanwhile is not kept
+        self._generation = 0
         self.last_stats: dict = {}
         self._limits = (0.0, 1.0)
         self._keep_limits()
@@ -190,11 +256,13 @@ class IsosurfaceLayer:
             cast = (self.node.model, self.node.model_options())
             if cast == self._cast:
                 return
-            # drop the casters without waiting for a worker that uses them (see set_volume)
+            # drop the caster without waiting for a worker that uses it (see set_volume);
+            # a kernel caster of the old model previews the new one until its own exists
             self._cast = cast
-            self._caster = None
-            self._preview = None
-            self._splines = {}
+            old = self._exact
+            if self._fast is None and old is not None and old.path == "opencl":
+                self._fast = old
+            self._drop(keep_fast=True)
         elif name in ("color_min", "color_max"):
             self._keep_limits()
         self._emit("frame" if name in FRAME_PROPERTIES else "appearance")
@@ -271,10 +339,19 @@ class IsosurfaceLayer:
         here waits for a lock, so the GUI thread never waits for a ray cast.
         """
         self._volume = volume
-        self._caster = None
-        self._preview = None
-        self._splines = {}
+        self._drop()
         self._emit("frame")
+
+    def _drop(self, keep_fast: bool = False) -> None:
+        """Forget the casters (and colour-by splines) without waiting for their users."""
+        self._generation += 1
+        self._exact = None
+        if not keep_fast:
+            self._fast = None
+        # a new cache and lock: a worker still colouring a frame of the old model with
+        # its spline (a plugin's may take any time) holds up no frame of the new one
+        self._splines = {}
+        self._spline_lock = threading.Lock()
 
     def set_model(self, model: str, options: dict | None = None) -> None:
         """Switch the spline model (``options``: its keyword arguments, e.g. ``k``)."""
@@ -407,35 +484,65 @@ class IsosurfaceLayer:
 
     # -- frames --------------------------------------------------------------------------
 
-    def _casters(self, build: bool = True):
-        """(exact caster, trilinear preview caster or None); (None, None) when they do not
-        exist yet and ``build`` is False (building uploads the data: not in the GUI thread)."""
+    def _build(self) -> tuple[_Caster, _Caster | None]:
+        """(exact caster, preview caster or None), made when missing (uploads the data: in a
+        worker, never in the GUI thread). A caster made while the model or the data changed
+        is used for this frame only (the frame is then discarded by its state)."""
         from splineviz.compute.raycast import RayCaster
 
-        if not build:
-            # read without the lock: a worker holds it for a whole exact frame, and the GUI
-            # thread's preview waited for it (170 ms when a split view's first view was
-            # repainted at half width while its exact frame was being cast). The builder
-            # makes both casters under the lock; until it has, there is no preview.
-            exact, fast = self._caster, self._preview
-            if exact is None or (fast is None and exact.stats.get("path") != "opencl"):
-                return None, None
-            return exact, fast
-        with self._lock:
-            if self._caster is None:
+        with self._build_lock:
+            generation = self._generation
+            exact, fast = self._exact, self._fast
+            if exact is None:
                 model, options = self._cast
-                self._caster = make_caster(self._volume, model, self._device, options)
-            if self._caster.stats.get("path") == "bricked" and self._preview is None:
+                exact = _Caster(make_caster(self._volume, model, self._device, options))
+            if fast is None and exact.path == "bricked":
                 # a chunked volume: previews ray cast its coarse level here
-                self._preview = self._caster.preview_caster()
-            elif self._caster.stats.get("path") != "opencl" and self._preview is None:
-                self._preview = RayCaster(self._volume, model="trilinear", device=self._device)
-            return self._caster, self._preview
+                fast = _Caster(exact.rc.preview_caster())
+            elif fast is None and exact.path != "opencl":
+                fast = _Caster(RayCaster(self._volume, model="trilinear", device=self._device))
+            if generation == self._generation:
+                self._exact, self._fast = exact, fast
+            return exact, fast
+
+    def _candidates(self, preview: bool, blocking: bool) -> list[_Caster]:
+        """The casters that may make the frame, best first (see :meth:`compute`)."""
+        exact, fast = self._exact, self._fast
+        if not preview:
+            if exact is None and blocking:
+                exact, fast = self._build()
+            return [] if exact is None else [exact]
+        usable = [c for c in (exact, fast)
+                  if c is not None and (c is fast or c.path == "opencl")]
+        if not usable and blocking:
+            exact, fast = self._build()
+            usable = [c for c in (exact, fast) if c is fast or c.path == "opencl"]
+        if not blocking:
+            # the GUI thread casts on the device only: a NumPy-path frame (no OpenCL device)
+            # takes the thread for as long as it computes
+            usable = [c for c in usable if c.path == "opencl"]
+        return usable
+
+    def exact_scales(self) -> tuple[float, ...]:
+        """The resolution factors a worker casts the exact frame at, one after the other:
+        :data:`COARSE_TO_FINE` on the NumPy path (a model without an OpenCL kernel, or no
+        device: minutes per frame are possible, so each step is shown and can be given up),
+        else one full frame."""
+        from splineviz.compute.raycast import family_class
+        from splineviz.core.splines.registry import MODELS
+
+        exact = self._exact
+        if exact is not None:
+            slow = exact.path == "numpy"
+        else:
+            slow = self._device == "numpy" or (self.node.model in MODELS
+                                               and family_class(self.node.model) is None)
+        return COARSE_TO_FINE if slow else (1.0,)
 
     def compute(self, view: ViewState, scale: float = 1.0, preview: bool = False,
                 blocking: bool = True, progress=None,
                 cancelled=None) -> RenderedFrame | None:
-        """Ray cast a frame for ``view`` (thread safe; may take seconds on the NumPy path).
+        """Ray cast a frame for ``view`` (thread safe; may take minutes on the NumPy path).
 
         Parameters
         ----------
@@ -443,10 +550,13 @@ class IsosurfaceLayer:
         scale : float in (0, 1]
             Resolution factor: the frame has ``ceil(scale * size)`` pixels per axis.
         preview : bool
-            Use the fast trilinear OpenCL caster when this model has no kernel.
+            A preview: the model's own kernel caster at ``scale`` when it has one and it is
+            free, else the cheaper preview caster (trilinear, a chunked volume's coarse level,
+            or the previous model's kernel right after a switch).
         blocking : bool
-            If False, return None instead of waiting while another thread uses the caster
-            or instead of building the casters (the GUI thread's previews).
+            False (the GUI thread): return None instead of waiting for a caster another
+            thread uses, building a caster, or evaluating a spline without a kernel for the
+            colour-by values (the frame is then uncoloured).
         progress, cancelled : callable, optional
             A chunked volume's exact frame, made in bricks on dask workers: ``progress(done,
             total)`` after each brick; ``cancelled()`` True gives up the frame (None).
@@ -465,43 +575,54 @@ class IsosurfaceLayer:
             warnings.warn(f"the OpenCL device failed ({' '.join(str(exc).split())[:120]}); "
                           "rendering on the NumPy reference path (slow)", SplinevizWarning,
                           stacklevel=2)
-            with self._lock, self._preview_lock:
-                self._device = "numpy"
-                self._caster = self._preview = None
+            self._device = "numpy"
+            self._drop()
             return self._compute(view, scale, preview, blocking, progress, cancelled)
 
     def _compute(self, view, scale, preview, blocking, progress, cancelled):
+        if not blocking and _WORKERS_ON_DEVICE.busy:
+            return None
+        candidates = self._candidates(preview, blocking)
+        if not blocking:
+            # a fallback caster (not this model's own) only at a size it has cast before
+            # (a new size compiles the kernel: not in the GUI thread), the largest one not
+            # above the one asked for
+            candidates = [c for c in candidates
+                          if c is self._exact or c.scale_cast(view.size, scale) is not None]
+        caster = next((c for i, c in enumerate(candidates)
+                       if c.lock.acquire(blocking=blocking and i == 0)), None)
+        if caster is None:
+            return None
+        if not blocking and caster is not self._exact:
+            scale = caster.scale_cast(view.size, scale)
         w, h = view.size
         sw, sh = max(1, int(np.ceil(w * scale))), max(1, int(np.ceil(h * scale)))
-        exact, fast = self._casters(build=blocking)
-        if exact is None:
-            return None
-        use_fast = preview and fast is not None
-        rc, lock = (fast, self._preview_lock) if use_fast else (exact, self._lock)
-        if not lock.acquire(blocking=blocking):
-            return None
         try:
             state = self.state
-            if rc is not (self._preview if use_fast else self._caster):
-                return None  # the model changed meanwhile
+            if caster is not self._exact and caster is not self._fast and not blocking:
+                return None  # dropped meanwhile (a worker's frame is judged by its state)
+            exact = caster is self._exact or not preview
+            rc = caster.rc
             isovalue = self.node.isovalue
             if rc.isovalue != isovalue:
                 rc.set_isovalue(isovalue)
             from splineviz.core.colour_by import DERIVATIVE_FIELDS
 
             # curvature and gradient magnitude from the kernel's derivatives at the hits, when
-            # this model's own kernel casts the frame (not the trilinear preview caster)
-            kernel_derivs = (self.color_by in DERIVATIVE_FIELDS and rc is exact
-                             and exact.stats.get("path") == "opencl")
+            # this model's own kernel casts the frame (not a preview caster)
+            kernel_derivs = (self.color_by in DERIVATIVE_FIELDS and exact
+                             and caster.path == "opencl")
             t = time.perf_counter()
-            if rc.stats.get("path") == "bricked":
+            if caster.path == "bricked":
                 extra = {"progress": progress, "cancelled": cancelled}
             else:
                 extra = {"hessian": kernel_derivs}
+            on_device = blocking and caster.path == "opencl"
             try:
-                frame = rc.render(view.camera, size=(sw, sh),
-                                  clip_planes=tuple(view.clip_planes) + self.clip_planes,
-                                  **extra).load()
+                with _WORKERS_ON_DEVICE if on_device else contextlib.nullcontext():
+                    frame = rc.render(view.camera, size=(sw, sh),
+                                      clip_planes=tuple(view.clip_planes) + self.clip_planes,
+                                      **extra).load()
             except SplinevizError as exc:
                 from splineviz.compute.bricked import RenderCancelled
 
@@ -509,17 +630,50 @@ class IsosurfaceLayer:
                     return None
                 raise
             seconds = time.perf_counter() - t
+            caster.sizes.add((tuple(view.size), scale))
             stats = dict(rc.stats)
         finally:
-            lock.release()
-        path = "preview" if rc is not exact else stats.get("path", "numpy")
+            caster.lock.release()
+        path = stats.get("path", "numpy") if exact else "preview"
         self.last_stats = stats
-        # colour-by values from the spline's exact derivatives at the hits (per hit, no pass
-        # over the volume); under the caster lock: the spline cache is shared
-        with self._lock:
-            scalars = self.hit_scalars(frame)
+        scalars = self._scalars(frame, blocking, cheap=path == "preview")
         return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats,
-                             scalars=scalars)
+                             scalars=scalars, model=rc.model)
+
+    def _scalars(self, frame: Frame, blocking: bool, cheap: bool) -> np.ndarray | None:
+        """:meth:`hit_scalars` under the spline cache's lock, or None: for a preview
+        (``cheap``) when a spline without a kernel would be evaluated (a plugin's may take
+        any time), and in the GUI thread (not ``blocking``) also when the lock is taken or
+        a spline must be built."""
+        from splineviz.compute.raycast import family_class
+        from splineviz.core.colour_by import DERIVATIVE_FIELDS
+        from splineviz.core.splines.registry import MODELS
+
+        color_by = self.color_by
+        if color_by == "none":
+            return None
+        if color_by in DERIVATIVE_FIELDS and frame.hessian is not None:
+            return self.hit_scalars(frame)  # from the frame alone
+        lock = self._spline_lock
+        needed = {"own": self._cast[0]}
+        if color_by == "volume":
+            needed["other"] = self._cast[0]
+        elif color_by == "distance" and self._color_reference is not None:
+            needed["reference"] = self._color_reference[1]
+        for which, model in needed.items():
+            if (cheap or not blocking) and (model not in MODELS or family_class(model) is None):
+                return None
+            if not blocking and which not in self._splines:
+                return None
+        if blocking:
+            with lock:
+                return self.hit_scalars(frame)
+        if not lock.acquire(blocking=False):
+            return None
+        try:
+            return self.hit_scalars(frame)
+        finally:
+            lock.release()
 
 
 def _layer_call(write):

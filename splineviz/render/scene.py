@@ -340,7 +340,9 @@ class SplineScene:
                 scale, fast = self._preview_scale(layer, lv, view)
                 t_preview = time.perf_counter()
                 rf = layer.compute(view, scale=scale, preview=fast, blocking=False)
-                if rf is not None:  # else a worker holds the caster: keep the old frame
+                if rf is None:  # a worker holds the caster: keep the old frame, and the scale
+                    lv.preview_seconds = None
+                else:
                     size = rf.frame.hit.shape
                     lv.preview_scale = rf.scale  # the next step starts from the level cast
                     self._show(layer, rf)
@@ -410,7 +412,7 @@ class SplineScene:
                 return True
         return False
 
-    def refine(self, view: ViewState | None = None, cancelled=None, job=None):
+    def refine(self, view: ViewState | None = None, cancelled=None, job=None, partial=None):
         """Exact frames of all visible layers that show a preview (thread safe).
 
         Parameters
@@ -419,30 +421,69 @@ class SplineScene:
             The view to render for (taken now when None; the caller takes it in the main
             thread before starting a worker).
         cancelled : callable or None
-            Returns True to stop between layers.
-        job : object with ``progress(fraction, message)``, optional
+            Returns True to stop between layers (and between the steps of a layer).
+        job : object with ``progress(fraction, message)`` and ``cancelled``, optional
             Told the bricks done of a chunked volume's frame (the GUI's job runner passes
-            its job); such a frame is also given up once the view moved on (bricks still
-            out are cancelled) and refined again for the new view.
+            its job) and the steps done of a frame cast coarse to fine; such a frame is also
+            given up once the view moved on (bricks still out are cancelled) and refined
+            again for the new view.
+        partial : callable, optional
+            ``partial(layer, RenderedFrame)``, called in this thread with the frames made on
+            the way: a preview first when the shown frame is of another state of the layer
+            (its model or data changed), then each coarser step of
+            :meth:`IsosurfaceLayer.exact_scales` (for such a slow model the preview is of
+            full resolution). None: exact frames only.
 
         Returns
         -------
         list of (layer, RenderedFrame)
         """
         view = self.view_state() if view is None else view
+
+        def given_up():
+            return ((cancelled is not None and cancelled())
+                    or bool(getattr(job, "cancelled", False))
+                    or self._latest_key not in (None, view.key()))
+
         out = []
         for layer in list(self.layers):
-            if cancelled is not None and cancelled():
+            if given_up():
                 break
             lv = self._views.get(id(layer))
             if lv is None or not layer.visible:
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
-            rf = layer.compute(view, progress=_brick_progress(job, layer),
-                               cancelled=lambda: self._latest_key not in (None, view.key()))
-            if rf is not None:
+            shown = lv.shown
+            scales = layer.exact_scales() if partial is not None else (1.0,)
+            # a slow model: a sharp preview from the cheaper caster while it is cast (after
+            # one of a preview size: the GUI thread previews from it while the camera moves)
+            slow = len(scales) > 1
+            if partial is not None and (shown is None or shown.state != layer.state
+                                        or (slow and shown.scale < 1.0)):
+                for size in (PREVIEW_LEVELS[4], 1.0) if slow else (PREVIEW_LEVELS[4],):
+                    rf = layer.compute(view, scale=size, preview=True)
+                    if rf is None or given_up():
+                        break
+                    _prepare(rf)
+                    partial(layer, rf)
+            total = sum(s * s for s in scales)
+            rf = None
+            for i, scale in enumerate(scales):
+                if job is not None and len(scales) > 1:
+                    job.progress(sum(s * s for s in scales[:i]) / total,
+                                 f"{layer.name}: {scale:.3g} of full resolution")
+                if i and given_up():
+                    rf = None
+                    break
+                rf = layer.compute(view, scale=scale, progress=_brick_progress(job, layer),
+                                   cancelled=given_up)
+                if rf is None:
+                    break
                 _prepare(rf)  # the textures, here in the worker, not in the GUI thread
+                if not rf.final:
+                    partial(layer, rf)
+            if rf is not None and rf.final:
                 out.append((layer, rf))
         return out
 
