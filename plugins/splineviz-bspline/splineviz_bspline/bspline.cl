@@ -32,9 +32,8 @@ __constant float bs_power[4][4] = {
     {0.0f, 0.0f, 0.0f, 1.0f / 6.0f},
 };
 
-// the scaled Bernstein coefficients of a cubic are binomial(3, i) times its coefficients
-#define BS_UNSCALE3 ((float4)(1.0f, 1.0f / 3.0f, 1.0f / 3.0f, 1.0f))
-// ... of a sextic binomial(6, i) (the eighth component is unused: 0)
+// the scaled Bernstein coefficients of a sextic are binomial(6, i) times its coefficients
+// (the eighth component is unused: 0)
 #define BS_UNSCALE6 ((float8)(1.0f, 1.0f / 6.0f, 1.0f / 15.0f, 1.0f / 20.0f, 1.0f / 15.0f, \
                               1.0f / 6.0f, 1.0f, 0.0f))
 
@@ -196,8 +195,8 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
 #ifdef BS_BOUNDS
     // the cell's bounds from its Bernstein form (TricubicBSplineFamily.device_cell_bounds),
     // after the samples; NaN bounds reject nothing
-    const long at = (long)BS_BOUNDS + 2 * (long)base;
-    if (data[at] > iso || data[at + 1] < iso) return -1.0f;
+    const float2 cb = vload2(0, data + (long)BS_BOUNDS + 2 * (long)base);
+    if (cb.x > iso || cb.y < iso) return -1.0f;
 #endif
     // the restriction to the segment in scaled Bernstein form, axis by axis (z, y, x):
     // products of scaled Bernstein forms are convolutions of their coefficient vectors
@@ -205,28 +204,19 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
     bs_axis(p.x, p.x + len * d.x, wx);
     bs_axis(p.y, p.y + len * d.y, wy);
     bs_axis(p.z, p.z + len * d.z, wz);
-    // g[a][b]: the coefficient row (a, b, .) along z restricted to the segment; f is a convex
-    // combination of the g (the x and y weights are >= 0 and sum to 1), so the range of their
-    // Bernstein coefficients bounds f on the segment: most candidate cells a ray crosses end
-    // here, before the products
+    // g[a][b]: the coefficient row (a, b, .) along z restricted to the segment
     float4 g[4][4];
-    float4 glo = (float4)(INFINITY), ghi = (float4)(-INFINITY);
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) {
             const offset_t row = base + a * sx + b * SZ;
             g[a][b] = (float)data[row] * wz[0] + (float)data[row + 1] * wz[1]
                       + (float)data[row + 2] * wz[2] + (float)data[row + 3] * wz[3];
-            // comparisons, not fmin/fmax: PoCL calls those out of line
-            const float4 u = g[a][b] * BS_UNSCALE3;
-            glo = select(glo, u, u < glo);
-            ghi = select(ghi, u, u > ghi);
         }
-    if (!((glo.s0 <= iso || glo.s1 <= iso || glo.s2 <= iso || glo.s3 <= iso)
-          && (ghi.s0 >= iso || ghi.s1 >= iso || ghi.s2 >= iso || ghi.s3 >= iso)))
-        return -1.0f;
     // h[a]: the x-slice a restricted to the segment (degree 6 in scaled Bernstein form, 7 of
-    // the 8 components used); f is a convex combination of them too, with a tighter range than
-    // the g: a second, cheaper rejection before the degree-9 product
+    // the 8 components used). f is a convex combination of them (the x weights are >= 0 and
+    // sum to 1), so the range of their Bernstein coefficients bounds f on the segment: a
+    // rejection before the degree-9 product (comparisons, not fmin/fmax: PoCL calls those out
+    // of line)
     float8 h[4];
     float8 hlo = (float8)(INFINITY), hhi = (float8)(-INFINITY);
     for (int a = 0; a < 4; ++a) {

@@ -5,12 +5,14 @@ unit cell reads the 4 x 4 x 4 coefficients of its pieces without a boundary test
 kernel restricts the spline to the ray in a cell exactly (a polynomial of degree <= 9 in
 Bernstein form) and isolates its first root by subdivision (see ``bspline.cl``).
 
-The same device buffer holds, after the samples, each cell's value bounds from its Bernstein
-form (:func:`splineviz_bspline.bounds.cell_bounds`), indexed like the cell's first sample:
-the kernel rejects a cell whose bounds miss the isovalue with two loads instead of 64. The
-ray caster's octree bounds a cell by its B-spline coefficients, which the prefilter makes
-overshoot the data: on CT data nearly every cell near the surface passes them, and ~1 in 12
-passes the Bernstein bounds.
+Each cell's value bounds come from its Bernstein form
+(:func:`splineviz_bspline.bounds.cell_bounds`) rather than from the B-spline coefficients,
+which the prefilter makes overshoot the data: on CT data nearly every cell a ray crosses near
+the surface straddles the isovalue by its coefficients, ~1 in 12 by its Bernstein
+coefficients. They replace the levels of the ray caster's min-max octree (so that empty-space
+leaping skips what they exclude), and the same device buffer holds them after the samples,
+indexed like the cell's first sample, for the kernel's test of a single cell (two loads
+instead of 64).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from splineviz.compute.raycast import CustomKernelFamily
+from splineviz.compute.raycast.octree import octree_nodes
 from splineviz_bspline.bounds import cell_bounds
 
 #: widening of the cell bounds, relative to the largest coefficient the cell reads: covers
@@ -33,6 +36,34 @@ def _window_max(a: np.ndarray) -> np.ndarray:
     for axis in range(3):
         a = sliding_window_view(a, 4, axis=axis).max(axis=-1)
     return a
+
+
+def octree_bounds(cells: np.ndarray, levels) -> np.ndarray:
+    """The stored levels of the min-max octree from per-cell bounds.
+
+    Parameters
+    ----------
+    cells : (cx, cy, cz, 2) float32
+        (lo, hi) of every cell.
+    levels : list of (offset, nx, ny, nz)
+        :func:`splineviz.compute.raycast.octree.octree_levels` of (cx, cy, cz).
+
+    Returns
+    -------
+    (nodes, 2) float32: (lo, hi) of every node, level after level, as classify.cl lays them
+    out; NaN bounds are ignored as its min/max ignore them.
+    """
+    out = np.empty((octree_nodes(levels), 2), dtype=np.float32)
+    cur = cells
+    for off, nx, ny, nz in levels:
+        pad = np.full((2 * nx, 2 * ny, 2 * nz, 2), np.nan, dtype=np.float32)
+        pad[:cur.shape[0], :cur.shape[1], :cur.shape[2]] = cur
+        blocks = pad.reshape(nx, 2, ny, 2, nz, 2, 2)
+        lo = np.fmin.reduce(blocks[..., 0], axis=(1, 3, 5))
+        hi = np.fmax.reduce(blocks[..., 1], axis=(1, 3, 5))
+        cur = np.stack([lo, hi], axis=-1)
+        out[off:off + nx * ny * nz] = cur.reshape(-1, 2)
+    return out
 
 
 class TricubicBSplineFamily(CustomKernelFamily):
@@ -81,7 +112,13 @@ class TricubicBSplineFamily(CustomKernelFamily):
             self._bounds_at = samples.size
         else:
             self._bounds_at = None
+        self._cells = table[:-3, :-3, :-3]
         return tables
+
+    def allocate(self, rc) -> None:
+        """The octree of the Bernstein bounds in place of classify.cl's (built by then)."""
+        rc._bounds.set(octree_bounds(self._cells, rc._levels).ravel())
+        self._cells = None
 
     def defines(self, rc) -> dict:
         out = super().defines(rc)
