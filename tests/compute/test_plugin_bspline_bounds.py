@@ -71,8 +71,9 @@ def test_a_nan_coefficient_leaves_its_cells_unbounded():
 
 
 def test_the_octree_holds_the_bounds_of_its_cells():
-    from splineviz.compute.raycast.octree import octree_levels
     from splineviz_bspline.kernel import octree_bounds
+
+    from splineviz.compute.raycast.octree import octree_levels
 
     cells = RNG.normal(size=(5, 6, 3, 2)).astype(np.float32)
     cells.sort(axis=-1)
