@@ -71,7 +71,7 @@ def test_a_nan_coefficient_leaves_its_cells_unbounded():
 
 
 def test_the_octree_holds_the_bounds_of_its_cells():
-    from splineviz_bspline.kernel import octree_bounds
+    from splineviz_bspline.bounds import node_bounds, octree_bounds
 
     from splineviz.compute.raycast.octree import octree_levels
 
@@ -79,7 +79,7 @@ def test_the_octree_holds_the_bounds_of_its_cells():
     cells.sort(axis=-1)
     cells[4, 5, 2] = np.nan  # ignored, as classify.cl's min/max ignore NaN
     levels = octree_levels(cells.shape[:3])
-    tree = octree_bounds(cells, levels)
+    tree = octree_bounds(node_bounds(cells), levels)
     for level, (off, nx, ny, nz) in enumerate(levels, start=1):
         span = 2**level
         for a, b, c in [(0, 0, 0), (nx - 1, ny - 1, nz - 1), (nx // 2, 0, nz - 1)]:
@@ -90,18 +90,23 @@ def test_the_octree_holds_the_bounds_of_its_cells():
 
 
 @pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device at all")
-def test_the_ray_caster_octree_is_that_of_the_bernstein_bounds():
+def test_the_device_bounds_and_octree_are_the_numpy_ones():
+    from splineviz_bspline.bounds import SLACK, cell_bounds, node_bounds, octree_bounds
+
     plugins.ensure_loaded()
     data = RNG.normal(size=(9, 7, 8))
     rc = sv.RayCaster(sv.Volume(data), model="tricubic-bspline", device="cpu")
-    tree = rc._bounds.get().reshape(-1, 2)
     samples = rc.family.device_samples(rc)
-    cells = rc.family.device_cell_bounds(samples)[:-3, :-3, :-3]
-    from splineviz_bspline.kernel import octree_bounds
-
-    np.testing.assert_array_equal(tree, octree_bounds(cells, rc._levels))
-    # the first node within the B-spline coefficients its cells read (up to the slack)
-    lo, hi = tree[0]
-    block = samples[:5, :5, :5]
-    slack = 1e-4 * np.abs(block).max()
-    assert block.min() - slack <= lo <= hi <= block.max() + slack
+    n = samples.size
+    assert rc.family.bounds_at == n
+    table = rc._data.get()[n:].reshape(*samples.shape, 2)
+    ref = cell_bounds(samples)
+    cells = table[:-3, :-3, :-3]
+    width = cells - ref
+    amax = np.abs(samples).max()
+    # widened by SLACK times the cell's largest coefficient, up to float32 rounding
+    assert (width[..., 0] <= 0).all() and (width[..., 1] >= 0).all()
+    assert np.abs(width).max() <= 1.1 * SLACK * amax
+    assert np.isneginf(table[-3:, ..., 0]).all() and np.isposinf(table[:, -3:, :, 1]).all()
+    tree = rc._bounds.get().reshape(-1, 2)
+    np.testing.assert_array_equal(tree, octree_bounds(node_bounds(cells), rc._levels))

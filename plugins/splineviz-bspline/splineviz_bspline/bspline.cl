@@ -193,7 +193,7 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
 {
     const int sx = SY * SZ;
 #ifdef BS_BOUNDS
-    // the cell's bounds from its Bernstein form (TricubicBSplineFamily.device_cell_bounds),
+    // the cell's bounds from its Bernstein form (bounds.cl: bspline_cell_bounds),
     // after the samples; NaN bounds reject nothing
     const float2 cb = vload2(0, data + (long)BS_BOUNDS + 2 * (long)base);
     if (cb.x > iso || cb.y < iso) return -1.0f;
