@@ -91,22 +91,26 @@ def test_the_octree_holds_the_bounds_of_its_cells():
 
 @pytest.mark.skipif(not HAVE_CL, reason="no OpenCL device at all")
 def test_the_device_bounds_and_octree_are_the_numpy_ones():
-    from splineviz_bspline.bounds import SLACK, cell_bounds, node_bounds, octree_bounds
+    from splineviz_bspline.bounds import (
+        SLACK,
+        cell_bounds,
+        device_cell_bounds,
+        node_bounds,
+        octree_bounds,
+    )
 
     plugins.ensure_loaded()
     data = RNG.normal(size=(9, 7, 8))
     rc = sv.RayCaster(sv.Volume(data), model="tricubic-bspline", device="cpu")
     samples = rc.family.device_samples(rc)
-    n = samples.size
-    assert rc.family.bounds_at == n
-    table = rc._data.get()[n:].reshape(*samples.shape, 2)
-    ref = cell_bounds(samples)
+    table = device_cell_bounds(rc._device.queue, rc._data, samples.shape).get()
+    table = table.reshape(*samples.shape, 2)
     cells = table[:-3, :-3, :-3]
-    width = cells - ref
-    amax = np.abs(samples).max()
+    width = cells - cell_bounds(samples)
     # widened by SLACK times the cell's largest coefficient, up to float32 rounding
     assert (width[..., 0] <= 0).all() and (width[..., 1] >= 0).all()
-    assert np.abs(width).max() <= 1.1 * SLACK * amax
+    assert np.abs(width).max() <= 1.1 * SLACK * np.abs(samples).max()
     assert np.isneginf(table[-3:, ..., 0]).all() and np.isposinf(table[:, -3:, :, 1]).all()
+    # the ray caster's octree is that of the Bernstein bounds, not classify.cl's
     tree = rc._bounds.get().reshape(-1, 2)
     np.testing.assert_array_equal(tree, octree_bounds(node_bounds(cells), rc._levels))

@@ -5,9 +5,9 @@
 // data holds the spline's coefficients with one mirrored layer (the float32 device samples of
 // TricubicBSplineFamily); data[base] is coefficient (i-1, j-1, k-1) of the cell (i, j, k), and
 // the cell reads the 4 x 4 x 4 coefficients base + (a, b, c), a, b, c = 0..3 (CELL_REACH 3).
-// Their min/max bound the spline on the cell (the B-spline weights are >= 0 and sum to 1),
-// which is what the octree of classify.cl stores; with BS_BOUNDS, data[BS_BOUNDS + 2 base]
-// and the next entry hold the tighter bounds of the cell's Bernstein coefficients.
+// Their min/max bound the spline on the cell (the B-spline weights are >= 0 and sum to 1);
+// the ray caster's octree holds the much tighter range of the cell's Bernstein coefficients
+// (bounds.cl, TricubicBSplineFamily.allocate), so the cells this function sees are few.
 //
 // Along the ray p + r d in the cell each axis' weights are cubics in r, so s - iso is a
 // polynomial of degree 9. Its Bernstein coefficients on [0, len] come from the blossoms of
@@ -192,12 +192,6 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
                        int want_hess, float *hess)
 {
     const int sx = SY * SZ;
-#ifdef BS_BOUNDS
-    // the cell's bounds from its Bernstein form (bounds.cl: bspline_cell_bounds),
-    // after the samples; NaN bounds reject nothing
-    const float2 cb = vload2(0, data + (long)BS_BOUNDS + 2 * (long)base);
-    if (cb.x > iso || cb.y < iso) return -1.0f;
-#endif
     // the restriction to the segment in scaled Bernstein form, axis by axis (z, y, x):
     // products of scaled Bernstein forms are convolutions of their coefficient vectors
     float4 wx[4], wy[4], wz[4];

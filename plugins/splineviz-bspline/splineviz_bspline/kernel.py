@@ -5,13 +5,11 @@ unit cell reads the 4 x 4 x 4 coefficients of its pieces without a boundary test
 kernel restricts the spline to the ray in a cell exactly (a polynomial of degree <= 9 in
 Bernstein form) and isolates its first root by subdivision (see ``bspline.cl``).
 
-Each cell's value bounds come from its Bernstein form (:mod:`splineviz_bspline.bounds`,
-computed on the device) rather than from the B-spline coefficients, which the prefilter makes
-overshoot the data: on CT data nearly every cell a ray crosses near the surface straddles the
-isovalue by its coefficients, ~1 in 12 by its Bernstein coefficients. They replace the levels
-of the ray caster's min-max octree (so that empty-space leaping skips what they exclude), and
-the same device buffer holds them after the samples, indexed like the cell's first sample,
-for the kernel's test of a single cell (two loads instead of 64).
+The ray caster's min-max octree bounds the cells by the range of their Bernstein
+coefficients (:mod:`splineviz_bspline.bounds`, computed on the device) rather than of their
+B-spline coefficients, which the prefilter makes overshoot the data: on CT data nearly every
+cell a ray crosses near the surface straddles the isovalue by its coefficients, ~1 in 12 by
+its Bernstein coefficients, and empty-space leaping skips the rest.
 """
 
 from __future__ import annotations
@@ -42,25 +40,10 @@ class TricubicBSplineFamily(CustomKernelFamily):
         return np.pad(coefficients, 1, mode="reflect").astype(np.float32)
 
     def upload(self, rc) -> dict:
-        """The samples, then (when one buffer may hold both) the cells' Bernstein bounds
-        after them in the same buffer, at :attr:`bounds_at` floats."""
-        import pyopencl as cl
-        import pyopencl.array as cla
-
+        """The samples, and the cells' Bernstein bounds for :meth:`allocate`."""
         tables = super().upload(rc)
-        q = rc._device.queue
-        samples = rc._data
         self._shape = tuple(n + 2 * self.ghost_layers for n in rc.volume.shape)
-        self._table = device_cell_bounds(q, samples, self._shape)
-        n = samples.size
-        self.bounds_at = None
-        if 3 * samples.nbytes <= rc._device.device.max_mem_alloc_size:
-            both = cla.empty(q, 3 * n, np.float32)
-            cl.enqueue_copy(q, both.data, samples.data, byte_count=samples.nbytes)
-            cl.enqueue_copy(q, both.data, self._table.data, byte_count=self._table.nbytes,
-                            dst_offset=samples.nbytes)
-            rc._data = both
-            self.bounds_at = n
+        self._table = device_cell_bounds(rc._device.queue, rc._data, self._shape)
         return tables
 
     def allocate(self, rc) -> None:
@@ -68,9 +51,3 @@ class TricubicBSplineFamily(CustomKernelFamily):
         the coefficients by then)."""
         device_octree(rc._device.queue, self._table, self._shape, rc._levels, rc._bounds)
         self._table = None
-
-    def defines(self, rc) -> dict:
-        out = super().defines(rc)
-        if getattr(self, "bounds_at", None) is not None:
-            out["BS_BOUNDS"] = self.bounds_at
-        return out
