@@ -5,8 +5,9 @@
 // data holds the spline's coefficients with one mirrored layer (the float32 device samples of
 // TricubicBSplineFamily); data[base] is coefficient (i-1, j-1, k-1) of the cell (i, j, k), and
 // the cell reads the 4 x 4 x 4 coefficients base + (a, b, c), a, b, c = 0..3 (CELL_REACH 3).
-// Their min/max bound the spline on the cell (the B-spline weights are >= 0 and sum to 1),
-// which is what the octree of classify.cl stores.
+// Their min/max bound the spline on the cell (the B-spline weights are >= 0 and sum to 1);
+// the ray caster's octree holds the much tighter range of the cell's Bernstein coefficients
+// (bounds.cl, TricubicBSplineFamily.allocate), so the cells this function sees are few.
 //
 // Along the ray p + r d in the cell each axis' weights are cubics in r, so s - iso is a
 // polynomial of degree 9. Its Bernstein coefficients on [0, len] come from the blossoms of
@@ -31,8 +32,10 @@ __constant float bs_power[4][4] = {
     {0.0f, 0.0f, 0.0f, 1.0f / 6.0f},
 };
 
-// the scaled Bernstein coefficients of a cubic are binomial(3, i) times its coefficients
-#define BS_UNSCALE3 ((float4)(1.0f, 1.0f / 3.0f, 1.0f / 3.0f, 1.0f))
+// the scaled Bernstein coefficients of a sextic are binomial(6, i) times its coefficients
+// (the eighth component is unused: 0)
+#define BS_UNSCALE6 ((float8)(1.0f, 1.0f / 6.0f, 1.0f / 15.0f, 1.0f / 20.0f, 1.0f / 15.0f, \
+                              1.0f / 6.0f, 1.0f, 0.0f))
 
 // binomial(9, k)
 __constant float bs_binom9[10] = {1.0f, 9.0f, 36.0f, 84.0f, 126.0f, 126.0f, 84.0f, 36.0f,
@@ -72,14 +75,24 @@ inline void bs_weights(float t, float *w, float *dw, float *d2w)
     d2w[3] = t;
 }
 
-// Value of the Bernstein polynomial b (degree 9) at u (de Casteljau).
-inline float bs_eval(const float *b, float u)
+// The sign of the Bernstein polynomial of degree 9 with scaled coefficients a (binomial(9, i)
+// times its Bernstein coefficients) at u in (0, 1): sum a_i u^i (1-u)^(9-i) is (1-u)^9 times a
+// polynomial in u / (1-u), or u^9 times one in (1-u) / u, evaluated by Horner in whichever
+// ratio is <= 1. Its rounding error is bounded by that of de Casteljau (both are a few ulps of
+// sum |a_i| u^i (1-u)^(9-i)) at a fifth of the work, and the positive power needs no computing.
+inline float bs_sign_at(const float *a, float u)
 {
-    float t[BS_DEGREE + 1];
-    for (int i = 0; i <= BS_DEGREE; ++i) t[i] = b[i];
-    for (int r = 1; r <= BS_DEGREE; ++r)
-        for (int i = 0; i <= BS_DEGREE - r; ++i) t[i] = t[i] + u * (t[i + 1] - t[i]);
-    return t[0];
+    float h;
+    if (u <= 0.5f) {
+        const float t = u / (1.0f - u);
+        h = a[BS_DEGREE];
+        for (int i = BS_DEGREE - 1; i >= 0; --i) h = h * t + a[i];
+    } else {
+        const float t = (1.0f - u) / u;
+        h = a[0];
+        for (int i = 1; i <= BS_DEGREE; ++i) h = h * t + a[i];
+    }
+    return h;
 }
 
 // The Bernstein coefficients of b on [u0, u1] of [0, 1] (two de Casteljau subdivisions, each
@@ -141,9 +154,11 @@ inline float bs_first_root(const float *b)
             // bisection on the piece's own coefficients (float resolution of [0, 1])
             float lo = 0.0f, hi = 1.0f;
             const bool neg = c[0] < 0.0f;
+            float a[BS_DEGREE + 1];
+            for (int i = 0; i <= BS_DEGREE; ++i) a[i] = c[i] * bs_binom9[i];
             for (int it = 0; it < BS_BISECT - d; ++it) {
                 const float m = 0.5f * (lo + hi);
-                const float fm = bs_eval(c, m);
+                const float fm = bs_sign_at(a, m);
                 if (fm == 0.0f) { lo = hi = m; break; }
                 if ((fm < 0.0f) == neg) lo = m; else hi = m;
             }
@@ -183,45 +198,52 @@ float custom_cell_root(__global const DATA_T *data, offset_t base, int SY, int S
     bs_axis(p.x, p.x + len * d.x, wx);
     bs_axis(p.y, p.y + len * d.y, wy);
     bs_axis(p.z, p.z + len * d.z, wz);
-    // g[a][b]: the coefficient row (a, b, .) along z restricted to the segment; f is a convex
-    // combination of the g (the x and y weights are >= 0 and sum to 1), so the range of their
-    // Bernstein coefficients bounds f on the segment: most candidate cells a ray crosses end
-    // here, before the products
+    // g[a][b]: the coefficient row (a, b, .) along z restricted to the segment
     float4 g[4][4];
-    float4 glo = (float4)(INFINITY), ghi = (float4)(-INFINITY);
     for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b) {
             const offset_t row = base + a * sx + b * SZ;
             g[a][b] = (float)data[row] * wz[0] + (float)data[row + 1] * wz[1]
                       + (float)data[row + 2] * wz[2] + (float)data[row + 3] * wz[3];
-            // comparisons, not fmin/fmax: PoCL calls those out of line
-            const float4 u = g[a][b] * BS_UNSCALE3;
-            glo = select(glo, u, u < glo);
-            ghi = select(ghi, u, u > ghi);
         }
-    if (!((glo.s0 <= iso || glo.s1 <= iso || glo.s2 <= iso || glo.s3 <= iso)
-          && (ghi.s0 >= iso || ghi.s1 >= iso || ghi.s2 >= iso || ghi.s3 >= iso)))
-        return -1.0f;
-    float16 acc = (float16)(0.0f);
+    // h[a]: the x-slice a restricted to the segment (degree 6 in scaled Bernstein form, 7 of
+    // the 8 components used). f is a convex combination of them (the x weights are >= 0 and
+    // sum to 1), so the range of their Bernstein coefficients bounds f on the segment: a
+    // rejection before the degree-9 product (comparisons, not fmin/fmax: PoCL calls those out
+    // of line)
+    float8 h[4];
+    float8 hlo = (float8)(INFINITY), hhi = (float8)(-INFINITY);
     for (int a = 0; a < 4; ++a) {
-        float8 h = (float8)(0.0f);  // degree 6 (7 used)
+        h[a] = (float8)(0.0f);
         for (int b = 0; b < 4; ++b) {
             const float4 ga = g[a][b];
             const float4 w = wy[b];
-            h += ga.s0 * (float8)(w, 0.0f, 0.0f, 0.0f, 0.0f)
-                 + ga.s1 * (float8)(0.0f, w, 0.0f, 0.0f, 0.0f)
-                 + ga.s2 * (float8)(0.0f, 0.0f, w, 0.0f, 0.0f)
-                 + ga.s3 * (float8)(0.0f, 0.0f, 0.0f, w, 0.0f);
+            h[a] += ga.s0 * (float8)(w, 0.0f, 0.0f, 0.0f, 0.0f)
+                    + ga.s1 * (float8)(0.0f, w, 0.0f, 0.0f, 0.0f)
+                    + ga.s2 * (float8)(0.0f, 0.0f, w, 0.0f, 0.0f)
+                    + ga.s3 * (float8)(0.0f, 0.0f, 0.0f, w, 0.0f);
         }
+        const float8 u = h[a] * BS_UNSCALE6;
+        hlo = select(hlo, u, u < hlo);
+        hhi = select(hhi, u, u > hhi);
+    }
+    if (!((hlo.s0 <= iso || hlo.s1 <= iso || hlo.s2 <= iso || hlo.s3 <= iso
+           || hlo.s4 <= iso || hlo.s5 <= iso || hlo.s6 <= iso)
+          && (hhi.s0 >= iso || hhi.s1 >= iso || hhi.s2 >= iso || hhi.s3 >= iso
+              || hhi.s4 >= iso || hhi.s5 >= iso || hhi.s6 >= iso)))
+        return -1.0f;
+    float16 acc = (float16)(0.0f);
+    for (int a = 0; a < 4; ++a) {
+        const float8 ha = h[a];
         const float4 w = wx[a];
         const float4 z4 = (float4)(0.0f);
-        acc += h.s0 * (float16)(w, z4, z4, z4)
-               + h.s1 * (float16)(0.0f, w, z4, z4, z4.s012)
-               + h.s2 * (float16)(0.0f, 0.0f, w, z4, z4, z4.s01)
-               + h.s3 * (float16)(0.0f, 0.0f, 0.0f, w, z4, z4, z4.s0)
-               + h.s4 * (float16)(z4, w, z4, z4)
-               + h.s5 * (float16)(z4, 0.0f, w, z4, z4.s012)
-               + h.s6 * (float16)(z4, 0.0f, 0.0f, w, z4, z4.s01);
+        acc += ha.s0 * (float16)(w, z4, z4, z4)
+               + ha.s1 * (float16)(0.0f, w, z4, z4, z4.s012)
+               + ha.s2 * (float16)(0.0f, 0.0f, w, z4, z4, z4.s01)
+               + ha.s3 * (float16)(0.0f, 0.0f, 0.0f, w, z4, z4, z4.s0)
+               + ha.s4 * (float16)(z4, w, z4, z4)
+               + ha.s5 * (float16)(z4, 0.0f, w, z4, z4.s012)
+               + ha.s6 * (float16)(z4, 0.0f, 0.0f, w, z4, z4.s01);
     }
     float f[BS_DEGREE + 1] = {acc.s0, acc.s1, acc.s2, acc.s3, acc.s4,
                               acc.s5, acc.s6, acc.s7, acc.s8, acc.s9};
