@@ -8,7 +8,6 @@ within :data:`PREVIEW_DEADLINE_S` of the switch with the "computing <model>" ove
 that the built-in model's exact frame appears after the switch back.
 """
 
-import threading
 import time
 
 import pytest
@@ -24,10 +23,8 @@ from interaction import (  # noqa: E402
     pump,
     run_steps,
 )
-
-from splineviz import plugins  # noqa: E402
-from splineviz.core.splines import MODELS  # noqa: E402
-from splineviz.core.splines.trilinear import TrilinearSpline  # noqa: E402
+from sleeping_model import NAME as SLOW_MODEL  # noqa: E402
+from sleeping_model import RELEASE, sleeping_model  # noqa: E402
 
 #: the longest the GUI thread may be away from its event loop in the default suite, ms
 #: (a generous guard on a busy 2-core machine: the 100 ms budget belongs to the benchmark)
@@ -35,34 +32,12 @@ MAX_STALL_MS = 300
 #: seconds from a model switch to a picture of the new state (preview or coarser image)
 PREVIEW_DEADLINE_S = 2.0
 #: what the test plugin is called, and its label in the overlay
-SLOW_MODEL, SLOW_LABEL = "sleeptest-slow", "Sleeping test model"
-
-#: set at the end of a test: the evaluations the sleeping model is stuck in return
-RELEASE = threading.Event()
-
-
-class SleepingSpline(TrilinearSpline):
-    """The trilinear spline, but each evaluation waits until the test ends."""
-
-    model = SLOW_MODEL
-
-    def index_derivatives(self, upoints, order):
-        RELEASE.wait(300.0)
-        return super().index_derivatives(upoints, order)
-
+SLOW_LABEL = "Sleeping test model"
 
 @pytest.fixture
 def slow_model():
-    MODELS.names()  # the installed plugins first: the snapshot restores them
-    snapshot = dict(MODELS)
-    api = plugins.PluginAPI("sleeptest")
-    api.add_model(SLOW_MODEL, SleepingSpline, label=SLOW_LABEL, degree=1, smoothness="C0")
-    api._commit()
-    RELEASE.clear()
-    yield SLOW_MODEL
-    RELEASE.set()
-    MODELS.clear()
-    MODELS.update(snapshot)
+    with sleeping_model(SLOW_LABEL, 300.0) as name:
+        yield name
 
 
 @pytest.fixture

@@ -7,43 +7,20 @@ import time
 
 import numpy as np
 import pytest
+from sleeping_model import RELEASE, sleeping_model
 
-from splineviz import plugins
 from splineviz.core.camera import Camera
-from splineviz.core.splines import MODELS
-from splineviz.core.splines.trilinear import TrilinearSpline
 from splineviz.core.volume import Volume
 from splineviz.render.isosurface import COARSE_TO_FINE, IsosurfaceLayer, ViewState
 
-SLOW_MODEL = "sleeptest-layer"
-#: set at the end of a test: the evaluations the sleeping model is stuck in return
-RELEASE = threading.Event()
 #: a non-blocking call must return this soon (generous: a busy 2-core machine)
 NO_WAIT_S = 1.0
 
 
-class SleepingSpline(TrilinearSpline):
-    """The trilinear spline, but each evaluation waits until the test ends."""
-
-    model = SLOW_MODEL
-
-    def index_derivatives(self, upoints, order):
-        RELEASE.wait(120.0)
-        return super().index_derivatives(upoints, order)
-
-
 @pytest.fixture
 def slow_model():
-    MODELS.names()  # the installed plugins first: the snapshot restores them
-    snapshot = dict(MODELS)
-    api = plugins.PluginAPI("sleeptest")
-    api.add_model(SLOW_MODEL, SleepingSpline, label="Sleeping", degree=1, smoothness="C0")
-    api._commit()
-    RELEASE.clear()
-    yield SLOW_MODEL
-    RELEASE.set()
-    MODELS.clear()
-    MODELS.update(snapshot)
+    with sleeping_model("Sleeping", 120.0) as name:
+        yield name
 
 
 @pytest.fixture
