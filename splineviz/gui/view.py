@@ -417,6 +417,9 @@ class View3D(QObject):
         if self._closed or self.spline_scene is None or self._refine_job is None \
                 or serial != self._refine_serial:
             return
+        if layer not in self.spline_scene.layers:
+            # removed (another file opened) while the signal was queued
+            return
         shown = self.spline_scene.shown_frame(layer)
         if shown is not None and shown.state == rf.state and shown.view.key() == rf.view.key() \
                 and shown.scale > rf.scale and not (shown.path == "preview" != rf.path

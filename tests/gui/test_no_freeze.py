@@ -127,3 +127,24 @@ def test_a_model_switch_on_bonsai_previews_the_new_model_at_once(qapp, tmp_path,
             assert meter.max_ms <= MAX_STALL_MS
     finally:
         close_window(w)
+
+
+def test_a_frame_of_a_removed_isosurface_is_dropped(window):
+    """Opening another file removes a layer while its exact frame is on the way: the frame,
+    still queued for the GUI thread, is dropped (before: a KeyError in the event loop)."""
+    w = window
+    w.open_default()
+    assert pump(120, lambda: bool(w.scene.isosurfaces) and not w.jobs.jobs)
+    node = w.scene.isosurfaces[0]
+    layer = w.view.scene_view.layers[node.id]
+    assert pump(120, lambda: _exact(w, layer))
+    frame = w.spline_scene.shown_frame(layer)
+    node.model = SLOW_MODEL
+    assert pump(PREVIEW_DEADLINE_S, lambda: w.view._refine_job is not None)
+    serial = w.view._refine_serial
+    w.scene.remove(node)
+    assert layer not in w.spline_scene.layers
+    with StallMeter():
+        w.view._partial_frame.emit(serial, layer, frame)
+        pump(0.3)
+    assert layer not in w.spline_scene.layers
