@@ -294,3 +294,18 @@ def test_outline_of_an_oblique_volume_is_its_rotated_box():
     finally:
         view.close()
         pl.close()
+
+
+def test_colour_by_volume_reads_the_oblique_spline_at_the_world_hits(tmp_path):
+    """Colour by the volume itself: at every hit the value is the isovalue, which holds only
+    when the world hit is taken back into the volume's own frame before evaluating."""
+    from splineviz.render.isosurface import IsosurfaceLayer, ViewState
+
+    sphere_file(tmp_path / "o.nii", rotation(18.0, -11.0, 33.0))
+    vol = read(tmp_path / "o.nii")
+    layer = IsosurfaceLayer(vol, model="trilinear", isovalue=RADIUS**2)
+    layer.set_color_by("volume", volume=vol)
+    rf = layer.compute(ViewState(world_camera(), (40, 30)))
+    hit = rf.frame.hit
+    assert hit.sum() > 100
+    np.testing.assert_allclose(rf.scalars[hit], RADIUS**2, rtol=1e-4)
