@@ -616,7 +616,9 @@ def _read_nrrd_single(path: Path, datafile: str):
 def _write_nrrd(path: Path, vol: Volume) -> None:
     import nrrd
 
-    header = {"space dimension": 3, "space directions": np.diag(vol.spacing),
+    # one row per array axis: its world step (an oblique volume's direction kept)
+    header = {"space dimension": 3,
+              "space directions": (vol.direction * np.asarray(vol.spacing)[None, :]).T,
               "space origin": np.asarray(vol.origin), "kinds": ["domain"] * 3,
               "encoding": "gzip"}
     with atomic_output(path) as tmp:
@@ -632,6 +634,8 @@ def _write_vti(path: Path, vol: Volume) -> None:
     image.SetDimensions(*vol.shape)
     image.SetSpacing(*vol.spacing)
     image.SetOrigin(*vol.origin)
+    if not vol.axis_aligned:
+        image.SetDirectionMatrix(*np.asarray(vol.direction, dtype=float).ravel())
     flat = np.ascontiguousarray(np.asarray(vol.data).ravel(order="F"))  # x fastest
     arr = numpy_to_vtk(flat, deep=True)
     arr.SetName("scalars")

@@ -309,3 +309,15 @@ def test_colour_by_volume_reads_the_oblique_spline_at_the_world_hits(tmp_path):
     hit = rf.frame.hit
     assert hit.sum() > 100
     np.testing.assert_allclose(rf.scalars[hit], RADIUS**2, rtol=1e-4)
+
+
+@pytest.mark.parametrize("suffix", [".nrrd", ".vti"])
+def test_an_oblique_volume_written_and_read_again_keeps_its_direction(tmp_path, suffix):
+    rot = rotation(10.0, -20.0, 35.0)
+    data = np.arange(4 * 5 * 6, dtype=np.float32).reshape(4, 5, 6)
+    vol = sv.Volume(data, (1.0, 1.5, 2.0), (3.0, -1.0, 7.0), rot)
+    back = read(sv.write_volume(tmp_path / f"o{suffix}", vol))
+    np.testing.assert_allclose(back.direction, rot, atol=1e-6)
+    np.testing.assert_allclose(back.spacing, vol.spacing, rtol=1e-6)
+    np.testing.assert_allclose(back.origin, vol.origin, atol=1e-6)
+    np.testing.assert_array_equal(back.data, data)
