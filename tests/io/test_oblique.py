@@ -321,3 +321,23 @@ def test_an_oblique_volume_written_and_read_again_keeps_its_direction(tmp_path, 
     np.testing.assert_allclose(back.spacing, vol.spacing, rtol=1e-6)
     np.testing.assert_allclose(back.origin, vol.origin, atol=1e-6)
     np.testing.assert_array_equal(back.data, data)
+
+
+def test_slice_planes_of_an_oblique_volume_are_drawn_turned_into_world():
+    """The slice views work in the volume's own frame; their outline in the 3-D view (and a
+    ruler there) is turned into world by the direction."""
+    from vtkmodules.vtkRenderingCore import vtkRenderer
+
+    from splineviz.render.slice_view import SlicePlanesMarker
+
+    rot = rotation(10.0, 20.0, 30.0)
+    vol = sv.Volume(np.zeros((5, 6, 7), np.float32), (1.0, 2.0, 0.5), (3.0, -2.0, 1.0), rot)
+    centre = np.mean(np.asarray(vol.bounds), axis=1)
+    marker = SlicePlanesMarker(vtkRenderer())
+    marker.update(vol.bounds, centre, ("axial",))
+    flat = marker.outlines["axial"].copy()
+    marker.frame = vol
+    marker.update(vol.bounds, centre, ("axial",))
+    np.testing.assert_allclose(marker.outlines["axial"], vol.to_world(flat), atol=1e-12)
+    assert np.abs(marker.outlines["axial"] - flat).max() > 0.5
+    marker.close()
