@@ -280,9 +280,10 @@ def to_chunked_volume(vd, name: str, *, spacing=None, origin=None):
     if orient is not None and (not orient.identity or orient.oblique):
         # read brick by brick in the file's order: a transpose, flip or rotation would put
         # the surface elsewhere than the file says
-        raise InvalidDataError(f"{name} is read in chunks and its direction matrix turns or "
-                               "flips its axes, which chunked volumes do not carry; convert it "
-                               "to a format read whole (NIfTI, NRRD) to show it in place")
+        raise InvalidDataError(f"{name} is read brick by brick (chunked, or too large to "
+                               "render in one piece) and its direction matrix turns or flips "
+                               "its axes, which bricked rendering does not carry; it is "
+                               "refused rather than shown in the wrong place")
     try:
         return ChunkedVolume(vd.data, vd.spacing if spacing is None else spacing,
                              vd.origin if origin is None else origin,

@@ -341,3 +341,19 @@ def test_slice_planes_of_an_oblique_volume_are_drawn_turned_into_world():
     np.testing.assert_allclose(marker.outlines["axial"], vol.to_world(flat), atol=1e-12)
     assert np.abs(marker.outlines["axial"] - flat).max() > 0.5
     marker.close()
+
+
+def test_a_chunked_volume_with_a_direction_is_refused_in_one_sentence():
+    """Bricked rendering does not carry a direction: refused, never drawn misplaced."""
+    import dask.array as da
+
+    from splineviz.io.chunked import to_chunked_volume
+    from splineviz.io.volume_data import VolumeData
+
+    vd = VolumeData(da.zeros((8, 8, 8), chunks=4), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0), "zarr",
+                    {}, rotation(0.0, 0.0, 20.0))
+    with pytest.raises(InvalidDataError, match="bricked rendering does not carry") as err:
+        to_chunked_volume(vd, "big.zarr")
+    assert "\n" not in str(err.value)
+    vd.direction = None
+    assert to_chunked_volume(vd, "big.zarr").shape == (8, 8, 8)
