@@ -167,7 +167,8 @@ def register(subparsers) -> None:
                    help="read data files that a header or session names outside its folder")
     p.add_argument("--channel", type=int, default=None,
                    help="multi-channel volumes: the channel to render (from 0)")
-    p.add_argument("--oblique", choices=("error", "resample"), default=None,
-                   help="a scan rotated against the world axes: refuse it (default) or "
-                   "resample it trilinearly onto axis-aligned axes")
+    p.add_argument("--oblique", choices=("direction", "resample", "error"), default=None,
+                   help="a scan rotated against the world axes: show it in place with its "
+                   "direction (default), resample it trilinearly onto axis-aligned axes, or "
+                   "refuse it")
     p.set_defaults(func=run)

@@ -75,7 +75,8 @@ def gaussian_smooth(volume: Volume, sigma, device: str | None = None) -> Volume:
         out = gaussian_filter(data.astype(np.float64), sigmas, mode="reflect", truncate=TRUNCATE)
     else:
         out = _smooth_cl(dev, data, sigmas)
-    return Volume(out, spacing=volume.spacing, origin=volume.origin)
+    return Volume(out, spacing=volume.spacing, origin=volume.origin,
+                  direction=getattr(volume, "direction", None))
 
 
 def _smooth_cl(dev, data: np.ndarray, sigmas) -> np.ndarray:

@@ -11,9 +11,11 @@ enclosed area then come from the vertices and the segments' curve midpoints by R
 extrapolation (Huygens' arc rule ``(4 (|am| + |mb|) - |ab|) / 3``), which removes the
 polyline's O(h^2) error.
 
-Conventions: world coordinates; points ``(M, 3)`` float64. A closed curve lists each vertex
-once (the last joins the first). Open curves end where the section leaves the data box (their
-end vertices lie on a box face, also on both surfaces).
+Conventions: world coordinates; points ``(M, 3)`` float64. The splines work in their volume's
+own frame; an oblique volume's plane is moved into it and its curves back into world
+(:mod:`splineviz.core.frame`: a rigid map, so lengths and areas are unchanged). A closed
+curve lists each vertex once (the last joins the first). Open curves end where the section
+leaves the data box (their end vertices lie on a box face, also on both surfaces).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from splineviz.core import frame
 from splineviz.core.errors import SplinevizError
 
 #: value tolerance of a curve vertex, relative to the data range of its volume
@@ -260,6 +263,35 @@ def _finish(f1, f2, polylines, lo, hi, step, sagitta):
     return curves
 
 
+class _AxisAligned:
+    """A spline seen as the grid of its volume's own frame (the solvers then run there)."""
+
+    def __init__(self, spline):
+        self._spline = spline
+        self.volume = _OwnFrame(spline.volume)
+
+    def __getattr__(self, name):
+        return getattr(self._spline, name)
+
+
+class _OwnFrame:
+    """A volume without its direction (its samples, range and grid are its own)."""
+
+    direction = None
+
+    def __init__(self, volume):
+        self._volume = volume
+
+    def __getattr__(self, name):
+        return getattr(self._volume, name)
+
+
+def _in_world(volume, curves):
+    """``curves`` of ``volume``'s own frame with their points in world."""
+    return [SectionCurve(frame.to_world(volume, c.points), c.closed, c.length, c.area)
+            for c in curves]
+
+
 def plane_basis(normal):
     """Two unit vectors ``(2, 3)`` spanning the plane with unit ``normal``."""
     n = np.asarray(normal, dtype=np.float64)
@@ -290,6 +322,13 @@ def plane_section(spline, iso: float, origin, normal, sagitta: float | None = No
     -------
     list of SectionCurve
     """
+    vol = spline.volume
+    if frame.rotation(vol) is not None:
+        (origin, normal), = frame.planes_to_volume(
+            vol, np.array([[origin, np.asarray(normal, float) / np.linalg.norm(normal)]],
+                          dtype=np.float64))
+        return _in_world(vol, plane_section(_AxisAligned(spline), iso, origin, normal,
+                                            sagitta))
     import contourpy
 
     level = Level(spline, iso)
@@ -394,6 +433,15 @@ def surface_intersection(spline1, iso1: float, spline2, iso2: float,
     -------
     list of SectionCurve
     """
+    vol1, vol2 = spline1.volume, spline2.volume
+    if frame.rotation(vol1) is not None or frame.rotation(vol2) is not None:
+        if not np.allclose(frame.world_matrix(vol1), frame.world_matrix(vol2), rtol=0,
+                           atol=1e-9 * max(1.0, *np.abs(vol1.origin))):
+            raise SectionError("the two isosurfaces' volumes lie in differently turned frames "
+                               "(their directions or origins differ); their intersection is "
+                               "computed only for volumes that share one frame")
+        return _in_world(vol1, surface_intersection(_AxisAligned(spline1), iso1,
+                                                    _AxisAligned(spline2), iso2, sagitta))
     f1, f2 = Level(spline1, iso1), Level(spline2, iso2)
     lo, hi = _box(f1, f2)
     step = min(f1.step, f2.step)

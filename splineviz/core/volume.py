@@ -1,6 +1,10 @@
-"""The volume data model: a 3-D scalar grid with spacing and origin.
+"""The volume data model: a 3-D scalar grid with spacing, origin and direction.
 
-Convention: ``data[i, j, k]`` is the sample at world point ``origin + (i*sx, j*sy, k*sz)``.
+Convention: ``data[i, j, k]`` is the sample at world point
+``origin + direction @ (i*sx, j*sy, k*sz)`` (ITK's and Slicer's). ``direction`` is a
+rotation, the identity for an axis-aligned grid; everything that works on the grid itself
+(splines, ray casters, sections, slices) works in the volume's own axis-aligned frame
+``origin + (i*sx, j*sy, k*sz)``, which :mod:`splineviz.core.frame` maps rigidly to world.
 
 Samples keep their own type when float32 holds every value of it exactly (8- and 16-bit
 integers, float32 itself), so a 1 GiB uint8 file stays 1 GiB; computations convert where they
@@ -42,6 +46,11 @@ class Volume:
         Grid step along x, y, z; all must be finite and positive.
     origin : (3,) sequence of float, optional
         World position of ``data[0, 0, 0]``.
+    direction : (3, 3) array_like, optional
+        World direction of the i, j, k axes (columns): a rotation (orthonormal, determinant
+        +1), the identity by default. An oblique scan keeps its rotation here (see
+        :mod:`splineviz.core.frame`); :attr:`bounds` and :meth:`index_to_world` stay in
+        the volume's own axis-aligned frame.
 
     Examples
     --------
@@ -58,6 +67,7 @@ class Volume:
     data: np.ndarray
     spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    direction: np.ndarray | None = None
 
     def __post_init__(self):
         data = np.asarray(self.data)
@@ -77,6 +87,12 @@ class Volume:
         object.__setattr__(self, "data", _stored(data))
         object.__setattr__(self, "spacing", spacing)
         object.__setattr__(self, "origin", origin)
+        object.__setattr__(self, "direction", _rotation(self.direction))
+
+    @property
+    def axis_aligned(self) -> bool:
+        """Whether the grid's axes are the world axes (``direction`` is the identity)."""
+        return not np.any(self.direction != np.eye(3))
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -84,7 +100,8 @@ class Volume:
 
     @property
     def bounds(self) -> tuple[tuple[float, float], ...]:
-        """((xmin, xmax), (ymin, ymax), (zmin, zmax)) of the sample grid."""
+        """((xmin, xmax), (ymin, ymax), (zmin, zmax)) of the sample grid in the volume's own
+        frame (world for an axis-aligned volume; :attr:`world_bounds` in general)."""
         return tuple(
             (o, o + (n - 1) * s)
             for o, n, s in zip(self.origin, self.shape, self.spacing, strict=True)
@@ -138,13 +155,35 @@ class Volume:
         return sum(int(slab.size - np.count_nonzero(np.isfinite(slab)))
                    for slab in slabs(self.data))
 
+    @property
+    def world_bounds(self) -> tuple[tuple[float, float], ...]:
+        """((xmin, xmax), ...) of the grid's eight corners in world: the box a camera
+        frames and clips (:attr:`bounds` itself when axis-aligned)."""
+        from splineviz.core.frame import world_bounds
+
+        return world_bounds(self)
+
+    def to_world(self, points) -> np.ndarray:
+        """(N, 3) points of the volume's own frame -> (N, 3) world points (float64)."""
+        from splineviz.core.frame import to_world
+
+        return to_world(self, points)
+
+    def from_world(self, points) -> np.ndarray:
+        """(N, 3) world points -> (N, 3) points of the volume's own frame (float64)."""
+        from splineviz.core.frame import from_world
+
+        return from_world(self, points)
+
     def world_to_index(self, points: np.ndarray) -> np.ndarray:
-        """(N, 3) world coordinates -> (N, 3) continuous grid indices (float64)."""
+        """(N, 3) coordinates of the volume's own frame (world when axis-aligned) -> (N, 3)
+        continuous grid indices (float64); world points go through :meth:`from_world`."""
         p = np.asarray(points, dtype=np.float64)
         return (p - np.asarray(self.origin)) / np.asarray(self.spacing)
 
     def index_to_world(self, index: np.ndarray) -> np.ndarray:
-        """(N, 3) continuous grid indices -> (N, 3) world coordinates (float64)."""
+        """(N, 3) continuous grid indices -> (N, 3) coordinates of the volume's own frame
+        (world when axis-aligned; :meth:`to_world` rotates them into place)."""
         i = np.asarray(index, dtype=np.float64)
         return i * np.asarray(self.spacing) + np.asarray(self.origin)
 
@@ -165,6 +204,33 @@ class Volume:
         spacing = tuple((hi - lo) / max(n - 1, 1)
                         for (lo, hi), n in zip(bounds, shape, strict=True))
         return cls(func(x, y, z), spacing=spacing, origin=tuple(lo for lo, _ in bounds))
+
+
+#: largest deviation of ``direction.T @ direction`` from the identity a rotation may have
+#: (headers store directions in float32)
+ROTATION_TOLERANCE = 1e-5
+
+
+def _rotation(direction) -> np.ndarray:
+    """``direction`` as a read-only (3, 3) float64 rotation (the identity for None);
+    orthonormalised when within :data:`ROTATION_TOLERANCE` of one, else refused."""
+    if direction is None:
+        d = np.eye(3)
+    else:
+        try:
+            d = np.array(direction, dtype=np.float64).reshape(3, 3)
+        except (TypeError, ValueError):
+            raise VolumeError("direction must be a 3x3 matrix of numbers") from None
+        if not np.all(np.isfinite(d)):
+            raise VolumeError("direction must be finite")
+        if np.abs(d.T @ d - np.eye(3)).max() > ROTATION_TOLERANCE or np.linalg.det(d) < 0:
+            raise VolumeError("direction must be a rotation (orthonormal columns, determinant "
+                              "+1); flip the axes of a mirrored grid instead")
+        if np.any(d != np.eye(3)):
+            u, _, vt = np.linalg.svd(d)
+            d = u @ vt
+    d.flags.writeable = False
+    return d
 
 
 def _stored(data: np.ndarray) -> np.ndarray:

@@ -7,7 +7,10 @@ slice and the slice planes' outline in the 3-D view; a change of the scene (isov
 model, colour, visibility, smoothing) redraws the slices. Slices are computed in one worker
 thread (the spline is built there, which takes up to a second for the smooth models); the
 GUI thread only shows the results, and only the newest request of each view is computed
-(:mod:`splineviz.gui.slice_worker`).
+(:mod:`splineviz.gui.slice_worker`). The slices run along the volume's own axes: for an
+oblique scan (a volume with a direction) that is its own frame, where the crosshair, probe
+and ruler live too; the 3-D view's picks are taken into it and the slice planes' outline
+turned out of it (:mod:`splineviz.core.frame`).
 
 Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK's):
 
@@ -28,6 +31,7 @@ from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
 
 from splineviz.core import slice_sampling
+from splineviz.core.frame import from_world
 from splineviz.core.volume import Volume
 from splineviz.gui.slice_worker import SliceRequest, SliceResult, SliceWorker
 from splineviz.gui.view import _interactor_class, _render_window
@@ -411,10 +415,13 @@ class SliceViews(QObject):
             return
         shown = self.state.shown if self._volume is not None else ()
         bounds = self._volume.active.bounds if self._volume is not None else None
-        key = (bounds, self.state.crosshair, shown)
+        frame = self._volume.active if self._volume is not None else None
+        key = (bounds, self.state.crosshair, shown, id(frame))
         if key == self._marker_key:
             return
         self._marker_key = key
+        # the slices work in the volume's own frame; an oblique scan's are drawn turned
+        self.marker.frame = frame
         self.marker.update(bounds if bounds is not None else ((0, 0),) * 3,
                            self.state.crosshair, shown)
         self.view3d.request_render()
@@ -499,12 +506,14 @@ class SliceViews(QObject):
                 and event.button() == Qt.MouseButton.LeftButton):
             p = event.position()
             hit = self.view3d.pick(p.x(), p.y())
-            if hit is None:
+            if hit is None or self._volume is None:
                 return False
+            # the hit is in world, the slices in the volume's own frame (an oblique scan)
+            point = from_world(self._volume.active, hit["position"])
             if event.modifiers() & Qt.KeyboardModifier.ShiftModifier:
-                self._ruler_point_3d(hit["position"])
+                self._ruler_point_3d(point)
             else:
-                self.move_crosshair(hit["position"])
+                self.move_crosshair(point)
         return False
 
     def close(self) -> None:

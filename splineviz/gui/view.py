@@ -592,7 +592,9 @@ def _trilinear(volume, point) -> float:
     """The samples of ``volume`` interpolated trilinearly at a world point."""
     from scipy.ndimage import map_coordinates
 
-    idx = volume.world_to_index(np.asarray(point, dtype=np.float64)[None])
+    from splineviz.core.frame import from_world
+
+    idx = volume.world_to_index(from_world(volume, np.asarray(point, dtype=np.float64)[None]))
     # float32 output: the samples may be integers (map_coordinates returns their type)
     return float(map_coordinates(volume.data, idx.T, order=1, mode="nearest",
                                  output=np.float32)[0])

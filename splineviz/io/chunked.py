@@ -274,7 +274,16 @@ def to_chunked_volume(vd, name: str, *, spacing=None, origin=None):
     """A :class:`~splineviz.core.chunked.ChunkedVolume` of lazily read :class:`VolumeData`."""
     from splineviz.core.chunked import ChunkedVolume
     from splineviz.core.volume import VolumeError
+    from splineviz.io.geometry import orientation
 
+    orient = None if vd.direction is None else orientation(vd.affine, vd.data.shape, name)
+    if orient is not None and (not orient.identity or orient.oblique):
+        # read brick by brick in the file's order: a transpose, flip or rotation would put
+        # the surface elsewhere than the file says
+        raise InvalidDataError(f"{name} is read brick by brick (chunked, or too large to "
+                               "render in one piece) and its direction matrix turns or flips "
+                               "its axes, which bricked rendering does not carry; it is "
+                               "refused rather than shown in the wrong place")
     try:
         return ChunkedVolume(vd.data, vd.spacing if spacing is None else spacing,
                              vd.origin if origin is None else origin,

@@ -27,7 +27,7 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     dict
         For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds, affine``
         (index to world, the file's own axes; with ``space`` and ``frames`` where the file has
-        them); for points:
+        them, ``oblique`` and ``direction`` for a rotated grid); for points:
         ``kind, format, points, normals, colors, bounds``; for sessions: ``kind,
         schema_version, objects, views``.
     """
@@ -81,7 +81,8 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
 
 def _geometry(vd, name: str, channel) -> dict:
     """The index-to-world affine, its space, the world bounds of the grid's corners (the
-    affine may reorder and reverse axes), and the frames of a 4-D file."""
+    affine may reorder, reverse and rotate axes), the direction an oblique grid keeps, and
+    the frames of a 4-D file."""
     from splineviz.io.geometry import orientation
     from splineviz.io.volume_data import select_frames
 
@@ -94,9 +95,15 @@ def _geometry(vd, name: str, channel) -> dict:
     if vd.space:
         out["space"] = vd.space
     orient = orientation(vd.affine, shape, name)
-    if orient.oblique:
-        out["oblique"] = (f"rotated by {orient.angle:.3g} degrees (render with --oblique "
-                          "resample)")
+    if orient.oblique and orient.sheared:
+        out["oblique"] = ("sheared (axes not perpendicular): resampled onto axis-aligned "
+                          "axes when read")
+    elif orient.oblique:
+        out["oblique"] = (f"rotated by {orient.angle:.3g} degrees: shown in place with its "
+                          "direction (--oblique resample resamples it)")
+        # the rotation the volume keeps, after the transpose and flips (world = origin +
+        # direction @ (i*sx, j*sy, k*sz) of the reordered grid)
+        out["direction"] = [[float(v) for v in row] for row in orient.rotation]
     if vd.frames is not None:
         sel = select_frames(vd.frames, name, channel)
         unit = f" ({sel.axis.unit})" if sel.axis.unit else ""

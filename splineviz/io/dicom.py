@@ -10,10 +10,10 @@ the file alone when it holds several frames.
 Geometry: the image-to-patient affine (LPS millimetres, as ITK) is built from
 ImageOrientationPatient, PixelSpacing and the slice positions (ImagePositionPatient of each
 slice or frame; RT dose: GridFrameOffsetVector along the slice normal) and kept in
-``meta["affine"]`` and turned into an axis-aligned grid by the rule every reader follows
+``meta["affine"]`` and placed by the rule every reader follows
 (:func:`splineviz.io.geometry.axis_aligned`): axes along the patient axes in any order and
-sign are transposed and flipped into place with a warning; an oblique grid is refused with
-one sentence naming its angle, never silently made axis-aligned. Slices spaced unevenly (a
+sign are transposed and flipped into place with a warning; an oblique grid keeps its
+rotation as its direction, never silently made axis-aligned. Slices spaced unevenly (a
 missing slice, variable spacing) are resampled to even steps by linear interpolation with a
 warning. Values: RescaleSlope/RescaleIntercept (per frame where given) and DoseGridScaling.
 """
@@ -498,7 +498,7 @@ def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     """VolumeData of slices ``stack`` (n, rows, cols) sorted along ``normal`` at positions
     ``pos`` (n, 3): evenly spaced (resampled if not), axis-aligned by the shared geometry
     rule (:func:`splineviz.io.geometry.axis_aligned`: transposed and flipped with a warning,
-    refused if oblique)."""
+    an oblique grid's rotation kept as its direction)."""
     if len(stack) < MIN_SAMPLES_PER_AXIS:
         raise InvalidDataError(f"{name} holds {len(stack)} slice; a volume needs at least "
                                f"{MIN_SAMPLES_PER_AXIS}")
@@ -522,7 +522,8 @@ def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     data = stack.transpose(2, 1, 0)  # (columns, rows, slices)
     meta = {**meta, "affine": affine.tolist(), "space": "LPS"}
     data, orient = axis_aligned(data, affine, name, space="LPS")
-    return VolumeData(np.ascontiguousarray(data), orient.spacing, orient.origin, "dicom", meta)
+    return VolumeData(np.ascontiguousarray(data), orient.spacing, orient.origin, "dicom", meta,
+                      orient.volume_direction, "LPS")
 
 
 def _check_depths(depth, name: str) -> None:

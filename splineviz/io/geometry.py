@@ -7,13 +7,17 @@ MetaImage ``TransformMatrix``/``Offset``, NRRD ``space directions``/``space orig
 the format uses (RAS+ for the nibabel formats, LPS for DICOM and usually for MetaImage and
 NRRD), so a surface lands where the file's own library and ITK/VTK put it.
 
-A :class:`~splineviz.Volume` is axis-aligned with positive steps. An affine whose directions
-are the world axes up to order and sign (a "signed permutation", the usual RAS/LPS/LAS
-storage of scanners) is turned into one by transposing and flipping the array, so every
-sample keeps its world position and the anatomy shows the right way up; a flip is announced
-with a :class:`~splineviz.core.errors.SplinevizWarning`. An **oblique** affine (a rotated
-scan) has no such exact form and is refused with one sentence naming the file and the
-angle: showing it axis-aligned would put the surface in the wrong place.
+The array is first transposed and flipped by the signed permutation that brings its axes
+nearest to the world axes with positive steps (the usual RAS/LPS/LAS storage of scanners is
+such a permutation exactly), so every sample keeps its world position and the anatomy shows
+the right way up; a flip is announced with a :class:`~splineviz.core.errors.SplinevizWarning`.
+What remains is a rotation by less than 45 degrees per axis: the identity for an axis-aligned
+file, the tilt of an **oblique** scan otherwise. An oblique grid keeps that rotation as the
+:class:`~splineviz.Volume`'s ``direction`` (ITK's and Slicer's convention: the surface lands
+where the scanner put it, in the same world as meshes); on request it is resampled onto
+axis-aligned axes instead (:func:`resample_axis_aligned`) or refused. An affine whose axes
+are not perpendicular (a sheared grid) has no rotation to keep: it is resampled, with a
+warning, each new sample taken at its own world point.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from splineviz.core.errors import SplinevizWarning
+from splineviz.core.volume import ROTATION_TOLERANCE
 from splineviz.io.errors import InvalidDataError
 
 #: largest angle, in degrees, between an axis of the file and the world axis it is taken
@@ -34,6 +39,12 @@ OBLIQUE_TOLERANCE_DEG = 0.01
 
 #: names of the world spaces formats declare
 SPACES = ("RAS", "LPS", "")
+#: what :func:`~splineviz.io.volumes.read_volume` does with an oblique grid: keep its rotation
+#: as the volume's direction (default), resample it onto axis-aligned axes, or refuse it
+OBLIQUE_MODES = ("direction", "resample", "error")
+
+#: the six orders of three axes
+_PERMUTATIONS = ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
 
 
 @dataclass(frozen=True)
@@ -60,6 +71,11 @@ class Orientation:
         The file's index-to-world affine.
     space : str
         ``"RAS"``, ``"LPS"`` or ``""`` (unknown): the world the affine maps into.
+    rotation : (3, 3) ndarray
+        World direction (columns) of each axis of the transposed, flipped array: what is
+        left after the signed permutation, the identity for an axis-aligned file; with
+        ``spacing`` and ``origin`` it places the transposed array
+        (``origin + rotation @ (i*sx, j*sy, k*sz)``).
     """
 
     perm: tuple[int, int, int]
@@ -70,11 +86,32 @@ class Orientation:
     angle: float
     affine: np.ndarray
     space: str = ""
+    rotation: np.ndarray = None
 
     @property
     def oblique(self) -> bool:
         """Whether the axes are rotated beyond :data:`OBLIQUE_TOLERANCE_DEG`."""
         return self.angle > OBLIQUE_TOLERANCE_DEG
+
+    @property
+    def shear(self) -> float:
+        """Largest deviation of the axes from perpendicular (``|R.T R - I|``, 0 for a
+        rectilinear grid; a rotation is kept only within
+        :data:`~splineviz.core.volume.ROTATION_TOLERANCE`)."""
+        r = self.rotation
+        return float(np.abs(r.T @ r - np.eye(3)).max())
+
+    @property
+    def sheared(self) -> bool:
+        """Whether the axes are too far from perpendicular for a rotation to place them
+        (:attr:`shear` beyond :data:`~splineviz.core.volume.ROTATION_TOLERANCE`)."""
+        return self.shear > ROTATION_TOLERANCE
+
+    @property
+    def volume_direction(self) -> np.ndarray | None:
+        """The direction a :class:`~splineviz.Volume` of the transposed array keeps: the
+        rotation of an oblique grid, None (the identity) otherwise."""
+        return self.rotation if self.oblique else None
 
     @property
     def identity(self) -> bool:
@@ -143,7 +180,8 @@ def orientation(affine, shape, name: str, *, space: str = "") -> Orientation:
     Returns
     -------
     Orientation
-        Check :attr:`Orientation.oblique` (or use :func:`axis_aligned`, which refuses).
+        Check :attr:`Orientation.oblique` (and :func:`check_oblique` for what a mode
+        refuses).
 
     Raises
     ------
@@ -159,36 +197,33 @@ def orientation(affine, shape, name: str, *, space: str = "") -> Orientation:
         raise InvalidDataError(f"{name} has an index-to-world affine with a zero-length axis "
                                f"(voxel sizes {', '.join(f'{s:g}' for s in steps)})")
     direction = m / steps[None, :]
-    world_of = np.argmax(np.abs(direction), axis=0)  # the world axis each array axis is nearest
-    cosines = np.abs(direction[world_of, [0, 1, 2]]).clip(0.0, 1.0)
+    # the signed permutation nearest the identity: each world axis w takes the array axis
+    # perm[w] whose direction is most along it (the largest sum of |cosines| over the six
+    # orders; a per-axis choice when the axes are nearly aligned, also past 45 degrees)
+    perm = max(_PERMUTATIONS, key=lambda p: sum(abs(direction[w, p[w]]) for w in range(3)))
+    flips = [bool(direction[w, perm[w]] < 0) for w in range(3)]
+    cosines = np.abs(direction[[0, 1, 2], list(perm)]).clip(0.0, 1.0)
     angle = float(np.degrees(np.arccos(cosines)).max())
-    if sorted(world_of.tolist()) != [0, 1, 2]:
-        # two array axes nearest one world axis: a rotation by 45 degrees or more
-        angle = max(angle, 45.0)
-        world_of = np.array([0, 1, 2])
-    perm = [0, 0, 0]
-    flips = [False, False, False]
-    for ax, w in enumerate(world_of.tolist()):
-        perm[w] = ax
-        flips[w] = bool(direction[w, ax] < 0)
     shape = [int(n) for n in shape[:3]]
-    first = np.array([shape[ax] - 1 if flips[w] else 0 for w, ax in enumerate(perm)], float)
     index0 = np.zeros(3)
     for w, ax in enumerate(perm):
-        index0[ax] = first[w]
+        index0[ax] = shape[ax] - 1 if flips[w] else 0
     origin = m @ index0 + a[:3, 3]
-    return Orientation(tuple(perm), tuple(flips),
+    rotation = np.stack([direction[:, ax] * (-1.0 if flips[w] else 1.0)
+                         for w, ax in enumerate(perm)], axis=1)
+    return Orientation(tuple(int(p) for p in perm), tuple(flips),
                        tuple(float(steps[ax]) for ax in perm),
                        tuple(float(v) for v in origin), direction, angle, a,
-                       space if space in SPACES else "")
+                       space if space in SPACES else "", rotation)
 
 
-def axis_aligned(data, affine, name: str, *, space: str = "", warn: bool = True):
-    """The samples, spacing and origin of an axis-aligned grid from a file's affine.
+def axis_aligned(data, affine, name: str, *, space: str = "", warn: bool = True,
+                 oblique: str = "direction"):
+    """The samples of a file's grid transposed and flipped nearest to the world axes.
 
     This is the one rule every reader follows (see the module notes): a signed-permutation
-    direction is transposed and flipped (announced by a warning when ``warn``); an oblique
-    one is refused.
+    direction is transposed and flipped (announced by a warning when ``warn``); the rotation
+    left over of an oblique grid is :attr:`Orientation.volume_direction`.
 
     Parameters
     ----------
@@ -201,25 +236,40 @@ def axis_aligned(data, affine, name: str, *, space: str = "", warn: bool = True)
     space : {"RAS", "LPS", ""}
     warn : bool
         Warn when an axis is flipped.
+    oblique : {"direction", "error"}
+        Keep an oblique grid's rotation (default) or refuse the grid.
 
     Returns
     -------
     data : (nx, ny, nz, ...) ndarray
         A view of ``data`` in world order with positive steps.
     orient : Orientation
-        Its ``spacing`` and ``origin`` place ``data``; ``direction`` and ``affine`` are the
-        file's.
+        Its ``spacing``, ``origin`` and ``volume_direction`` place ``data``; ``direction``
+        and ``affine`` are the file's.
 
     Raises
     ------
     InvalidDataError
-        An oblique affine, with its angle; a malformed one.
+        An oblique affine when ``oblique="error"``, a sheared one (no rotation places it),
+        a malformed one.
     """
     orient = orientation(affine, np.shape(data), name, space=space)
-    refuse_oblique(orient, name)
+    check_oblique(orient, name, oblique)
+    if orient.oblique and orient.sheared:
+        raise InvalidDataError(f"{name} has a sheared grid (its axes are not perpendicular), "
+                               "which splineviz cannot show in place")
     if warn:
         warn_flips(orient, name)
     return orient.apply(data), orient
+
+
+def check_oblique(orient: Orientation, name: str, mode: str) -> None:
+    """Refuse an oblique grid when ``mode`` (one of :data:`OBLIQUE_MODES`) is ``"error"``
+    (one sentence, the angle)."""
+    if mode not in OBLIQUE_MODES:
+        raise ValueError(f"oblique must be one of {', '.join(OBLIQUE_MODES)}, got {mode!r}")
+    if mode == "error":
+        refuse_oblique(orient, name)
 
 
 def refuse_oblique(orient: Orientation, name: str) -> None:
@@ -227,8 +277,9 @@ def refuse_oblique(orient: Orientation, name: str) -> None:
     if orient.oblique:
         raise InvalidDataError(
             f"{name} is an oblique scan (its axes are rotated by {orient.angle:.3g} degrees "
-            "from the world axes), which splineviz cannot show in place unresampled; read it "
-            "with oblique='resample' to resample it onto axis-aligned axes")
+            "from the world axes) and was read with oblique='error'; read it with "
+            "oblique='direction' to show it in place or oblique='resample' to resample it "
+            "onto axis-aligned axes")
 
 
 def resample_axis_aligned(data, orient: Orientation, name: str, *, fill: float):
@@ -274,9 +325,10 @@ def resample_axis_aligned(data, orient: Orientation, name: str, *, fill: float):
     out = ndimage.affine_transform(np.asarray(data, dtype=np.float32), matrix, offset,
                                    output_shape=shape, order=1, mode="constant",
                                    cval=float(fill))
-    warnings.warn(f"{name} is an oblique scan (rotated by {orient.angle:.3g} degrees): it is "
-                  "resampled trilinearly onto axis-aligned axes, each sample at its own world "
-                  "point", SplinevizWarning, stacklevel=4)
+    what = "a sheared grid (its axes are not perpendicular)" if orient.sheared else \
+        f"an oblique scan (rotated by {orient.angle:.3g} degrees)"
+    warnings.warn(f"{name} is {what}: it is resampled trilinearly onto axis-aligned axes, each "
+                  "sample at its own world point", SplinevizWarning, stacklevel=4)
     return out, tuple(float(s) for s in spacing), tuple(float(v) for v in lo)
 
 

@@ -78,7 +78,7 @@ class VolumeSequence(Sequence):
 
 
 def read_volume_sequence(path, *, channel=None, format=None, spacing=None, origin=None,
-                         nonfinite="error", complex="error", oblique="error",
+                         nonfinite="error", complex="error", oblique="direction",
                          allow_outside=False, **raw) -> VolumeSequence:
     """Open a volume file as a sequence of 3-D volumes, each read when it is indexed.
 

@@ -5,7 +5,7 @@ Convention: every reader returns a :class:`~splineviz.io.volume_data.VolumeData`
 (x fastest in the file; ``D`` its direction matrix, the identity unless the file states
 one), in the file's own sample type; :func:`read_volume` turns it into a
 :class:`~splineviz.Volume` that keeps that type where it can (8- and 16-bit integers,
-float32), axis-aligned by the rule of :mod:`splineviz.io.geometry`. NumPy, raw, raw-encoded
+float32), placed by the rule of :mod:`splineviz.io.geometry`. NumPy, raw, raw-encoded
 NRRD and MRC samples are memory-mapped; a volume too large to render in one piece
 (:func:`~splineviz.io.mapped.renders_in_pieces`) opens as a chunked volume read from the
 mapping brick by brick.
@@ -52,9 +52,10 @@ from splineviz.io.errors import (
     InvalidDataError,
 )
 from splineviz.io.geometry import (
+    OBLIQUE_MODES,
     affine_from,
+    check_oblique,
     orientation,
-    refuse_oblique,
     resample_axis_aligned,
     warn_flips,
 )
@@ -615,7 +616,9 @@ def _read_nrrd_single(path: Path, datafile: str):
 def _write_nrrd(path: Path, vol: Volume) -> None:
     import nrrd
 
-    header = {"space dimension": 3, "space directions": np.diag(vol.spacing),
+    # one row per array axis: its world step (an oblique volume's direction kept)
+    header = {"space dimension": 3,
+              "space directions": (vol.direction * np.asarray(vol.spacing)[None, :]).T,
               "space origin": np.asarray(vol.origin), "kinds": ["domain"] * 3,
               "encoding": "gzip"}
     with atomic_output(path) as tmp:
@@ -631,6 +634,8 @@ def _write_vti(path: Path, vol: Volume) -> None:
     image.SetDimensions(*vol.shape)
     image.SetSpacing(*vol.spacing)
     image.SetOrigin(*vol.origin)
+    if not vol.axis_aligned:
+        image.SetDirectionMatrix(*np.asarray(vol.direction, dtype=float).ravel())
     flat = np.ascontiguousarray(np.asarray(vol.data).ravel(order="F"))  # x fastest
     arr = numpy_to_vtk(flat, deep=True)
     arr.SetName("scalars")
@@ -853,7 +858,7 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
 
 def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little", offset=0,
                 spacing=None, origin=None, nonfinite="error", allow_outside=False,
-                channel=None, complex="error", oblique="error") -> Volume:
+                channel=None, complex="error", oblique="direction") -> Volume:
     """Read a volume file (or DICOM folder) into a :class:`~splineviz.Volume`.
 
     Parameters
@@ -877,8 +882,8 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         smallest finite sample (outside every isosurface above it) with a
         :class:`~splineviz.core.errors.SplinevizWarning`. A negative spacing, or a direction
         matrix that runs against a world axis, flips the axis (samples keep their world
-        positions; :mod:`splineviz.io.geometry`), also with a warning; an oblique one is
-        refused.
+        positions; :mod:`splineviz.io.geometry`), also with a warning; an oblique one keeps
+        its rotation (see ``oblique``).
     allow_outside : bool
         Read data files that a header (MetaImage ``ElementDataFile``, NRRD ``data file``)
         names outside the header's folder; refused by default with an
@@ -888,16 +893,19 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
         :func:`~splineviz.io.volume_data.select_frames`).
     complex : {"error", "magnitude"}
         Complex samples are refused (default) or replaced by their magnitude.
-    oblique : {"error", "resample"}
-        A grid rotated against the world axes is refused (default: a Volume is
-        axis-aligned, and showing it so would misplace it) or resampled trilinearly onto the
-        axis-aligned grid covering it, with a warning
-        (:func:`~splineviz.io.geometry.resample_axis_aligned`).
+    oblique : {"direction", "resample", "error"}
+        A grid rotated against the world axes (an oblique scan) keeps its rotation as the
+        volume's ``direction`` (default: shown in place in world, :mod:`splineviz.core.
+        frame`), is resampled trilinearly onto the axis-aligned grid covering it, with a
+        warning (:func:`~splineviz.io.geometry.resample_axis_aligned`), or is refused. A
+        sheared grid (axes not perpendicular: no rotation places it) is resampled unless
+        refused.
 
     Returns
     -------
     Volume or ChunkedVolume
-        ``data[i, j, k]`` at ``origin + (i, j, k) * spacing``, in the file's sample type
+        ``data[i, j, k]`` at ``origin + direction @ ((i, j, k) * spacing)``, in the file's
+        sample type
         where :class:`~splineviz.Volume` keeps it (else float32); chunked formats
         (OME-Zarr, Zarr, HDF5), and mapped ones too large to render in one piece, give a
         lazily read :class:`~splineviz.core.chunked.ChunkedVolume`.
@@ -946,7 +954,7 @@ def frames_notice(name: str, selection, channel=None) -> str | None:
 
 
 def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
-              nonfinite="error", complex="error", oblique="error") -> Volume:
+              nonfinite="error", complex="error", oblique="direction") -> Volume:
     """Validate a :class:`VolumeData` and make it a :class:`~splineviz.Volume` (the second
     half of :func:`read_volume`, whose parameters these are).
 
@@ -957,8 +965,8 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         raise ValueError(f"nonfinite must be 'error' or 'fill', got {nonfinite!r}")
     if complex not in ("error", "magnitude"):
         raise ValueError(f"complex must be 'error' or 'magnitude', got {complex!r}")
-    if oblique not in ("error", "resample"):
-        raise ValueError(f"oblique must be 'error' or 'resample', got {oblique!r}")
+    if oblique not in OBLIQUE_MODES:
+        raise ValueError(f"oblique must be one of {', '.join(OBLIQUE_MODES)}, got {oblique!r}")
     raw = np.asarray(vd.data)
     if np.issubdtype(raw.dtype, np.complexfloating):
         if complex == "error":
@@ -976,16 +984,17 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         raise InvalidDataError(f"{name} has unusable geometry: spacing must be finite and "
                                f"positive, got {sp}")
     orient = orientation(affine_from(sp, og, vd.direction), raw.shape, name, space=vd.space)
-    if oblique == "error":
-        refuse_oblique(orient, name)
+    check_oblique(orient, name, oblique)
     data = _checked_samples(raw, name, nonfinite)
-    if orient.oblique:
+    direction = None
+    if orient.oblique and (oblique == "resample" or orient.sheared):
         data, sp, og = resample_axis_aligned(data, orient, name, fill=float(data.min()))
     else:
         warn_flips(orient, name, stacklevel=4)
         data, sp, og = orient.apply(data), orient.spacing, orient.origin
+        direction = orient.volume_direction
     try:
-        return Volume(data, spacing=sp, origin=og)
+        return Volume(data, spacing=sp, origin=og, direction=direction)
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
 

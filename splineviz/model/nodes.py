@@ -231,7 +231,11 @@ class VolumeNode(Node):
 
     @property
     def bounds(self) -> tuple:
-        return self.data.bounds
+        """The world box of the data: its grid's box, turned by an oblique scan's direction
+        (:func:`splineviz.core.frame.world_bounds`)."""
+        from splineviz.core.frame import world_bounds
+
+        return world_bounds(self.data)
 
 
 class IsosurfaceNode(Node):

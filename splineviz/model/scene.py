@@ -210,7 +210,7 @@ class Scene:
         boxes = []
         for n in self._nodes.values():
             if isinstance(n, VolumeNode) and n.data is not None:
-                boxes.append(np.asarray(n.data.bounds, dtype=float))
+                boxes.append(np.asarray(n.bounds, dtype=float))
             elif isinstance(n, PointsNode) and n.data is not None and len(n.data):
                 boxes.append(np.asarray(n.data.bounds, dtype=float))
             elif isinstance(n, MeshNode) and n.vertices is not None and len(n.vertices):

@@ -3,12 +3,15 @@
 The mesh is the isosurface *of the spline*: a flying-edges mesh of spline samples on a refined
 grid whose vertices are moved onto s(x) = iso by Newton steps along the spline gradient, with
 the exact spline normals. (The ray caster shows the surface exactly; this is its export.)
+Meshes are in world: the spline's own frame turned by an oblique volume's direction
+(:mod:`splineviz.core.frame`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from splineviz.core import frame
 from splineviz.core.isosurface import project_to_isosurface
 
 #: most spline samples taken to mesh the isosurface (bounds the time of a mesh export)
@@ -36,8 +39,8 @@ def spline_isosurface(spline, iso: float, refine: int = 2):
     if mesh.n_points == 0:
         return mesh
     pts, normals = project_to_isosurface(spline, np.asarray(mesh.points), iso)
-    mesh.points = pts
-    mesh.point_data.active_normals = normals
+    mesh.points = frame.to_world(vol, pts)
+    mesh.point_data.active_normals = frame.vectors_to_world(vol, normals)
     return mesh
 
 
@@ -49,9 +52,14 @@ def front_isosurface(spline, iso: float, planes=(), **options):
 
     from splineviz.pointcloud.spline_mesh import spline_front_mesh
 
+    vol = spline.volume
+    if len(planes):
+        # the planes are world's; the spline is in its volume's frame
+        planes = [tuple(p) for p in frame.planes_to_volume(vol, np.asarray(planes, float))]
     v, f, n = spline_front_mesh(spline, iso, planes=planes, **options)
-    mesh = pv.PolyData(v, np.hstack([np.full((len(f), 1), 3), f]).astype(np.int64).ravel())
-    mesh.point_data.active_normals = n
+    mesh = pv.PolyData(frame.to_world(vol, v),
+                       np.hstack([np.full((len(f), 1), 3), f]).astype(np.int64).ravel())
+    mesh.point_data.active_normals = frame.vectors_to_world(vol, n)
     return mesh
 
 

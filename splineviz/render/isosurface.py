@@ -36,6 +36,7 @@ import numpy as np
 
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError, SplinevizWarning
+from splineviz.core.frame import from_world
 from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
 from splineviz.core.volume import Volume
@@ -465,17 +466,21 @@ class IsosurfaceLayer:
             grad = frame.normal[hit] * frame.gradient_norm[hit][:, None]
             out[hit] = derivative_scalars(color_by, grad, frame.hessian[hit])
             return out
+        # the hits are in world; each spline is evaluated in its own volume's frame (the
+        # "volume" and "distance" fields read the other spline only)
         pts = frame.position[frame.hit]
-        other, other_iso = None, 0.0
+        other, other_iso, frame_of = None, 0.0, self._volume
         if color_by == "volume":
             if self._color_volume is None:
                 return out
-            other = self._spline("other")
+            other, frame_of = self._spline("other"), self._color_volume
         elif color_by == "distance":
             if self._color_reference is None:
                 return out
             other, other_iso = self._spline("reference"), self._color_reference[3]
-        out[frame.hit] = hit_scalars(self._spline("own"), pts, color_by, other, other_iso)
+            frame_of = self._color_reference[0]
+        out[frame.hit] = hit_scalars(self._spline("own"), from_world(frame_of, pts), color_by,
+                                     other, other_iso)
         return out
 
     def set_visible(self, visible: bool) -> None:

@@ -29,6 +29,7 @@ import numpy as np
 
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
+from splineviz.core.frame import world_bounds
 from splineviz.core.raycast_reference import normalize_clip_planes
 from splineviz.render.colormaps import colorize, lut
 from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
@@ -134,13 +135,13 @@ class SplineScene:
     # -- objects -------------------------------------------------------------------------
 
     def add_layer(self, layer: IsosurfaceLayer) -> None:
-        quad = FrameQuad(layer.volume.bounds)
+        quad = FrameQuad(world_bounds(layer.volume))
         lv = _LayerView(quad)
 
         def changed(_layer, what, lv=lv):
             self._apply_appearance(_layer, lv)
             if what == "frame":
-                lv.quad.set_bounds(_layer.volume.bounds)
+                lv.quad.set_bounds(world_bounds(_layer.volume))
 
         lv.callback = changed
         layer.connect(changed)
@@ -382,7 +383,8 @@ class SplineScene:
         a layer whose quad has no image yet must count too, or its first exact frame
         would be made for another clipping range than the frames after it."""
         bounds = np.array(self.renderer.ComputeVisiblePropBounds(), dtype=float)
-        boxes = [np.ravel(layer.volume.bounds) for layer in self.layers if layer.visible]
+        boxes = [np.ravel(world_bounds(layer.volume)) for layer in self.layers
+                 if layer.visible]
         if bounds[0] <= bounds[1]:
             boxes.append(bounds)
         if not boxes:

@@ -19,6 +19,7 @@ import weakref
 
 import numpy as np
 
+from splineviz.core.frame import to_world
 from splineviz.model import (
     ClipPlaneNode,
     IsosurfaceNode,
@@ -335,6 +336,8 @@ class OutlineView(NodeView):
         if node.data is None:
             return
         outline = pv.Box(bounds=np.ravel(node.data.bounds)).outline()
+        # the grid's own box, turned into world with an oblique scan's direction
+        outline.points = to_world(node.data, np.asarray(outline.points))
         sv.spline_scene.add_mesh(name, outline, kind="outline", color=OUTLINE_COLOR,
                                  pickable=False)
         self._visibility()

@@ -30,6 +30,7 @@ from vtkmodules.vtkRenderingCore import (
     vtkTextActor,
 )
 
+from splineviz.core.frame import to_world
 from splineviz.core.slice_sampling import SliceGrid, in_plane_axes
 from splineviz.render.colormaps import LUT_SIZE, lut
 
@@ -332,6 +333,9 @@ class SlicePlanesMarker:
         renderer.AddViewProp(self._ruler_label)
         #: the ruler's ends ``(2, 3)`` (world) while one is shown
         self.ruler: np.ndarray | None = None
+        #: the volume whose own frame the slice views work in: their points are drawn
+        #: turned into world by its direction (an oblique scan); None: world itself
+        self.frame = None
 
     def set_ruler(self, a, b) -> None:
         """A ruler between the world points ``a`` and ``b`` labelled with its length
@@ -344,17 +348,19 @@ class SlicePlanesMarker:
         a = np.asarray(a, dtype=np.float64)
         b = a if b is None else np.asarray(b, dtype=np.float64)
         self.ruler = np.stack([a, b])
-        self._ruler_mapper.SetInputData(_polylines3([self.ruler], [RULER_COLOR]))
+        self._ruler_mapper.SetInputData(_polylines3([to_world(self.frame, self.ruler)],
+                                                    [RULER_COLOR]))
         length = float(np.linalg.norm(b - a))
         self._ruler_actor.SetVisibility(length > 0)
         self._ruler_label.SetInput(f"{length:.4g}")
-        mid = 0.5 * (a + b)
+        mid = to_world(self.frame, 0.5 * (a + b))
         self._ruler_label.GetPositionCoordinate().SetValue(*map(float, mid))
         self._ruler_label.SetVisibility(length > 0)
 
     def update(self, bounds, point, names) -> None:
-        """Outline the slices ``names`` through the world ``point`` within the box
-        ``bounds`` (no names: nothing shown)."""
+        """Outline the slices ``names`` through ``point`` within the box ``bounds`` (no
+        names: nothing shown); both in the slice views' frame (:attr:`frame`), the
+        outlines in world."""
         b = np.asarray(bounds, dtype=np.float64)
         self.outlines = {}
         segments, colors = [], []
@@ -366,6 +372,7 @@ class SlicePlanesMarker:
             for k, (i, j) in enumerate(((0, 0), (1, 0), (1, 1), (0, 1), (0, 0))):
                 corners[k, ua] = b[ua, i]
                 corners[k, va] = b[va, j]
+            corners = to_world(self.frame, corners)
             self.outlines[name] = corners
             segments.append(corners)
             colors.append(SLICE_COLORS[name])

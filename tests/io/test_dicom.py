@@ -241,11 +241,15 @@ def test_orientation_flips_and_permutations_keep_world_positions(tmp_path):
     assert vs.spacing == pytest.approx((2.5, 0.661468, 0.661468))
 
 
-def test_an_oblique_series_is_refused_with_its_angle(tmp_path):
+def test_an_oblique_series_keeps_its_direction_or_is_refused_with_its_angle(tmp_path):
     t = np.radians(10)
     _write_ct_series(tmp_path / "obl", n=4, iop=(1, 0, 0, 0, np.cos(t), np.sin(t)))
+    vd = load_volume_data(tmp_path / "obl")
+    normal = np.cross([1, 0, 0], [0, np.cos(t), np.sin(t)])
+    np.testing.assert_allclose(vd.direction, np.stack([[1, 0, 0], [0, np.cos(t), np.sin(t)],
+                                                       normal], axis=1), atol=1e-6)
     with pytest.raises(InvalidDataError, match=r"oblique scan .*rotated by 10 degrees"):
-        load_volume_data(tmp_path / "obl")
+        sv.read_volume(tmp_path / "obl", oblique="error")
 
 
 def _enhanced(path: Path, order):

@@ -1,7 +1,7 @@
 """Direction matrices: a volume whose file says its axes run against (or across) the world
 axes lands with its parts where the file says, in the world coordinates that the format's
-own library (VTK for MetaImage, pynrrd for NRRD, nibabel for NIfTI) gives; an oblique one is
-refused in one sentence."""
+own library (VTK for MetaImage, pynrrd for NRRD, nibabel for NIfTI) gives; an oblique one
+keeps its rotation as the volume's direction, or is refused in one sentence when asked."""
 
 from __future__ import annotations
 
@@ -132,7 +132,8 @@ def test_nifti_stored_las_lands_where_nibabel_says(tmp_path):
 
 
 @pytest.mark.parametrize("degrees", [30.0, 2.5])
-def test_oblique_volume_is_refused_naming_file_and_angle(tmp_path, degrees):
+def test_oblique_volume_keeps_its_direction_or_is_refused_naming_file_and_angle(tmp_path,
+                                                                                degrees):
     import nibabel as nib
 
     t = np.radians(degrees)
@@ -141,8 +142,10 @@ def test_oblique_volume_is_refused_naming_file_and_angle(tmp_path, degrees):
              tmp_path / "tilted.nii")
     write_mha(tmp_path / "tilted.mha", phantom(), rot.T, (0, 0, 0), (1, 1, 1))
     for name in ("tilted.nii", "tilted.mha"):
+        vol = sv.read_volume(tmp_path / name)
+        np.testing.assert_allclose(vol.direction, rot, atol=1e-6)
         with pytest.raises(InvalidDataError) as err:
-            sv.read_volume(tmp_path / name)
+            sv.read_volume(tmp_path / name, oblique="error")
         msg = str(err.value)
         assert name in msg and f"{degrees:g} degrees" in msg and "\n" not in msg
 

@@ -73,9 +73,12 @@ def test_every_nibabel_test_file_reads_like_nibabel_or_is_refused_in_one_sentenc
             if hasattr(handle, "close"):
                 handle.close()
     assert MUST_READ <= read, sorted(MUST_READ - read)
-    oblique = {"test.mgz", "phantom_varscale.PAR", "phantom_EPI_asc_CLEAR_2_1.PAR",
-               "example4d.nii.gz"}
-    assert {n + " (resampled)" for n in oblique} <= read
+    # rotated scans keep their rotation as the volume's direction; test.mgz's affine is
+    # sheared (its axes are not perpendicular), so no rotation places it: resampled
+    oblique = {"phantom_varscale.PAR", "phantom_EPI_asc_CLEAR_2_1.PAR", "example4d.nii.gz",
+               "example_nifti2.nii.gz"}
+    assert {n + " (oblique)" for n in oblique} <= read
+    assert "test.mgz (resampled)" in read
     # shipped without its .img: nibabel parses the header, but there are no samples to read
     for pair in ("analyze.hdr", "nifti1.hdr", "nifti2.hdr"):
         if pair in refused:
@@ -93,6 +96,19 @@ def check_one(name, img, read, refused):
         assert img is None, f"{name}: nibabel reads it but splineviz refused: {exc}"
         refused[name] = exc
         return
+    if img is None and vd.format.startswith("dicom"):
+        # nibabel's two DICOM slices (0.3 degrees oblique) are a series pydicom reads: each
+        # file's pixels are one slice of the volume (values with their rescale)
+        import pydicom
+
+        ds = pydicom.dcmread(path)
+        px = ds.pixel_array * float(ds.get("RescaleSlope", 1)) + float(
+            ds.get("RescaleIntercept", 0))
+        data = np.asarray(vd.data)
+        assert any(np.array_equal(np.sort(data[..., k].ravel()), np.sort(px.ravel()))
+                   for k in range(data.shape[2])), name
+        read.add(name + " (DICOM)")
+        return
     assert img is not None, f"{name}: read although nibabel reads no volume from it"
     read.add(name)
     np.testing.assert_allclose(vd.affine, img.affine, rtol=1e-6, atol=1e-6,
@@ -107,24 +123,44 @@ def check_one(name, img, read, refused):
         last = tuple(a.size - 1 for a in vd.frames.axes)
         np.testing.assert_array_equal(vd.frames.read(last), frame_of(img, spatial, last),
                                       err_msg=name)
-    # the Volume: the same samples at the same world points, or one sentence (oblique)
+    # the Volume: the same samples at the same world points (an oblique grid through its
+    # direction), or resampled (a sheared grid)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SplinevizWarning)
-        try:
-            vol = read_volume(path, nonfinite="fill")
-        except SplinevizError as exc:
-            assert one_sentence(exc), (name, str(exc))
-            assert orientation(img.affine, vd.data.shape, name).oblique, (name, str(exc))
-            # on request, resampled in place (tests/io/test_geometry.py checks the values)
-            vol = read_volume(path, nonfinite="fill", oblique="resample")
-            assert np.all(np.isfinite(vol.data)) and min(vol.shape) >= 2, name
-            read.add(name + " (resampled)")
-            return
+        vol = read_volume(path, nonfinite="fill")
     orient = orientation(img.affine, vd.data.shape, name)
+    if orient.oblique and orient.sheared:
+        # tests/io/test_geometry.py checks the resampled values
+        assert vol.axis_aligned and np.all(np.isfinite(vol.values())), name
+        assert min(vol.shape) >= 2, name
+        read.add(name + " (resampled)")
+        return
+    if orient.oblique:
+        assert not vol.axis_aligned, name
+        read.add(name + " (oblique)")
+    else:
+        assert vol.axis_aligned, name
     np.testing.assert_allclose(vol.origin, orient.origin, atol=1e-5, err_msg=name)
     finite = np.isfinite(want)
     np.testing.assert_allclose(orient.apply(np.where(finite, want, 0))[
         orient.apply(finite)], vol.data[orient.apply(finite)], rtol=1e-6, err_msg=name)
+    # a few file indices: our index of the same sample (transpose and flips undone) lies at
+    # nibabel's img.affine @ (i, j, k, 1) and holds nibabel's value
+    shape = np.array(want.shape)
+    rng = np.random.default_rng(0)
+    file_index = np.vstack([np.zeros(3, int), shape - 1, rng.integers(0, shape, (8, 3))])
+    ours = np.empty_like(file_index)
+    for w, ax in enumerate(orient.perm):
+        ours[:, w] = shape[ax] - 1 - file_index[:, ax] if orient.flips[w] else \
+            file_index[:, ax]
+    world = vol.to_world(vol.index_to_world(ours.astype(float)))
+    scale = max(1.0, float(np.abs(img.affine).max()))
+    np.testing.assert_allclose(world, nib.affines.apply_affine(img.affine, file_index),
+                               atol=1e-5 * scale, err_msg=name)
+    got = vol.data[tuple(ours.T)]
+    expect = want[tuple(file_index.T)]
+    ok = np.isfinite(expect)
+    np.testing.assert_allclose(got[ok], expect[ok], rtol=1e-6, err_msg=name)
 
 
 @pytest.mark.skipif(not (DATA / "small.mnc").exists(), reason="nibabel ships no MINC2 file")

@@ -1,6 +1,6 @@
 """The command line's volume options: ``--channel`` picks a channel of a multi-channel file
-(``render`` and ``info``), ``--oblique resample`` reads a rotated scan, and ``info`` prints
-the affine."""
+(``render`` and ``info``), ``--oblique`` shows a rotated scan in place, resampled or refused,
+and ``info`` prints the affine."""
 
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ def test_info_prints_affine_frames_and_channel(two_channels, capsys):
     assert "frames: 2 along frame" in text and "channel: 1 of 2" in text
 
 
-def test_render_oblique_scan_only_when_asked(tmp_path, capsys):
+def test_render_oblique_scan_in_place_resampled_or_refused(tmp_path, capsys):
     t = np.radians(20.0)
     affine = np.eye(4)
     affine[:2, :2] = [[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]]
@@ -59,9 +59,11 @@ def test_render_oblique_scan_only_when_asked(tmp_path, capsys):
              tmp_path / "tilted.nii")
     args = ["render", str(tmp_path / "tilted.nii"), "--iso", "0.6", "--model", "trilinear",
             "--size", "32x24", "-o", str(tmp_path / "t.png")]
-    assert main(args) == 2
+    assert main(args) == 0
+    assert main([*args, "--oblique", "error"]) == 2
     assert "20 degrees" in capsys.readouterr().err
     assert main([*args, "--oblique", "resample"]) == 0
     assert "resampled" in capsys.readouterr().err
     assert main(["info", str(tmp_path / "tilted.nii")]) == 0
-    assert "oblique: rotated by 20 degrees" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "oblique: rotated by 20 degrees" in out and "direction: [0.939693" in out

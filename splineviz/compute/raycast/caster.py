@@ -22,6 +22,7 @@ from splineviz.compute.raycast.frames import crop, empty_frame, world_hessian
 from splineviz.compute.raycast.limits import Limits
 from splineviz.compute.raycast.octree import octree_levels, octree_nodes
 from splineviz.compute.raycast.samples import numpy_cell_bounds
+from splineviz.core import frame as volume_frame
 from splineviz.core import raycast_reference as ref
 from splineviz.core.bricks import Placement
 from splineviz.core.camera import Camera, parse_size
@@ -525,7 +526,9 @@ class RayCaster:
         Returns
         -------
         Frame
-            Of the window's size when one is given.
+            Of the window's size when one is given; positions, normals and Hessians in
+            world. A volume with a direction (an oblique scan) is cast in its own frame,
+            camera and clip planes moved there rigidly (:mod:`splineviz.core.frame`).
         """
         if self._isovalue is None:
             raise RayCastError("set an isovalue before rendering")
@@ -536,7 +539,9 @@ class RayCaster:
         if not (0 <= r0 <= r1 <= h and 0 <= c0 <= c1 <= w):
             raise RayCastError(f"the window {tuple(window)} (rows r0, r1, columns c0, c1) is "
                                f"not inside the {w}x{h} frame")
-        planes = ref.normalize_clip_planes(clip_planes)
+        planes = volume_frame.planes_to_volume(self._volume,
+                                               ref.normalize_clip_planes(clip_planes))
+        camera = volume_frame.camera_to_volume(self._volume, camera)
         if placement is not None:
             self._check_placement(placement)
         if self._device is not None:
@@ -552,7 +557,7 @@ class RayCaster:
         else:
             frame = self._render_cl(camera, w, h, planes, hessian, (r0, r1, c0, c1), placement)
         self.stats["render_s"] = time.perf_counter() - t
-        return frame
+        return volume_frame.frame_to_world(self._volume, frame)
 
     def _check_placement(self, placement: Placement) -> None:
         """Refuse a placement that does not fit this caster's volume and model."""
