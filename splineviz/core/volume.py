@@ -42,6 +42,9 @@ class Volume:
         Grid step along x, y, z; all must be finite and positive.
     origin : (3,) sequence of float, optional
         World position of ``data[0, 0, 0]``.
+    unit : str, optional
+        The unit of world coordinates the file states ("mm", "µm", "Å"; see
+        :mod:`splineviz.core.units`), ``""`` when it does not say.
 
     Examples
     --------
@@ -58,8 +61,11 @@ class Volume:
     data: np.ndarray
     spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    unit: str = ""
 
     def __post_init__(self):
+        from splineviz.core.units import canonical_unit
+
         data = np.asarray(self.data)
         if data.ndim != 3:
             raise VolumeError(f"a volume needs a 3-D array, got {data.ndim} dimension(s)")
@@ -77,6 +83,7 @@ class Volume:
         object.__setattr__(self, "data", _stored(data))
         object.__setattr__(self, "spacing", spacing)
         object.__setattr__(self, "origin", origin)
+        object.__setattr__(self, "unit", canonical_unit(self.unit))
 
     @property
     def shape(self) -> tuple[int, int, int]:

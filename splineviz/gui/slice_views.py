@@ -28,6 +28,7 @@ from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
 
 from splineviz.core import slice_sampling
+from splineviz.core.units import format_quantity
 from splineviz.core.volume import Volume
 from splineviz.gui.slice_worker import SliceRequest, SliceResult, SliceWorker
 from splineviz.gui.view import _interactor_class, _render_window
@@ -352,13 +353,12 @@ class SliceViews(QObject):
         self._update_marker()
 
     def _model(self) -> tuple[str, tuple]:
-        """The spline model of the image: the first visible isosurface's (else cubic C1)."""
-        from splineviz.model.scene import default_model
-
+        """The spline model of the image: the first visible isosurface's (else the one a
+        first isosurface would get, :meth:`~splineviz.model.Scene.first_model`)."""
         isos = self._isosurfaces(self._volume) if self._volume is not None else []
         if isos:
             return isos[0].model, tuple(sorted(isos[0].model_options().items()))
-        return default_model(), ()
+        return self.scene.first_model(), ()
 
     def _request_all(self) -> None:
         if self._volume is None:
@@ -452,23 +452,30 @@ class SliceViews(QObject):
             self.readout.emit("")
             return None
         result = slice_sampling.probe(spline, point)
-        self.readout.emit(f"{model}: {result.describe()}")
+        self.readout.emit(f"{model}: {result.describe(self.unit)}")
         return result
 
     def set_ruler(self, a, b, name: str) -> float:
         """Show a ruler from ``a`` to ``b`` (world) in the view ``name`` (a slice, or
-        ``"3d"``) and in the 3-D view; returns its length (world units)."""
+        ``"3d"``) and in the 3-D view; returns its length (world units, :attr:`unit`)."""
         a, b = np.asarray(a, float), np.asarray(b, float)
         self.ruler = (a, b, name)
         self._show_ruler()
         if self.marker is not None:
-            self.marker.set_ruler(a, b)
+            self.marker.set_ruler(a, b, self.unit)
             self.view3d.request_render()
         length = float(np.linalg.norm(b - a))
-        self.readout.emit(f"ruler {length:.5g} (world units) from "
+        unit = f" {self.unit}" if self.unit else ""
+        self.readout.emit(f"ruler {format_quantity(length, self.unit, digits=5)} from "
                           f"({', '.join(f'{c:.4g}' for c in a)}) to "
-                          f"({', '.join(f'{c:.4g}' for c in b)})")
+                          f"({', '.join(f'{c:.4g}' for c in b)}){unit}")
         return length
+
+    @property
+    def unit(self) -> str:
+        """The unit of the shown volume's world coordinates, ``""`` when its file did not
+        say (see :mod:`splineviz.core.units`)."""
+        return self._volume.data.unit if self._volume is not None else ""
 
     def _show_ruler(self) -> None:
         """The ruler in the slice view it was drawn in, while that view shows its plane."""
@@ -476,7 +483,7 @@ class SliceViews(QObject):
         for other, view in self.views.items():
             here = other == name and abs(self.state.position(other) - a[AXES[other]]) <= \
                 1e-9 * max(1.0, abs(a[AXES[other]]))
-            view.scene.set_ruler(*((a, b) if here else (None, None)))
+            view.scene.set_ruler(*((a, b) if here else (None, None)), self.unit)
             view.request_render()
 
     def _ruler_point_3d(self, point) -> None:

@@ -31,6 +31,7 @@ from vtkmodules.vtkRenderingCore import (
 )
 
 from splineviz.core.slice_sampling import SliceGrid, in_plane_axes
+from splineviz.core.units import format_quantity
 from splineviz.render.colormaps import LUT_SIZE, lut
 
 #: slice name -> its colour (3D Slicer's)
@@ -230,7 +231,7 @@ class SliceScene:
 
     def set_ruler(self, a, b, unit: str = "") -> None:
         """A ruler between the world points ``a`` and ``b`` (None: no ruler), labelled with
-        its length in world units."""
+        its length in world units (``unit``: the volume's, see :mod:`splineviz.core.units`)."""
         if a is None or b is None:
             self.ruler = None
             self._ruler_actor.VisibilityOff()
@@ -244,7 +245,7 @@ class SliceScene:
         self._ruler_mapper.SetInputData(_polylines([uv], self._lift(3)))
         self._ruler_actor.VisibilityOn()
         length = float(np.linalg.norm(b - a))
-        self._ruler_label.SetInput(f"{length:.4g}{' ' + unit if unit else ''}")
+        self._ruler_label.SetInput(format_quantity(length, unit, ascii=True))
         mid = uv.mean(axis=0)
         self._ruler_label.SetPosition(float(mid[0]), float(mid[1]))
         self._ruler_label.VisibilityOn()
@@ -333,9 +334,9 @@ class SlicePlanesMarker:
         #: the ruler's ends ``(2, 3)`` (world) while one is shown
         self.ruler: np.ndarray | None = None
 
-    def set_ruler(self, a, b) -> None:
-        """A ruler between the world points ``a`` and ``b`` labelled with its length
-        (``a`` None: no ruler)."""
+    def set_ruler(self, a, b, unit: str = "") -> None:
+        """A ruler between the world points ``a`` and ``b`` labelled with its length in
+        ``unit`` (``a`` None: no ruler)."""
         if a is None:
             self.ruler = None
             self._ruler_actor.VisibilityOff()
@@ -347,7 +348,7 @@ class SlicePlanesMarker:
         self._ruler_mapper.SetInputData(_polylines3([self.ruler], [RULER_COLOR]))
         length = float(np.linalg.norm(b - a))
         self._ruler_actor.SetVisibility(length > 0)
-        self._ruler_label.SetInput(f"{length:.4g}")
+        self._ruler_label.SetInput(format_quantity(length, unit, ascii=True))
         mid = 0.5 * (a + b)
         self._ruler_label.GetPositionCoordinate().SetValue(*map(float, mid))
         self._ruler_label.SetVisibility(length > 0)
