@@ -80,7 +80,7 @@ def run_gui(args) -> int:
         window.export_screenshot(args.screenshot, size=size or DEFAULT_SIZE)
         window.close()
         return 0
-    from splineviz.gui import window_state
+    from splineviz.gui import preferences, window_state
 
     # the last session's size, position and dock layout, unless --size asks for a view size
     if size is not None:
@@ -89,6 +89,7 @@ def run_gui(args) -> int:
     else:
         window_state.restore_geometry(window)
     window.ask_before_closing = True
+    preferences.apply(window, preferences.load())
     _install_excepthook(window)
     window.show()
     if size is None:
