@@ -149,8 +149,10 @@ def test_scene_probe_and_curve_figures_carry_the_unit():
     class Curve:
         closed, length, area = True, 31.4159, 78.54
 
-    assert curve_summary([Curve()], "µm") == "curve 1: closed, length 31.4 µm, area 78.5 µm²"
-    assert curve_summary([Curve()]) == "curve 1: closed, length 31.4, area 78.5"
+    assert curve_summary([Curve()], "µm") == \
+        "curve 1: closed, length 31.4159 µm, area 78.54 µm²"
+    assert curve_summary([Curve()]) == "curve 1: closed, length 31.4159, area 78.54"
+    assert curve_summary([Curve()], "mm").endswith("area 78.54 mm²")
 
 
 def test_ruler_labels_in_slice_and_3d_views():

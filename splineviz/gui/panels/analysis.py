@@ -49,9 +49,9 @@ def curve_summary(curves, unit: str = "") -> str:
     world coordinates' unit, see :mod:`splineviz.core.units`; ``""``: bare numbers)."""
     lines = []
     for i, c in enumerate(curves or []):
-        area = "" if math.isnan(c.area) else f", area {format_quantity(c.area, unit, 2)}"
+        area = "" if math.isnan(c.area) else f", area {format_quantity(c.area, unit, 2, digits=6)}"
         lines.append(f"curve {i + 1}: {'closed' if c.closed else 'open'}, "
-                     f"length {format_quantity(c.length, unit)}{area}")
+                     f"length {format_quantity(c.length, unit, digits=6)}{area}")
     return "\n".join(lines) or "no curve"
 
 
