@@ -7,7 +7,9 @@ slice and the slice planes' outline in the 3-D view; a change of the scene (isov
 model, colour, visibility, smoothing) redraws the slices. Slices are computed in one worker
 thread (the spline is built there, which takes up to a second for the smooth models); the
 GUI thread only shows the results, and only the newest request of each view is computed
-(:mod:`splineviz.gui.slice_worker`).
+(:mod:`splineviz.gui.slice_worker`). A chunked volume (OME-Zarr, bricked stores) is sliced
+too: the worker reads the slab of samples around each slice, never the whole volume; the
+window / level comes from the histogram the volume already has.
 
 Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK's):
 
@@ -42,6 +44,29 @@ WINDOW_PER_PIXEL = 0.005
 ZOOM_STEP = 1.15
 #: background of the slice views
 BACKGROUND = (0.0, 0.0, 0.0)
+
+
+def fit(state: SliceViewNode, volume) -> None:
+    """Crosshair at the volume's centre sample, window on its 2-98 % values: the node's
+    :meth:`~splineviz.model.slices.SliceViewNode.fit` for samples in memory; for a chunked
+    volume (not read here, in the GUI thread) the percentiles of its cached histogram
+    (:func:`splineviz.model.summaries.cached_histogram`, made when it was opened)."""
+    if isinstance(volume, Volume):
+        state.fit(volume)
+        return
+    from splineviz.model.summaries import cached_histogram
+
+    log_counts, edges = cached_histogram(volume)
+    below = np.concatenate([[0.0], np.cumsum(np.expm1(log_counts))])
+    lo, hi = np.interp([0.02 * below[-1], 0.98 * below[-1]], below, edges)
+    if not hi > lo:
+        lo, hi = volume.finite_range
+    if not hi > lo:
+        hi = lo + 1.0
+    centre = np.asarray(volume.origin) + (np.asarray(volume.shape) // 2) * \
+        np.asarray(volume.spacing)
+    state.update(crosshair=tuple(map(float, centre)), window=float(hi - lo),
+                 level=float(0.5 * (lo + hi)))
 
 
 class SliceView(QObject):
@@ -296,15 +321,15 @@ class SliceViews(QObject):
         vid = self.state.volume_id
         if vid is not None and vid in self.scene:
             node = self.scene.get(vid)
-            if isinstance(node, VolumeNode) and isinstance(node.active, Volume):
+            if isinstance(node, VolumeNode) and node.active is not None:
                 return node
         sel = self.scene.selected
         if isinstance(sel, IsosurfaceNode):
             sel = self.scene.volume_of(sel)
-        if isinstance(sel, VolumeNode) and isinstance(sel.active, Volume):
+        if isinstance(sel, VolumeNode) and sel.active is not None:
             return sel
         for node in self.scene.volumes:
-            if isinstance(node.active, Volume):
+            if node.active is not None:
                 return node
         return None
 
@@ -330,16 +355,12 @@ class SliceViews(QObject):
             if self.marker is not None:
                 self.marker.set_ruler(None, None)
             if volume is not None:
-                self.state.fit(volume.active)
+                fit(self.state, volume.active)
                 for view in self.views.values():
                     view.scene.set_extent(volume.active.bounds)
                     view.scene.set_ruler(None, None)
                     view._framed = False
         if volume is None:
-            if self.state.shown and self.scene.volumes:
-                # chunked stores are rendered in bricks and have no in-memory spline
-                self.readout.emit("the slice views show volumes held in memory; "
-                                  f"{self.scene.volumes[0].name} is read in chunks")
             self._update_marker()
             return
         isos = self._isosurfaces(volume)
@@ -430,7 +451,7 @@ class SliceViews(QObject):
         """Window / level from the shown volume's samples (the crosshair stays)."""
         if self._volume is not None:
             point = self.state.crosshair
-            self.state.fit(self._volume.active)
+            fit(self.state, self._volume.active)
             self.state.crosshair = point
 
     def move_crosshair(self, point) -> None:
@@ -444,7 +465,7 @@ class SliceViews(QObject):
         if self._volume is None:
             return None
         model, options = self._model()
-        spline = self.worker.spline(self._volume.active, model, options)
+        spline = self.worker.spline(self._volume.active, model, options, point)
         if spline is None:
             return None
         lo, hi = np.asarray(spline.bounds, dtype=np.float64).T
