@@ -16,7 +16,8 @@ with a wall of speckles; on CT and MRI the range is stretched by a few bright sa
    object is the bigger class, so a split that puts most of the samples in the "object" has
    found no object in a background but a box its subject fills (a crystal lattice in a
    cryo-EM map such as EMD-3197, whose Otsu surface runs as a wall through the whole box; a
-   CT cropped inside the body, where it is the tissue around the vessels of interest). The
+   scan cropped inside the body such as carotid.vtk, where that class is the tissue around
+   the vessels of interest). The
    densest structure is then what a first surface can show: the level enclosing
    :data:`NOISE_ENCLOSED` of the samples, as for noise.
 
