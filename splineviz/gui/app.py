@@ -66,8 +66,13 @@ def run_gui(args) -> int:
     session = bool(args.file) and args.file.lower().endswith(".svs") and not args.screenshot
     # data are read before the window opens, so a bad file is one line on stderr; a session
     # is opened by the window instead, which asks for data files that moved
-    scene = None if session else _scene(args)
     from PySide6.QtWidgets import QApplication
+
+    from splineviz.gui import preferences
+
+    # the preferred model, for the file named on the command line too (--model wins)
+    args.model = args.model or preferences.load().model
+    scene = None if session else _scene(args)
 
     from splineviz.gui.main_window import MainWindow
 
@@ -80,7 +85,7 @@ def run_gui(args) -> int:
         window.export_screenshot(args.screenshot, size=size or DEFAULT_SIZE)
         window.close()
         return 0
-    from splineviz.gui import preferences, window_state
+    from splineviz.gui import window_state
 
     # the last session's size, position and dock layout, unless --size asks for a view size
     if size is not None:

@@ -92,8 +92,12 @@ def _settings() -> QSettings:
 
 
 def load() -> Preferences:
-    """The stored preferences, each missing or unusable value replaced by its default."""
+    """The stored preferences, each missing or unusable value replaced by its default (a
+    model is checked against the registry with the plugins' models in it)."""
     from splineviz.core.splines import MODELS
+    from splineviz.plugins import load_plugins
+
+    load_plugins()
 
     prefs = Preferences.defaults()
     s = _settings()
