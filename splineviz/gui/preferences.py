@@ -142,16 +142,21 @@ def save(prefs: Preferences) -> None:
     s.sync()
 
 
-def apply(window, prefs: Preferences) -> None:
-    """Make ``prefs`` act in ``window`` (see the module docstring for when each does); an
-    unmodified scene stays unmodified (a colour preference is no edit to save)."""
+def apply(window, prefs: Preferences, previous: Preferences | None = None) -> None:
+    """Make ``prefs`` act in ``window`` (see the module docstring for when each does).
+
+    With ``previous`` (the preferences before the dialog's OK) the background and the
+    layout change only where the preference changed: a session's own background and the
+    layout the user chose stay. An unmodified scene stays unmodified (a colour preference is
+    no edit to save)."""
     from splineviz.io.mapped import LAZY_SHARE_ENV
 
     scene = window.scene
     scene.preferred_model = prefs.model
     was_modified = scene.modified
-    if tuple(scene.view.background) != tuple(prefs.background):
-        scene.view.background = tuple(prefs.background)
+    if previous is None or previous.background != prefs.background:
+        if tuple(scene.view.background) != tuple(prefs.background):
+            scene.view.background = tuple(prefs.background)
     if not was_modified:
         scene.mark_saved()
     for view in window.linked_views.views:
@@ -161,8 +166,9 @@ def apply(window, prefs: Preferences) -> None:
     if prefs.lazy_share != Preferences.defaults().lazy_share or _lazy_written:
         os.environ[LAZY_SHARE_ENV] = repr(float(prefs.lazy_share))
         globals()["_lazy_written"] = True
-    layout, _, single = prefs.layout.partition(":")
-    window.view_layout.set_layout(layout, single or None)
+    if previous is None or previous.layout != prefs.layout:
+        layout, _, single = prefs.layout.partition(":")
+        window.view_layout.set_layout(layout, single or None)
 
 
 class PreferencesDialog(QDialog):
@@ -251,9 +257,9 @@ class PreferencesDialog(QDialog):
             self._set_background((colour.redF(), colour.greenF(), colour.blueF()))
 
     def accept(self) -> None:
-        prefs = self.values()
+        prefs, previous = self.values(), load()
         save(prefs)
-        apply(self.window, prefs)
+        apply(self.window, prefs, previous)
         super().accept()
 
 

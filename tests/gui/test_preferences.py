@@ -85,6 +85,14 @@ def test_restore_defaults_and_cancel(window):
     preferences.save(preferences.Preferences("trilinear", (1.0, 0.0, 0.0), 0.25, 0.1, "3d"))
     dialog = _open_dialog(window)
     assert dialog.values() == preferences.load()  # the dialog shows what is stored
+    # OK with only the preview quality changed: the scene's own background stays
+    window.scene.view.background = (0.0, 0.5, 0.0)
+    dialog.preview.setCurrentIndex(dialog.preview.findData(0.5))
+    _ok(dialog)
+    assert preferences.load().max_preview_scale == 0.5
+    assert window.spline_scene.max_preview_scale == 0.5
+    assert tuple(window.scene.view.background) == (0.0, 0.5, 0.0)
+    dialog = _open_dialog(window)
     dialog.restore_button.click()
     assert dialog.values() == preferences.Preferences.defaults()
     dialog.reject()  # Cancel keeps what was stored
