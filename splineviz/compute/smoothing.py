@@ -76,7 +76,7 @@ def gaussian_smooth(volume: Volume, sigma, device: str | None = None) -> Volume:
     else:
         out = _smooth_cl(dev, data, sigmas)
     return Volume(out, spacing=volume.spacing, origin=volume.origin,
-                  direction=getattr(volume, "direction", None))
+                  direction=getattr(volume, "direction", None), unit=volume.unit)
 
 
 def _smooth_cl(dev, data: np.ndarray, sigmas) -> np.ndarray:

@@ -62,6 +62,8 @@ class ChunkedVolume:
         Region reader of the full level in the same axis order (``source[i0:i1, j0:j1,
         k0:k1]`` -> ndarray): a zarr array or HDF5 dataset reads just the chunks a brick
         meets, an analytic field samples just the brick; without it bricks come from dask.
+    unit : str, optional
+        The unit of world coordinates (see :attr:`splineviz.Volume.unit`).
 
     Examples
     --------
@@ -77,6 +79,7 @@ class ChunkedVolume:
     levels: tuple = ()
     name: str = "chunked volume"
     source: object = None
+    unit: str = ""
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -91,11 +94,12 @@ class ChunkedVolume:
                 np.issubdtype(data.dtype, np.complexfloating):
             raise VolumeError(f"volume samples must be real numbers, got dtype {data.dtype}")
         # the geometry checks of Volume, on a 1-sample stand-in (nothing is read)
-        probe = Volume(np.zeros((1, 1, 1), np.float32), self.spacing, self.origin)
+        probe = Volume(np.zeros((1, 1, 1), np.float32), self.spacing, self.origin, unit=self.unit)
         object.__setattr__(self, "data", data)
         object.__setattr__(self, "spacing", probe.spacing)
         object.__setattr__(self, "origin", probe.origin)
         object.__setattr__(self, "levels", tuple(self.levels))
+        object.__setattr__(self, "unit", probe.unit)
 
     # -- geometry, without reading ------------------------------------------------------
 
@@ -168,7 +172,7 @@ class ChunkedVolume:
             data = np.asarray(self.data[sl].compute(scheduler="synchronous"))
         origin = tuple(o + int(a) * s for o, (a, _), s in zip(self.origin, box, self.spacing,
                                                                 strict=True))
-        return Volume(data, spacing=self.spacing, origin=origin)
+        return Volume(data, spacing=self.spacing, origin=origin, unit=self.unit)
 
     # -- constructors -------------------------------------------------------------------
 

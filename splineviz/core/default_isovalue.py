@@ -12,6 +12,14 @@ with a wall of speckles; on CT and MRI the range is stretched by a few bright sa
    hardly better than that (below :data:`MIN_SEPARABILITY`) is noise around one level, as
    in a cryo-EM map. Otsu's level would then cut the noise at its mean; instead the level
    that encloses :data:`NOISE_ENCLOSED` of the samples is used, ChimeraX's rule for maps.
+3. Unless Otsu's upper class holds more than half of the samples: the background around an
+   object is the bigger class, so a split that puts most of the samples in the "object" has
+   found no object in a background but a box its subject fills (a crystal lattice in a
+   cryo-EM map such as EMD-3197, whose Otsu surface runs as a wall through the whole box; a
+   scan cropped inside the body such as carotid.vtk, where that class is the tissue around
+   the vessels of interest). The
+   densest structure is then what a first surface can show: the level enclosing
+   :data:`NOISE_ENCLOSED` of the samples, as for noise.
 
 ``tests/model/test_default_isovalue.py`` renders the result on the shared data.
 
@@ -107,8 +115,9 @@ def isovalue_from_histogram(counts: np.ndarray, edges: np.ndarray) -> float:
     -------
     float
         Otsu's threshold, or the level enclosing :data:`NOISE_ENCLOSED` of the samples for
-        a noise-like histogram; strictly inside ``(edges[0], edges[-1])``. The middle of the
-        edges when one bin holds every sample (nothing to separate).
+        a noise-like histogram or one whose Otsu object would be the bigger class;
+        strictly inside ``(edges[0], edges[-1])``. The middle of the edges when one bin
+        holds every sample (nothing to separate).
     """
     from skimage.filters import threshold_otsu
 
@@ -119,7 +128,8 @@ def isovalue_from_histogram(counts: np.ndarray, edges: np.ndarray) -> float:
         return 0.5 * (lo + hi)
     centres = 0.5 * (e[1:] + e[:-1])
     level = float(threshold_otsu(hist=(w, centres)))
-    if separability(w, centres, level) < MIN_SEPARABILITY:
+    if (separability(w, centres, level) < MIN_SEPARABILITY
+            or w[centres > level].sum() > 0.5 * w.sum()):
         level = enclosing_level(w, e, NOISE_ENCLOSED)
     if not lo < level < hi:
         return 0.5 * (lo + hi)

@@ -156,13 +156,15 @@ class Probe:
     gradient: np.ndarray
 
     def describe(self, unit: str = "") -> str:
-        """One line for a status bar."""
+        """One line for a status bar; ``unit`` (the world coordinates', ``""`` for none)
+        follows the position, and the gradient is per that unit."""
         x, y, z = self.position
         gx, gy, gz = self.gradient
         u = f" {unit}" if unit else ""
+        per = f" /{unit}" if unit else ""
         return (f"({x:.4g}, {y:.4g}, {z:.4g}){u}  value {self.value:.5g}  "
-                f"gradient ({gx:.4g}, {gy:.4g}, {gz:.4g}), |g| "
-                f"{float(np.linalg.norm(self.gradient)):.4g}")
+                f"gradient ({gx:.4g}, {gy:.4g}, {gz:.4g}){per}, |g| "
+                f"{float(np.linalg.norm(self.gradient)):.4g}{per}")
 
 
 def probe(spline, point) -> Probe:

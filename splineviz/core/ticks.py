@@ -91,10 +91,20 @@ def format_tick(count: int, step: float, exponent: int) -> str:
 
 
 def axis_title(name: str, exponent: int, unit: str = "") -> str:
-    """``name`` with the unit the labels are in: "X (mm)", "X (x 1e-3)", "X (A)", "X"."""
+    """``name`` with the unit the labels are in: "X (mm)", "X (x 1e-3)", "X (A)", "X".
+
+    A metre-family unit takes the SI prefix of the scaled labels (labels of thousands of
+    millimetres are metres: "X (m)"); the unit is written in ASCII (see
+    :data:`SI_PREFIXES`)."""
+    from splineviz.core.units import ascii_unit, metre_exponent
+
+    unit = ascii_unit(unit)
     if unit:
         if exponent == 0:
             return f"{name} ({unit})"
+        base = metre_exponent(unit)
+        if base is not None and exponent + base in SI_PREFIXES:
+            return f"{name} ({SI_PREFIXES[exponent + base]}m)"
         if exponent in SI_PREFIXES and len(unit) == 1 and unit.islower():
             return f"{name} ({SI_PREFIXES[exponent]}{unit})"
         return f"{name} (x 1e{exponent} {unit})"

@@ -51,6 +51,9 @@ class Volume:
         +1), the identity by default. An oblique scan keeps its rotation here (see
         :mod:`splineviz.core.frame`); :attr:`bounds` and :meth:`index_to_world` stay in
         the volume's own axis-aligned frame.
+    unit : str, optional
+        The unit of world coordinates the file states ("mm", "µm", "Å"; see
+        :mod:`splineviz.core.units`), ``""`` when it does not say.
 
     Examples
     --------
@@ -68,8 +71,11 @@ class Volume:
     spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
     direction: np.ndarray | None = None
+    unit: str = ""
 
     def __post_init__(self):
+        from splineviz.core.units import canonical_unit
+
         data = np.asarray(self.data)
         if data.ndim != 3:
             raise VolumeError(f"a volume needs a 3-D array, got {data.ndim} dimension(s)")
@@ -88,6 +94,7 @@ class Volume:
         object.__setattr__(self, "spacing", spacing)
         object.__setattr__(self, "origin", origin)
         object.__setattr__(self, "direction", _rotation(self.direction))
+        object.__setattr__(self, "unit", canonical_unit(self.unit))
 
     @property
     def axis_aligned(self) -> bool:

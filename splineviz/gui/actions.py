@@ -11,7 +11,7 @@ from __future__ import annotations
 from PySide6.QtGui import QAction, QIcon, QKeySequence
 from PySide6.QtWidgets import QToolBar
 
-from splineviz.gui import dialogs, open_dialogs
+from splineviz.gui import dialogs, open_dialogs, preferences
 from splineviz.gui.undo import undo_stack
 
 #: (view name, menu text, shortcut, icon name) of the standard views
@@ -68,6 +68,7 @@ def build_edit_menu(window, acts: dict[str, QAction]) -> None:
         action.setStatusTip(tip)
         e.addAction(action)
         acts[name] = action
+    acts["preferences"] = preferences.add_action(window, e)
 
 
 def build_actions(window) -> dict[str, QAction]:

@@ -66,8 +66,13 @@ def run_gui(args) -> int:
     session = bool(args.file) and args.file.lower().endswith(".svs") and not args.screenshot
     # data are read before the window opens, so a bad file is one line on stderr; a session
     # is opened by the window instead, which asks for data files that moved
-    scene = None if session else _scene(args)
     from PySide6.QtWidgets import QApplication
+
+    from splineviz.gui import preferences
+
+    # the preferred model, for the file named on the command line too (--model wins)
+    args.model = args.model or preferences.load().model
+    scene = None if session else _scene(args)
 
     from splineviz.gui.main_window import MainWindow
 
@@ -89,6 +94,7 @@ def run_gui(args) -> int:
     else:
         window_state.restore_geometry(window)
     window.ask_before_closing = True
+    preferences.apply(window, preferences.load())
     _install_excepthook(window)
     window.show()
     if size is None:

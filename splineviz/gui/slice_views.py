@@ -10,7 +10,9 @@ GUI thread only shows the results, and only the newest request of each view is c
 (:mod:`splineviz.gui.slice_worker`). The slices run along the volume's own axes: for an
 oblique scan (a volume with a direction) that is its own frame, where the crosshair, probe
 and ruler live too; the 3-D view's picks are taken into it and the slice planes' outline
-turned out of it (:mod:`splineviz.core.frame`).
+turned out of it (:mod:`splineviz.core.frame`). A chunked volume (OME-Zarr, bricked
+stores) is sliced too: the worker reads the slab of samples around each slice, never the
+whole volume; the window / level comes from the histogram the volume already has.
 
 Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK's):
 
@@ -32,6 +34,7 @@ from vtkmodules.vtkInteractionStyle import vtkInteractorStyleUser
 
 from splineviz.core import slice_sampling
 from splineviz.core.frame import from_world
+from splineviz.core.units import format_quantity
 from splineviz.core.volume import Volume
 from splineviz.gui.slice_worker import SliceRequest, SliceResult, SliceWorker
 from splineviz.gui.view import _interactor_class, _render_window
@@ -45,6 +48,29 @@ WINDOW_PER_PIXEL = 0.005
 ZOOM_STEP = 1.15
 #: background of the slice views
 BACKGROUND = (0.0, 0.0, 0.0)
+
+
+def fit(state: SliceViewNode, volume) -> None:
+    """Crosshair at the volume's centre sample, window on its 2-98 % values: the node's
+    :meth:`~splineviz.model.slices.SliceViewNode.fit` for samples in memory; for a chunked
+    volume (not read here, in the GUI thread) the percentiles of its cached histogram
+    (:func:`splineviz.model.summaries.cached_histogram`, made when it was opened)."""
+    if isinstance(volume, Volume):
+        state.fit(volume)
+        return
+    from splineviz.model.summaries import cached_histogram
+
+    log_counts, edges = cached_histogram(volume)
+    below = np.concatenate([[0.0], np.cumsum(np.expm1(log_counts))])
+    lo, hi = np.interp([0.02 * below[-1], 0.98 * below[-1]], below, edges)
+    if not hi > lo:
+        lo, hi = volume.finite_range
+    if not hi > lo:
+        hi = lo + 1.0
+    centre = np.asarray(volume.origin) + (np.asarray(volume.shape) // 2) * \
+        np.asarray(volume.spacing)
+    state.update(crosshair=tuple(map(float, centre)), window=float(hi - lo),
+                 level=float(0.5 * (lo + hi)))
 
 
 class SliceView(QObject):
@@ -299,15 +325,15 @@ class SliceViews(QObject):
         vid = self.state.volume_id
         if vid is not None and vid in self.scene:
             node = self.scene.get(vid)
-            if isinstance(node, VolumeNode) and isinstance(node.active, Volume):
+            if isinstance(node, VolumeNode) and node.active is not None:
                 return node
         sel = self.scene.selected
         if isinstance(sel, IsosurfaceNode):
             sel = self.scene.volume_of(sel)
-        if isinstance(sel, VolumeNode) and isinstance(sel.active, Volume):
+        if isinstance(sel, VolumeNode) and sel.active is not None:
             return sel
         for node in self.scene.volumes:
-            if isinstance(node.active, Volume):
+            if node.active is not None:
                 return node
         return None
 
@@ -333,16 +359,12 @@ class SliceViews(QObject):
             if self.marker is not None:
                 self.marker.set_ruler(None, None)
             if volume is not None:
-                self.state.fit(volume.active)
+                fit(self.state, volume.active)
                 for view in self.views.values():
                     view.scene.set_extent(volume.active.bounds)
                     view.scene.set_ruler(None, None)
                     view._framed = False
         if volume is None:
-            if self.state.shown and self.scene.volumes:
-                # chunked stores are rendered in bricks and have no in-memory spline
-                self.readout.emit("the slice views show volumes held in memory; "
-                                  f"{self.scene.volumes[0].name} is read in chunks")
             self._update_marker()
             return
         isos = self._isosurfaces(volume)
@@ -356,13 +378,12 @@ class SliceViews(QObject):
         self._update_marker()
 
     def _model(self) -> tuple[str, tuple]:
-        """The spline model of the image: the first visible isosurface's (else cubic C1)."""
-        from splineviz.model.scene import default_model
-
+        """The spline model of the image: the first visible isosurface's (else the one a
+        first isosurface would get, :meth:`~splineviz.model.Scene.first_model`)."""
         isos = self._isosurfaces(self._volume) if self._volume is not None else []
         if isos:
             return isos[0].model, tuple(sorted(isos[0].model_options().items()))
-        return default_model(), ()
+        return self.scene.first_model(), ()
 
     def _request_all(self) -> None:
         if self._volume is None:
@@ -437,7 +458,7 @@ class SliceViews(QObject):
         """Window / level from the shown volume's samples (the crosshair stays)."""
         if self._volume is not None:
             point = self.state.crosshair
-            self.state.fit(self._volume.active)
+            fit(self.state, self._volume.active)
             self.state.crosshair = point
 
     def move_crosshair(self, point) -> None:
@@ -451,7 +472,7 @@ class SliceViews(QObject):
         if self._volume is None:
             return None
         model, options = self._model()
-        spline = self.worker.spline(self._volume.active, model, options)
+        spline = self.worker.spline(self._volume.active, model, options, point)
         if spline is None:
             return None
         lo, hi = np.asarray(spline.bounds, dtype=np.float64).T
@@ -459,23 +480,30 @@ class SliceViews(QObject):
             self.readout.emit("")
             return None
         result = slice_sampling.probe(spline, point)
-        self.readout.emit(f"{model}: {result.describe()}")
+        self.readout.emit(f"{model}: {result.describe(self.unit)}")
         return result
 
     def set_ruler(self, a, b, name: str) -> float:
         """Show a ruler from ``a`` to ``b`` (world) in the view ``name`` (a slice, or
-        ``"3d"``) and in the 3-D view; returns its length (world units)."""
+        ``"3d"``) and in the 3-D view; returns its length (world units, :attr:`unit`)."""
         a, b = np.asarray(a, float), np.asarray(b, float)
         self.ruler = (a, b, name)
         self._show_ruler()
         if self.marker is not None:
-            self.marker.set_ruler(a, b)
+            self.marker.set_ruler(a, b, self.unit)
             self.view3d.request_render()
         length = float(np.linalg.norm(b - a))
-        self.readout.emit(f"ruler {length:.5g} (world units) from "
+        unit = f" {self.unit}" if self.unit else ""
+        self.readout.emit(f"ruler {format_quantity(length, self.unit, digits=5)} from "
                           f"({', '.join(f'{c:.4g}' for c in a)}) to "
-                          f"({', '.join(f'{c:.4g}' for c in b)})")
+                          f"({', '.join(f'{c:.4g}' for c in b)}){unit}")
         return length
+
+    @property
+    def unit(self) -> str:
+        """The unit of the shown volume's world coordinates, ``""`` when its file did not
+        say (see :mod:`splineviz.core.units`)."""
+        return self._volume.data.unit if self._volume is not None else ""
 
     def _show_ruler(self) -> None:
         """The ruler in the slice view it was drawn in, while that view shows its plane."""
@@ -483,7 +511,7 @@ class SliceViews(QObject):
         for other, view in self.views.items():
             here = other == name and abs(self.state.position(other) - a[AXES[other]]) <= \
                 1e-9 * max(1.0, abs(a[AXES[other]]))
-            view.scene.set_ruler(*((a, b) if here else (None, None)))
+            view.scene.set_ruler(*((a, b) if here else (None, None)), self.unit)
             view.request_render()
 
     def _ruler_point_3d(self, point) -> None:

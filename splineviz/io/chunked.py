@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from splineviz.core.units import canonical_unit
 from splineviz.io.errors import CorruptFileError, InvalidDataError
 from splineviz.io.registry import formats, register_format
 from splineviz.io.volume_data import VolumeData
@@ -108,7 +109,8 @@ def _is_zarr_folder(path: Path) -> bool:
 
 
 def _ome_levels(path: Path):
-    """(axes names, [(dataset path, scale, translation)]) of an OME-Zarr image, or None."""
+    """(axes names, [(dataset path, scale, translation)], length unit) of an OME-Zarr image,
+    or None."""
     from ome_zarr.io import parse_url
     from ome_zarr.reader import Multiscales, Reader
 
@@ -119,8 +121,11 @@ def _ome_levels(path: Path):
         ms = [s for s in node.specs if isinstance(s, Multiscales)]
         if not ms:
             continue
-        axes = [a["name"] if isinstance(a, dict) else str(a)
-                for a in node.metadata.get("axes", ["z", "y", "x"])]
+        described = node.metadata.get("axes", ["z", "y", "x"])
+        axes = [a["name"] if isinstance(a, dict) else str(a) for a in described]
+        # OME-NGFF names one unit per space axis ("micrometer"); the first one found is the grid's
+        unit = next((a.get("unit") for a in described if isinstance(a, dict)
+                     and a.get("type") == "space" and a.get("unit")), "")
         transforms = node.metadata.get("coordinateTransformations") or []
         levels = []
         for n, ds in enumerate(ms[0].datasets):
@@ -132,7 +137,7 @@ def _ome_levels(path: Path):
                 elif t.get("type") == "translation":
                     shift = list(t["translation"])
             levels.append((ds, scale, shift))
-        return axes, levels
+        return axes, levels, canonical_unit(unit)
     return None
 
 
@@ -143,7 +148,7 @@ def _read_zarr(path: Path):
 
     ome = _ome_levels(path)
     if ome is not None:
-        axes, levels = ome
+        axes, levels, unit = ome
         spatial = [n for n, a in enumerate(axes) if a in ("x", "y", "z")]
         if len(spatial) != 3:
             raise InvalidDataError(f"{path.name} has axes {axes}; a volume needs x, y and z")
@@ -168,7 +173,7 @@ def _read_zarr(path: Path):
         full = out[0]
         return _volume_data(full[0], full[1], full[2], "ome-zarr",
                             [Level(d, s, o) for d, s, o, _ in out[1:]], full[3],
-                            axes="".join(axes))
+                            axes="".join(axes), length_unit=unit)
     node = zarr.open(str(path), mode="r")
     if isinstance(node, zarr.Group):
         arrays = [a for _, a in node.arrays() if a.ndim == 3]
@@ -287,6 +292,7 @@ def to_chunked_volume(vd, name: str, *, spacing=None, origin=None):
     try:
         return ChunkedVolume(vd.data, vd.spacing if spacing is None else spacing,
                              vd.origin if origin is None else origin,
-                             vd.meta.get("levels", ()), name, source=vd.meta.get("source"))
+                             vd.meta.get("levels", ()), name, source=vd.meta.get("source"),
+                             unit=vd.meta.get("length_unit", ""))
     except (VolumeError, ValueError) as exc:
         raise CorruptFileError(f"{name} cannot be used as a volume: {exc}") from None

@@ -26,8 +26,9 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     -------
     dict
         For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds, affine``
-        (index to world, the file's own axes; with ``space`` and ``frames`` where the file has
-        them, ``oblique`` and ``direction`` for a rotated grid); for points:
+        (index to world, the file's own axes; with ``space``, ``unit`` (of lengths) and
+        ``frames`` where the file has them, ``oblique`` and ``direction`` for a rotated
+        grid); for points:
         ``kind, format, points, normals, colors, bounds``; for sessions: ``kind,
         schema_version, objects, views``.
     """
@@ -94,6 +95,8 @@ def _geometry(vd, name: str, channel) -> dict:
            "affine": [[float(v) for v in row] for row in vd.affine]}
     if vd.space:
         out["space"] = vd.space
+    if vd.meta.get("length_unit"):  # of spacing, origin and bounds, where the file says
+        out["unit"] = vd.meta["length_unit"]
     orient = orientation(vd.affine, shape, name)
     if orient.oblique and orient.sheared:
         out["oblique"] = ("sheared (axes not perpendicular): resampled onto axis-aligned "

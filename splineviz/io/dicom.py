@@ -520,7 +520,8 @@ def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     affine[:3, 2] = normal * dz
     affine[:3, 3] = pos[0]
     data = stack.transpose(2, 1, 0)  # (columns, rows, slices)
-    meta = {**meta, "affine": affine.tolist(), "space": "LPS"}
+    # DICOM positions and spacings are millimetres (PS3.3 C.7.6.2)
+    meta = {**meta, "affine": affine.tolist(), "space": "LPS", "length_unit": "mm"}
     data, orient = axis_aligned(data, affine, name, space="LPS")
     return VolumeData(np.ascontiguousarray(data), orient.spacing, orient.origin, "dicom", meta,
                       orient.volume_direction, "LPS")

@@ -157,6 +157,19 @@ def _spatial_axes(img) -> tuple[int, int, int]:
     return (0, 1, 2)
 
 
+def _length_unit(img) -> str:
+    """The unit of the affine's world coordinates: NIfTI's ``xyzt_units`` ("unknown" says
+    none); MGH files are millimetres by definition (FreeSurfer); other formats do not say."""
+    from splineviz.core.units import canonical_unit
+
+    kind = type(img).__name__
+    if kind.startswith("Nifti"):
+        return canonical_unit(img.header.get_xyzt_units()[0])
+    if kind.startswith("MGH"):
+        return "mm"
+    return ""
+
+
 def _frame_axes(img, extra: list[int]) -> tuple[FrameAxis, ...]:
     """Name, size and coordinates of the non-spatial axes, from the file's metadata."""
     shape = img.shape
@@ -266,7 +279,8 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
     data = read((0,) * len(extra))
     direction = m / steps[None, :]
     # spatial_axes: the array axes of the file that i, j, k are (MINC may keep time first)
-    meta = {"class": type(img).__name__, "spatial_axes": spatial}
+    meta = {"class": type(img).__name__, "spatial_axes": spatial,
+            "length_unit": _length_unit(img)}
     return VolumeData(data, tuple(float(s) for s in steps),
                       tuple(float(v) for v in affine[:3, 3]), fmt, meta,
                       None if np.array_equal(direction, np.eye(3)) else direction, "RAS",

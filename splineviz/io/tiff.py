@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from splineviz.core.units import canonical_unit
 from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size
 from splineviz.io.chunked import AxisSource
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
@@ -228,7 +229,8 @@ def _read_tiff(path: Path):
             spacing, unit = _imagej_geometry(tif)
         else:
             spacing, unit = (1.0, 1.0, 1.0), None
-        meta = {"axes": axes, "unit": unit, "bigtiff": bool(tif.is_bigtiff),
+        meta = {"axes": axes, "unit": unit, "length_unit": canonical_unit(unit),
+                "bigtiff": bool(tif.is_bigtiff),
                 "flavour": "ome" if tif.is_ome else "imagej" if tif.is_imagej else "tiff"}
         if min(stored) < MIN_SAMPLES_PER_AXIS:
             raise InvalidDataError(f"{path.name} has {stored[::-1]} samples; a spline volume "
@@ -391,7 +393,8 @@ def read_slices(path):
         with tifffile.TiffFile(str(files[0])) as tif:
             if tif.is_imagej:
                 spacing, unit = _imagej_geometry(tif)
-    meta = {"files": len(files), "unit": unit, "first": files[0].name}
+    meta = {"files": len(files), "unit": unit, "length_unit": canonical_unit(unit),
+            "first": files[0].name}
     src = SliceFiles(files, stored, first.dtype)
     if _eager_bytes(stored, first.dtype) <= lazy_threshold():
         check_volume_size(stored, first.dtype.itemsize, name)

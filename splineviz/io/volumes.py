@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.errors import SplinevizWarning
+from splineviz.core.units import canonical_unit
 from splineviz.core.volume import Volume, VolumeError, slabs
 from splineviz.io import _vtk
 from splineviz.io._util import (
@@ -141,6 +142,8 @@ def _read_legacy_vtk(path: Path) -> VolumeData:
 _SLC_HEADER = re.compile(rb"\s*11111\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\S+)\s+(\S+)\s+(\S+)"
                          rb"\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\d+)\s*X")
 _SLC_SLICE = re.compile(rb"\s*(\d+)\s*X")
+#: the SLC unit codes (VolVis' SLCUnitType: meter, millimeter, micron, foot, inch)
+_SLC_UNITS = ("m", "mm", "µm", "ft", "in")
 
 
 def _slc_decode(run: bytes, size: int, name: str, z: int) -> np.ndarray:
@@ -208,7 +211,10 @@ def _read_slc(path: Path) -> VolumeData:
             raise CorruptFileError(f"{path.name}: slice {z} holds {n} bytes, not {size}")
         else:
             data[z] = np.frombuffer(chunk, np.uint8).reshape(ny, nx)
-    return VolumeData(data.transpose(2, 1, 0), spacing, (0.0, 0.0, 0.0), "slc", {})
+    code = int(m.group(8))
+    unit = _SLC_UNITS[code] if code < len(_SLC_UNITS) else ""
+    return VolumeData(data.transpose(2, 1, 0), spacing, (0.0, 0.0, 0.0), "slc",
+                      {"length_unit": unit})
 
 
 _MHD_KEY = re.compile(rb"^\s*(\w+)\s*=\s*(.*?)\s*$", re.M)
@@ -375,12 +381,14 @@ def _read_nrrd(path: Path) -> VolumeData:
     elif "spacings" in header:
         spacing = tuple(float(np.asarray(header["spacings"], dtype=float)[a]) for a in spatial)
     origin = tuple(float(v) for v in header.get("space origin", (0.0, 0.0, 0.0)))
+    # "space units" names one unit per world axis; a grid has one length unit
+    unit = canonical_unit((header.get("space units") or [""])[0])
     source = None
     if len(sizes) == 3 and not multifile and direction is None:
         source = _nrrd_mapped(path, header, datafile, sizes)
     if source is not None:
         return VolumeData(lazy_array(source), spacing, origin, "nrrd",
-                          {"levels": (), "source": source}, None,
+                          {"levels": (), "source": source, "length_unit": unit}, None,
                           _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""))
     if multifile:
         if len(sizes) != 3:
@@ -400,7 +408,7 @@ def _read_nrrd(path: Path) -> VolumeData:
 
         frames = Frames(tuple(_nrrd_frame_axis(header, a, sizes[a]) for a in extra), read)
         data = read((0,) * len(extra))
-    return VolumeData(data, spacing, origin, "nrrd", {}, direction,
+    return VolumeData(data, spacing, origin, "nrrd", {"length_unit": unit}, direction,
                       _NRRD_SPACES.get(str(header.get("space", "")).lower(), ""), frames)
 
 
@@ -713,7 +721,8 @@ def _read_mrc(path: Path) -> VolumeData:
     if not np.any(org):
         start_xyz = [start_crs[crs.index(w + 1)] for w in range(3)]
         org = np.asarray(start_xyz, float) * np.asarray(spacing)
-    meta = {"axis_order": "".join("xyz"[c - 1] for c in crs)}
+    # MRC/CCP4 cell dimensions are in Ångström (the format's definition)
+    meta = {"axis_order": "".join("xyz"[c - 1] for c in crs), "length_unit": "Å"}
     if data is None:
         data = lazy_array(source)
         meta.update(levels=(), source=source)
@@ -994,7 +1003,8 @@ def to_volume(vd: VolumeData, name: str, *, spacing=None, origin=None,
         data, sp, og = orient.apply(data), orient.spacing, orient.origin
         direction = orient.volume_direction
     try:
-        return Volume(data, spacing=sp, origin=og, direction=direction)
+        return Volume(data, spacing=sp, origin=og, direction=direction,
+                      unit=vd.meta.get("length_unit", ""))
     except (VolumeError, ValueError) as exc:
         raise InvalidDataError(f"{name} has unusable geometry: {exc}") from None
 

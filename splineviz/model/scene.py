@@ -108,6 +108,9 @@ class Scene:
         self.modified = False
         #: width / height of the view that shows the scene (set by views; used to frame)
         self.aspect = 1.0
+        #: the model a volume's first isosurface starts with, when it names a registered
+        #: one (the GUI's preferences set it); else :func:`default_model`
+        self.preferred_model: str | None = None
         self.view.events.connect(self._node_changed)
         # looking around is not an edit: the camera is saved, but moving it leaves
         # ``modified`` alone (no "unsaved changes" prompt after an orbit)
@@ -221,6 +224,21 @@ class Scene:
         b = np.stack(boxes)
         return tuple((float(b[:, a, 0].min()), float(b[:, a, 1].max())) for a in range(3))
 
+    def first_model(self) -> str:
+        """The model of a volume's first isosurface: :attr:`preferred_model` if registered,
+        else :func:`default_model`."""
+        from splineviz.core.splines import MODELS
+
+        return self.preferred_model if self.preferred_model in MODELS else default_model()
+
+    def length_unit(self) -> str:
+        """The unit of world coordinates the volumes' files state ("mm"), ``""`` when none
+        does or they differ (see :mod:`splineviz.core.units`)."""
+        from splineviz.core.units import common_unit
+
+        return common_unit(n.data.unit for n in self._nodes.values()
+                           if isinstance(n, VolumeNode) and n.data is not None)
+
     # -- editing -------------------------------------------------------------------------
 
     def new_id(self, prefix: str) -> str:
@@ -332,7 +350,7 @@ class Scene:
             lo, hi = volume.active.finite_range
             isovalue = lo + (hi - lo) * (0.3 + 0.4 * ((n * 0.618) % 1.0))
         if model is None:
-            model = others[-1].model if others else default_model()
+            model = others[-1].model if others else self.first_model()
         props.setdefault("color", PALETTE[n % len(PALETTE)])
         props.setdefault("name", f"isosurface {n + 1}" if n else "isosurface")
         return self.add(IsosurfaceNode(volume_id=volume.id, model=model,

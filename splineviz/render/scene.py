@@ -124,6 +124,9 @@ class SplineScene:
         self._force_exact = False
         self.last_frame_s = None
         self.frame_times: list[float] = []
+        #: the finest preview resolution factor (the preview quality the GUI's preferences
+        #: set: 1 lets a fast preview reach full resolution)
+        self.max_preview_scale = 1.0
         #: the :class:`ColourRangeLink` of the views of this scene's model (None: alone;
         #: a :class:`FixedRanges` for a copy in another window)
         self.range_link: ColourRangeLink | FixedRanges | None = None
@@ -312,7 +315,8 @@ class SplineScene:
             # at scale 1 does (else the scale would stay at 1 however slow those frames are)
             ratio = float(np.sqrt(PREVIEW_BUDGET_S / lv.preview_seconds))
             lv.preview_scale *= float(np.clip(ratio, 0.5, 2.0))
-        lv.preview_scale = float(np.clip(lv.preview_scale, MIN_PREVIEW_SCALE, 1.0))
+        lv.preview_scale = float(np.clip(lv.preview_scale, MIN_PREVIEW_SCALE,
+                                         max(self.max_preview_scale, MIN_PREVIEW_SCALE)))
         level = max((v for v in PREVIEW_LEVELS if v <= lv.preview_scale * (1 + 1e-9)),
                     default=MIN_PREVIEW_SCALE)
         return max(level, MIN_PREVIEW_SCALE), True

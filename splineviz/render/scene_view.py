@@ -250,7 +250,7 @@ class SceneView:
         bounds = self.scene.bounds()
         show = self.scene.view.show_scale and bounds is not None
         if show:
-            label_grid(self._grid, bounds)
+            label_grid(self._grid, bounds, self.scene.length_unit())
         self._grid.SetVisibility(int(show))
 
     # -- pictures ------------------------------------------------------------------------

@@ -32,6 +32,7 @@ from vtkmodules.vtkRenderingCore import (
 
 from splineviz.core.frame import to_world
 from splineviz.core.slice_sampling import SliceGrid, in_plane_axes
+from splineviz.core.units import format_quantity
 from splineviz.render.colormaps import LUT_SIZE, lut
 
 #: slice name -> its colour (3D Slicer's)
@@ -231,7 +232,7 @@ class SliceScene:
 
     def set_ruler(self, a, b, unit: str = "") -> None:
         """A ruler between the world points ``a`` and ``b`` (None: no ruler), labelled with
-        its length in world units."""
+        its length in world units (``unit``: the volume's, see :mod:`splineviz.core.units`)."""
         if a is None or b is None:
             self.ruler = None
             self._ruler_actor.VisibilityOff()
@@ -245,7 +246,7 @@ class SliceScene:
         self._ruler_mapper.SetInputData(_polylines([uv], self._lift(3)))
         self._ruler_actor.VisibilityOn()
         length = float(np.linalg.norm(b - a))
-        self._ruler_label.SetInput(f"{length:.4g}{' ' + unit if unit else ''}")
+        self._ruler_label.SetInput(format_quantity(length, unit, ascii=True))
         mid = uv.mean(axis=0)
         self._ruler_label.SetPosition(float(mid[0]), float(mid[1]))
         self._ruler_label.VisibilityOn()
@@ -337,9 +338,9 @@ class SlicePlanesMarker:
         #: turned into world by its direction (an oblique scan); None: world itself
         self.frame = None
 
-    def set_ruler(self, a, b) -> None:
-        """A ruler between the world points ``a`` and ``b`` labelled with its length
-        (``a`` None: no ruler)."""
+    def set_ruler(self, a, b, unit: str = "") -> None:
+        """A ruler between the world points ``a`` and ``b`` labelled with its length in
+        ``unit`` (``a`` None: no ruler)."""
         if a is None:
             self.ruler = None
             self._ruler_actor.VisibilityOff()
@@ -352,7 +353,7 @@ class SlicePlanesMarker:
                                                     [RULER_COLOR]))
         length = float(np.linalg.norm(b - a))
         self._ruler_actor.SetVisibility(length > 0)
-        self._ruler_label.SetInput(f"{length:.4g}")
+        self._ruler_label.SetInput(format_quantity(length, unit, ascii=True))
         mid = to_world(self.frame, 0.5 * (a + b))
         self._ruler_label.GetPositionCoordinate().SetValue(*map(float, mid))
         self._ruler_label.SetVisibility(length > 0)

@@ -47,6 +47,7 @@ def _coverage(volume, isovalue: float) -> float:
 
 
 @pytest.mark.parametrize("name", ["EMD-3001.map",  # cryo-EM map: noise around 0
+                                  "EMD-3197.map",  # cryo-EM map of a lattice filling the box
                                   "tooth.nrrd", "carotid.vtk",  # CT
                                   "HeadMRVolume.mhd"])  # MRI
 def test_the_first_isovalue_shows_an_object_not_a_wall(shared_data, name):
@@ -92,6 +93,21 @@ def test_noise_gets_the_level_enclosing_one_percent():
     assert abs(separability(counts, centres, 0.0) - 2.0 / np.pi) < 0.01
     level = isovalue_from_histogram(counts, edges)
     assert np.mean(samples > level) == pytest.approx(NOISE_ENCLOSED, abs=0.002)
+
+
+def test_an_object_class_bigger_than_the_background_gets_the_densest_percent():
+    """A box the subject fills (a lattice): Otsu's split is clean but puts most samples
+    above it, so its surface would be a wall through the box; the densest 1 % is shown."""
+    rng = np.random.default_rng(3)
+    dark, bright = rng.normal(-2.0, 0.5, 30_000), rng.normal(3.0, 1.0, 70_000)
+    samples = np.concatenate([dark, bright])
+    counts, edges = np.histogram(samples, bins=128)
+    level = isovalue_from_histogram(counts, edges)
+    assert np.mean(samples > level) == pytest.approx(NOISE_ENCLOSED, abs=0.002)
+    # the same two classes the other way round: an object in a background keeps Otsu's level
+    counts, edges = np.histogram(-samples, bins=128)
+    level = isovalue_from_histogram(counts, edges)
+    assert np.mean(-bright > level) < 0.01 and np.mean(-dark < level) < 0.01
 
 
 def test_a_constant_volume_gets_its_value_and_a_given_isovalue_is_kept():

@@ -31,6 +31,7 @@ from PySide6.QtWidgets import (
 )
 
 from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
+from splineviz.core.units import format_quantity
 from splineviz.gui.undo import undo_stack
 from splineviz.model import IsosurfaceNode, Scene, SectionNode, VolumeNode
 from splineviz.render.scene_view import colour_range_link
@@ -43,13 +44,14 @@ FIELD_LABELS = {"none": "Flat colour", "mean": "Mean curvature", "gaussian": "Ga
                 "distance": "Distance to another isosurface"}
 
 
-def curve_summary(curves) -> str:
-    """One line per curve: closed or open, length and enclosed area."""
+def curve_summary(curves, unit: str = "") -> str:
+    """One line per curve: closed or open, length and enclosed area, in ``unit`` (the
+    world coordinates' unit, see :mod:`splineviz.core.units`; ``""``: bare numbers)."""
     lines = []
     for i, c in enumerate(curves or []):
-        area = "" if math.isnan(c.area) else f", area {c.area:.6g}"
+        area = "" if math.isnan(c.area) else f", area {format_quantity(c.area, unit, 2, digits=6)}"
         lines.append(f"curve {i + 1}: {'closed' if c.closed else 'open'}, "
-                     f"length {c.length:.6g}{area}")
+                     f"length {format_quantity(c.length, unit, digits=6)}{area}")
     return "\n".join(lines) or "no curve"
 
 
@@ -272,7 +274,8 @@ class AnalysisPanel(QWidget):
         secs = self.sections_of_node()
         row = self.sections.currentRow()
         sec = secs[row] if 0 <= row < len(secs) else (secs[-1] if secs else None)
-        self.summary.setText("" if sec is None else curve_summary(sec.curves))
+        self.summary.setText("" if sec is None
+                             else curve_summary(sec.curves, self.scene.length_unit()))
         self.export.setEnabled(sec is not None and bool(sec.curves))
 
     # -- widgets -> node -----------------------------------------------------------------
