@@ -36,7 +36,6 @@ class Level:
     ----------
     data : (nx, ny, nz) dask array
     spacing, origin : (3,) tuple of float
-
     label : str
         What the level is, in words (``"coarse level 2 of 3 (128^3 of 512^3)"``): shown
         with the previews made from it.
@@ -155,7 +154,9 @@ class ChunkedVolume:
                 return Level(level.data, level.spacing, level.origin, label)
         key = ("pyramid", max_samples)
         if key not in self._cache:
-            self._cache[key] = strided_level(levels[-1], max_samples, full)
+            k = len(levels) - 1
+            name = f"coarse level {k} of {k} downsampled" if k else "downsample"
+            self._cache[key] = strided_level(levels[-1], max_samples, name, full)
         return self._cache[key]
 
     def preview_volume(self, max_samples: int = PREVIEW_SAMPLES) -> Volume:
@@ -317,7 +318,8 @@ def coarsen_level(level: Level, max_samples: int) -> Level:
     return Level(data.astype(np.float32), spacing, origin)
 
 
-def strided_level(level: Level, max_samples: int, of: str = "") -> Level:
+def strided_level(level: Level, max_samples: int, name: str = "downsample",
+                  of: str = "") -> Level:
     """Every f-th sample of ``level`` along each axis, for the smallest whole f that leaves at
     most ``max_samples`` samples, read now (dask's threads) and held in memory.
 
@@ -329,8 +331,9 @@ def strided_level(level: Level, max_samples: int, of: str = "") -> Level:
     ----------
     level : Level
     max_samples : int
-    of : str
-        The full level's size, for the label.
+    name, of : str
+        What the level is and the full level's size, for the label (``"downsample 1:4
+        (128^3 of 512^3)"``).
     """
     import dask.array as da
 
@@ -349,7 +352,7 @@ def strided_level(level: Level, max_samples: int, of: str = "") -> Level:
                       .compute(scheduler="threads"))
     spacing = tuple(s * g for s, g in zip(level.spacing, step, strict=True))
     size = _size(data.shape) + (f" of {of}" if of else "")
-    label = f"downsample 1:{max(step)} ({size})"
+    label = f"{name} 1:{max(step)} ({size})"
     return Level(da.from_array(data, chunks=data.shape), spacing, level.origin, label)
 
 

@@ -22,6 +22,11 @@ def test_the_finest_pyramid_level_within_the_budget_is_chosen_and_named():
     assert level.shape == (128, 128, 128) and 128**3 <= PREVIEW_SAMPLES
     assert level.label == "coarse level 1 of 2 (128^3 of 256^3)"
     assert vol.preview_level(64**3).label == "coarse level 2 of 2 (64^3 of 256^3)"
+    # every level too big: the coarsest one, downsampled
+    big = ChunkedVolume(full, levels=[Level(da.zeros((160,) * 3, chunks=64, dtype=np.uint8),
+                                            (1.6,) * 3, (0.0,) * 3)])
+    assert big.preview_level().label == "coarse level 1 of 1 downsampled 1:2 (80^3 of 256^3)"
+    assert big.preview_level().spacing == (3.2,) * 3
     small = ChunkedVolume(da.zeros((40, 30, 20), chunks=10))
     assert small.preview_level().label == "full level (40x30x20)"
 
