@@ -353,15 +353,21 @@ class BrickedRayCaster:
         return self._client
 
     def preview_caster(self, model: str = "trilinear") -> RayCaster:
-        """A ray caster of the coarse level (:meth:`ChunkedVolume.preview_level`) for
-        previews while the camera moves (an in-memory volume: the volume itself)."""
+        """A ray caster of the coarse level in memory (:meth:`ChunkedVolume.preview_volume`:
+        the same world box) for the pictures shown while the bricks are computed and while
+        the camera moves (an in-memory volume: the volume itself)."""
         vol = self._volume
         if isinstance(vol, ChunkedVolume):
-            level = vol.preview_level()
-            vol = Volume(np.asarray(level.read_all(), dtype=np.float32), level.spacing,
-                         level.origin)
+            vol = vol.preview_volume()
         options = dict(self._model_kwargs) if model == self.model else {}
         return RayCaster(vol, model=model, device=self.device, **options)
+
+    @property
+    def preview_label(self) -> str:
+        """What :meth:`preview_caster` casts, in words (``"coarse level 2 of 3 (128^3 of
+        512^3)"``; empty for an in-memory volume)."""
+        vol = self._volume
+        return vol.preview_level().label if isinstance(vol, ChunkedVolume) else ""
 
     def set_isovalue(self, value) -> None:
         """Set the isovalue (constant time: bricks are classified where they are rendered)."""

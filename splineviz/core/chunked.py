@@ -6,6 +6,12 @@ HDF5 or any dask graph), never computed whole. ``levels`` are coarser versions o
 (an OME-Zarr multiscale pyramid, a pyramid sampled from an analytic field, or one built by
 dask), each with its own spacing and origin, for previews and summaries that must not read
 the full data.
+
+The *preview level* (:meth:`ChunkedVolume.preview_level`) is the finest level of at most
+:data:`PREVIEW_SAMPLES` samples; a volume without such a level gets a strided downsample of
+its coarsest one, read once. Its samples, held in memory as a :class:`Volume` spanning the
+same world box (:meth:`ChunkedVolume.preview_volume`), make the pictures shown at once while
+the exact bricks are computed, and the value range and histogram.
 """
 
 from __future__ import annotations
@@ -17,8 +23,9 @@ import numpy as np
 
 from splineviz.core.volume import Volume, VolumeError
 
-#: samples of the coarse level used for previews and the value range (about 96^3)
-PREVIEW_SAMPLES = 96**3
+#: samples of the coarse level used for previews and the value range (128^3: 2 MiB of
+#: uint8, read in a fraction of a second, ray cast in milliseconds)
+PREVIEW_SAMPLES = 128**3
 
 
 @dataclass(frozen=True)
@@ -29,11 +36,15 @@ class Level:
     ----------
     data : (nx, ny, nz) dask array
     spacing, origin : (3,) tuple of float
+    label : str
+        What the level is, in words (``"coarse level 2 of 3 (128^3 of 512^3)"``): shown
+        with the previews made from it.
     """
 
     data: object
     spacing: tuple[float, float, float]
     origin: tuple[float, float, float]
+    label: str = ""
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -132,25 +143,53 @@ class ChunkedVolume:
         return [Level(self.data, self.spacing, self.origin), *self.levels]
 
     def preview_level(self, max_samples: int = PREVIEW_SAMPLES) -> Level:
-        """The finest level with at most ``max_samples`` samples; without such a level one
-        is built by dask (block means of the full data: a pass over it, done once)."""
-        for level in self.all_levels():
-            if math.prod(level.shape) <= max_samples:
-                return level
+        """The finest level with at most ``max_samples`` samples, labelled with its place in
+        the pyramid; without such a level, a strided downsample of the coarsest level (every
+        f-th sample along each axis: its chunks are read once, here, and the result kept in
+        memory)."""
+        levels = self.all_levels()
+        full = _size(levels[0].shape)
+        for n, level in enumerate(levels):
+            # (a pyramid of a thin volume may end in levels one sample thick: no grid)
+            if math.prod(level.shape) <= max_samples and min(level.shape) >= 2:
+                label = (f"full level ({full})" if n == 0 else
+                         f"coarse level {n} of {len(levels) - 1} ({_size(level.shape)} of "
+                         f"{full})")
+                return Level(level.data, level.spacing, level.origin, label)
         key = ("pyramid", max_samples)
         if key not in self._cache:
-            self._cache[key] = coarsen_level(self.all_levels()[-1], max_samples)
+            k = len(levels) - 1
+            name = f"coarse level {k} of {k} downsampled" if k else "downsample"
+            self._cache[key] = strided_level(levels[-1], max_samples, name, full)
+        return self._cache[key]
+
+    def preview_volume(self, max_samples: int = PREVIEW_SAMPLES) -> Volume:
+        """The samples of :meth:`preview_level` in memory (read once), as a volume spanning
+        this volume's world box.
+
+        A level of ``m`` samples along an axis gets the spacing ``(n - 1) s / (m - 1)`` of
+        the full level's ``n`` samples of spacing ``s``, and the full level's origin: the
+        coarse surface then fills the box the exact one does (a level's own spacing,
+        ``f s`` for ``m = n / f``, would end ``f - 1`` samples short of the box's far side).
+        """
+        key = ("preview", max_samples)
+        if key not in self._cache:
+            level = self.preview_level(max_samples)
+            data = level.read_all()
+            spacing = tuple((n - 1) * s / (m - 1) for n, s, m in zip(
+                self.shape, self.spacing, data.shape, strict=True))
+            self._cache[key] = Volume(data, spacing, self.origin)
         return self._cache[key]
 
     @property
     def finite_range(self) -> tuple[float, float]:
-        """(min, max) of the finite samples of :meth:`preview_level` (computed once).
+        """(min, max) of the finite samples of :meth:`preview_volume` (computed once).
 
         The full data are never read for it: an isovalue slider or a default isovalue needs
         the range, not every sample (extremes finer than the coarse level may lie outside).
         """
         if "range" not in self._cache:
-            d = np.asarray(self.preview_level().read_all(), dtype=np.float64)
+            d = np.asarray(self.preview_volume().data, dtype=np.float64)
             finite = d[np.isfinite(d)]
             if finite.size == 0:
                 raise VolumeError(f"{self.name} has no finite samples in its coarse level")
@@ -281,6 +320,50 @@ def coarsen_level(level: Level, max_samples: int) -> Level:
     origin = tuple(o + 0.5 * (factors[a] - 1) * s
                    for a, (o, s) in enumerate(zip(level.origin, level.spacing, strict=True)))
     return Level(data.astype(np.float32), spacing, origin)
+
+
+def strided_level(level: Level, max_samples: int, name: str = "downsample",
+                  of: str = "") -> Level:
+    """Every f-th sample of ``level`` along each axis, for the smallest whole f that leaves at
+    most ``max_samples`` samples, read now (dask's threads) and held in memory.
+
+    Strides, not block means: the samples are the data's own (a surface through them is the
+    data's at that isovalue, the value range is the data's), and no arithmetic runs over
+    the full level (a 512^3 uint8 store: 0.14 s against 1.2 s for means, measured).
+
+    Parameters
+    ----------
+    level : Level
+    max_samples : int
+    name, of : str
+        What the level is and the full level's size, for the label (``"downsample 1:4
+        (128^3 of 512^3)"``).
+    """
+    import dask.array as da
+
+    shape = level.shape
+
+    def factors(f):
+        # a thin axis keeps two samples (a grid needs them)
+        return tuple(max(1, min(f, n - 1)) for n in shape)
+
+    f = max(1, math.floor((math.prod(shape) / max_samples) ** (1.0 / 3.0)))
+    while math.prod(-(-n // g) for n, g in zip(shape, factors(f), strict=True)) > max_samples \
+            and max(factors(f)) == f:
+        f += 1
+    step = factors(f)
+    data = np.asarray(level.data[tuple(slice(None, None, g) for g in step)]
+                      .compute(scheduler="threads"))
+    spacing = tuple(s * g for s, g in zip(level.spacing, step, strict=True))
+    size = _size(data.shape) + (f" of {of}" if of else "")
+    label = f"{name} 1:{max(step)} ({size})"
+    return Level(da.from_array(data, chunks=data.shape), spacing, level.origin, label)
+
+
+def _size(shape) -> str:
+    """A grid's size in words: ``128^3``, ``256x256x64``."""
+    n = tuple(int(k) for k in shape)
+    return f"{n[0]}^3" if len(set(n)) == 1 else "x".join(map(str, n))
 
 
 # ``Volume.from_dask`` (the README's spelling) returns a ChunkedVolume, so it is set here, where

@@ -16,7 +16,11 @@ model` says which): the trilinear OpenCL kernel, or the previous model's kernel 
 after a model switch (same data, same isovalue; the surfaces differ by the model error
 only). The exact frame follows in a worker (thesis §6.3: interactive rates for the
 trilinear model, exact pictures for the smooth ones); a model without a kernel is cast
-coarse to fine there (:meth:`IsosurfaceLayer.exact_scales`), each step shown.
+coarse to fine there (:meth:`IsosurfaceLayer.exact_scales`), each step shown. A chunked
+volume's previews ray cast its coarse level (an OME-Zarr pyramid level or a strided
+downsample, in memory: :meth:`~splineviz.core.chunked.ChunkedVolume.preview_volume`) with
+the trilinear kernel, at any size in milliseconds (:attr:`IsosurfaceLayer.coarse_preview`),
+while the exact frame is made in bricks on dask workers.
 
 The GUI thread calls :meth:`compute` with ``blocking=False``: it takes no lock it would
 have to wait for, builds no caster and evaluates no spline of a model without a kernel
@@ -84,6 +88,9 @@ class RenderedFrame:
     scalars: np.ndarray | None = None
     #: the spline model that cast the frame (a preview's may be a cheaper one)
     model: str = ""
+    #: the data a preview was cast from when not the layer's own samples: a chunked
+    #: volume's coarse level (:attr:`splineviz.core.chunked.Level.label`), else ""
+    source: str = ""
 
     @property
     def final(self) -> bool:
@@ -121,6 +128,8 @@ class _Caster:
     #: anew for each new frame size (0.2-0.7 s), which the GUI thread leaves to workers
     #: for a fallback caster
     sizes: set = field(default_factory=set)
+    #: the data it casts when not the layer's own (:attr:`RenderedFrame.source`)
+    source: str = ""
 
     def scale_cast(self, size, scale: float) -> float | None:
         """The largest resolution factor not above ``scale`` this caster has cast a frame
@@ -503,7 +512,7 @@ class IsosurfaceLayer:
                 exact = _Caster(make_caster(self._volume, model, self._device, options))
             if fast is None and exact.path == "bricked":
                 # a chunked volume: previews ray cast its coarse level here
-                fast = _Caster(exact.rc.preview_caster())
+                fast = _Caster(exact.rc.preview_caster(), source=exact.rc.preview_label)
             elif fast is None and exact.path != "opencl":
                 fast = _Caster(RayCaster(self._volume, model="trilinear", device=self._device))
             if generation == self._generation:
@@ -527,6 +536,15 @@ class IsosurfaceLayer:
             # takes the thread for as long as it computes
             usable = [c for c in usable if c.path == "opencl"]
         return usable
+
+    @property
+    def coarse_preview(self) -> bool:
+        """Whether previews are cast from a coarse level of the data (a chunked volume's,
+        :attr:`RenderedFrame.source`): milliseconds at any size, so the one shown while the
+        exact bricks are computed is cast at full resolution too."""
+        from splineviz.core.chunked import ChunkedVolume
+
+        return isinstance(self._volume, ChunkedVolume)
 
     def exact_scales(self) -> tuple[float, ...]:
         """The resolution factors a worker casts the exact frame at, one after the other:
@@ -643,7 +661,8 @@ class IsosurfaceLayer:
         self.last_stats = stats
         scalars = self._scalars(frame, blocking, cheap=path == "preview")
         return RenderedFrame(frame, view, state, min(scale, 1.0), seconds, path, stats,
-                             scalars=scalars, model=rc.model)
+                             scalars=scalars, model=rc.model,
+                             source=caster.source if path == "preview" else "")
 
     def _scalars(self, frame: Frame, blocking: bool, cheap: bool) -> np.ndarray | None:
         """:meth:`hit_scalars` under the spline cache's lock, or None: for a preview

@@ -28,7 +28,8 @@ def shown_description(layer, rf) -> str:
         return f"stale picture of {model_label(rf.model)}" if rf.model else "stale picture"
     share = f"{rf.scale:.0%} resolution"
     if rf.path == "preview":
-        return f"preview from {model_label(rf.model)}, {share}"
+        on = f" on {rf.source}" if rf.source else ""
+        return f"preview from {model_label(rf.model)}{on}, {share}"
     return f"coarser image, {share}" if not rf.final else "exact picture of another view"
 
 

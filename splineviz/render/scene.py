@@ -462,12 +462,13 @@ class SplineScene:
                 continue
             shown = lv.shown
             scales = layer.exact_scales() if partial is not None else (1.0,)
-            # a slow model: a sharp preview from the cheaper caster while it is cast (after
-            # one of a preview size: the GUI thread previews from it while the camera moves)
-            slow = len(scales) > 1
+            # a slow model or bricks: a sharp preview from the cheaper caster (a chunked
+            # volume's coarse level) while it is cast (after one of a preview size: the GUI
+            # thread previews from it while the camera moves)
+            sharp = len(scales) > 1 or layer.coarse_preview
             if partial is not None and (shown is None or shown.state != layer.state
-                                        or (slow and shown.scale < 1.0)):
-                for size in (PREVIEW_LEVELS[4], 1.0) if slow else (PREVIEW_LEVELS[4],):
+                                        or (sharp and shown.scale < 1.0)):
+                for size in (PREVIEW_LEVELS[4], 1.0) if sharp else (PREVIEW_LEVELS[4],):
                     rf = layer.compute(view, scale=size, preview=True)
                     if rf is None or given_up():
                         break

@@ -85,3 +85,52 @@ def test_1024_cubed_ome_zarr_opens_and_renders(window, tmp_path, bricks_on):
     print(f"GUI, 1024^3 OME-Zarr: exact frame {rf.seconds:.1f} s, bricks "
           f"{rf.stats['bricks']} rendered {rf.stats['bricks_rendered']} culled "
           f"{rf.stats['bricks_culled']}")
+
+
+@pytest.mark.parametrize("bricks_on", ["inproc"], indirect=True)
+def test_the_coarse_level_shows_while_the_bricks_compute(window, tmp_path, bricks_on):
+    """Issue 26, item 5: the view is not empty while the exact bricks are computed — the
+    pyramid level within the preview budget is shown first, at full size, and named; the
+    exact bricked frame replaces it; a new isovalue previews through that level at once."""
+    from compute.bricked_helpers import write_ball_ome_zarr
+    from PySide6.QtWidgets import QApplication
+
+    path = write_ball_ome_zarr(tmp_path / "ball.ome.zarr", 160, 40)
+    shown = []  # (frame, refining, quad shows an image) after each render of a new frame
+
+    def record(_seconds):
+        scene = window.spline_scene
+        if scene is None or not scene.layers:
+            return
+        layer = scene.layers[0]
+        rf = scene.shown_frame(layer)
+        if rf is not None and (not shown or shown[-1][0] is not rf):
+            shown.append((rf, window.view.refining, scene.quad(layer).has_image))
+
+    window.view.frame_rendered.connect(record)
+    window.open_path(path, mode="replace", block=True)
+    iso = window.scene.isosurfaces[0]
+    iso.isovalue = 100.0
+    window.wait_for_refine(timeout_s=600)
+    layer = window.view.scene_view.layers[iso.id]
+    current = [(rf, busy, image) for rf, busy, image in shown if rf.state == layer.state]
+    *before, (exact, _, _) = current
+    assert exact.final and exact.path == "bricked"
+    assert before, "nothing shown before the exact frame"
+    for rf, _, _ in before:
+        assert rf.path == "preview" and rf.source == "coarse level 1 of 2 (80^3 of 160^3)"
+    sharp = [rf for rf, busy, image in before
+             if busy and image and rf.scale == 1.0 and rf.frame.hit.mean() > 0.05]
+    assert sharp, "no full-size coarse picture while the bricks were computed"
+
+    # a new isovalue: the GUI thread's own preview, from the coarse level, before any brick
+    iso.isovalue = 120.0
+    for _ in range(20000):
+        QApplication.processEvents()
+        rf = window.spline_scene.shown_frame(layer)
+        if rf.state == layer.state:
+            break
+    assert rf.state == layer.state and rf.path == "preview"
+    assert rf.source.startswith("coarse level 1 of 2") and rf.frame.hit.any()
+    window.wait_for_refine(timeout_s=600)
+    assert window.spline_scene.shown_frame(layer).path == "bricked"
