@@ -178,7 +178,7 @@ class ChunkedVolume:
             data = level.read_all()
             spacing = tuple((n - 1) * s / (m - 1) for n, s, m in zip(
                 self.shape, self.spacing, data.shape, strict=True))
-            self._cache[key] = Volume(data, spacing, self.origin)
+            self._cache[key] = Volume(data, spacing, self.origin, unit=self.unit)
         return self._cache[key]
 
     @property
