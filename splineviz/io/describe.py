@@ -36,7 +36,7 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     from splineviz.io.session import load_session
     from splineviz.io.volumes import load_volume_data, validate_volume_data
 
-    p = regular_input(path, allow_dir=True)
+    p = regular_input(path, allow_dir=True, allow_pattern=True)
     if p.suffix.lower() == ".svs":
         s = load_session(p, check_data=False, allow_outside=allow_outside)
         return {"kind": "session", "file": str(p), "schema_version": s.schema_version,
