@@ -26,8 +26,8 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     -------
     dict
         For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds, affine``
-        (index to world, the file's own axes; with ``space`` and ``frames`` where the file has
-        them); for points:
+        (index to world, the file's own axes; with ``space``, ``values`` (the unit of the
+        samples) and ``frames`` where the file has them); for points:
         ``kind, format, points, normals, colors, bounds``; for sessions: ``kind,
         schema_version, objects, views``.
     """
@@ -91,6 +91,9 @@ def _geometry(vd, name: str, channel) -> dict:
     out = {"bounds": [[float(lo), float(hi)] for lo, hi in zip(world.min(axis=1),
                                                                world.max(axis=1), strict=True)],
            "affine": [[float(v) for v in row] for row in vd.affine]}
+    if vd.meta.get("value_unit"):  # what the samples measure (DICOM: Gy, relative dose, HU)
+        dose = vd.meta.get("dose")
+        out["values"] = str(vd.meta["value_unit"]) + (f" (RT dose, {dose})" if dose else "")
     if vd.space:
         out["space"] = vd.space
     orient = orientation(vd.affine, shape, name)

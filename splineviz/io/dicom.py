@@ -15,7 +15,8 @@ slice or frame; RT dose: GridFrameOffsetVector along the slice normal) and kept 
 sign are transposed and flipped into place with a warning; an oblique grid is refused with
 one sentence naming its angle, never silently made axis-aligned. Slices spaced unevenly (a
 missing slice, variable spacing) are resampled to even steps by linear interpolation with a
-warning. Values: RescaleSlope/RescaleIntercept (per frame where given) and DoseGridScaling.
+warning. Values: RescaleSlope/RescaleIntercept (per frame where given) and DoseGridScaling
+(per file), in the unit ``meta["value_unit"]`` names (:func:`value_unit`).
 """
 
 from __future__ import annotations
@@ -39,6 +40,8 @@ from splineviz.io.volume_data import VolumeData
 EVEN_STEP_TOLERANCE = 1e-3
 #: an uneven series is resampled to at most this many times its slice count
 MAX_RESAMPLE_FACTOR = 4
+#: DoseUnits (3004,0002) as splineviz names them
+DOSE_UNITS = {"GY": "Gy", "RELATIVE": "relative"}
 #: folder scans kept (header summaries of every file, keyed by the files' sizes and times)
 _SCAN_CACHE_SIZE = 8
 _scans: dict = {}
@@ -371,6 +374,32 @@ def _rescale(ds, seq_item=None) -> tuple[float, float]:
     return slope, inter
 
 
+def _dose_scaling(ds, name: str) -> float | None:
+    """DoseGridScaling: the dose of one stored unit (None when the file has none)."""
+    value = ds.get("DoseGridScaling")
+    if value is None or value == "":
+        return None
+    try:
+        scale = float(value)
+    except (TypeError, ValueError):
+        raise CorruptFileError(f"{name} has an unreadable DoseGridScaling {value!r}") from None
+    if not np.isfinite(scale) or scale <= 0:
+        raise CorruptFileError(f"{name} has an unusable DoseGridScaling {scale:g}")
+    return scale
+
+
+def value_unit(ds) -> str | None:
+    """The unit of a file's values once scaled: an RT dose's DoseUnits (``"Gy"``, or
+    ``"relative"``: a share of an unstated reference dose, never taken for Gy), ``"HU"``
+    for CT, else None (unknown)."""
+    units = str(ds.get("DoseUnits", "") or "").strip()
+    if units or str(ds.get("Modality", "")) == "RTDOSE":
+        return DOSE_UNITS.get(units.upper(), units or None)
+    if str(ds.get("Modality", "")) == "CT":
+        return "HU"
+    return None
+
+
 def _read_series(series: Series, name: str, single_frames: bool = False):
     """A series of single-frame images (or one multi-frame file); ``single_frames``: only
     the single-frame images of the series."""
@@ -408,8 +437,11 @@ def _read_series(series: Series, name: str, single_frames: bool = False):
     check_volume_size((cols, rows, len(heads)), 4, name)
     order = np.argsort(pos @ normal, kind="stable")
     _check_depths((pos @ normal)[order], name)  # before decoding a single pixel
+    units = {value_unit(ds) for _, ds in heads}
+    if len(units) > 1:
+        raise InvalidDataError(f"the images of {name}'s series hold values in different units "
+                               f"({', '.join(sorted(str(u) for u in units))}), not one volume")
     stack = np.empty((len(heads), rows, cols), dtype=np.float32)
-    unit = "HU" if str(first.get("Modality", "")) == "CT" else None
     for k, idx in enumerate(order):
         f = heads[idx][0]
         ds, px = _pixels(f)
@@ -418,7 +450,10 @@ def _read_series(series: Series, name: str, single_frames: bool = False):
                                    f"{(rows, cols)}")
         slope, inter = _rescale(ds)
         stack[k] = px * slope + inter if (slope, inter) != (1.0, 0.0) else px
-    meta = {"series": series.uid, "modality": series.modality, "unit": unit,
+        dose = _dose_scaling(ds, f.name)  # each file of a dose series has its own
+        if dose is not None:
+            stack[k] *= np.float32(dose)
+    meta = {"series": series.uid, "modality": series.modality, "value_unit": units.pop(),
             "description": series.description, "files": len(heads)}
     return _volume(stack, pos[order], row, col, normal, spacing_xy, name, meta)
 
@@ -472,9 +507,9 @@ def _read_multiframe(path: Path):
             pos.append(_floats(value, 3, "ImagePositionPatient", name))
         pos = np.array(pos)
     stack = np.asarray(px, dtype=np.float32)
-    scale = ds.get("DoseGridScaling")
+    scale = _dose_scaling(ds, name)
     if scale is not None:
-        stack = stack * np.float32(float(scale))
+        stack = stack * np.float32(scale)
     for k in range(frames):
         value, item = _functional(ds, k, "PixelValueTransformationSequence", "RescaleSlope")
         slope, inter = _rescale(ds, item) if item is not None else _rescale(ds)
@@ -482,14 +517,12 @@ def _read_multiframe(path: Path):
             stack[k] = stack[k] * np.float32(slope) + np.float32(inter)
     depth = pos @ normal
     order = np.argsort(depth, kind="stable")
-    unit = None
-    if scale is not None:
-        unit = {"GY": "Gy", "RELATIVE": "relative"}.get(str(ds.get("DoseUnits", "")).upper(),
-                                                        str(ds.get("DoseUnits", "")) or None)
-    elif str(ds.get("Modality", "")) == "CT":
-        unit = "HU"
     meta = {"series": str(ds.get("SeriesInstanceUID", "") or ""),
-            "modality": str(ds.get("Modality", "") or ""), "unit": unit, "frames": frames}
+            "modality": str(ds.get("Modality", "") or ""), "value_unit": value_unit(ds),
+            "frames": frames}
+    if "DoseType" in ds or "DoseSummationType" in ds:
+        meta["dose"] = " ".join(str(ds.get(k, "") or "").lower()
+                                for k in ("DoseType", "DoseSummationType")).strip()
     return _volume(stack[order], pos[order], row, col, normal,
                    _pixel_spacing(ps_value, name), name, meta)
 
