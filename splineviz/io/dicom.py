@@ -30,9 +30,11 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.errors import SplinevizWarning
-from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, confined
+from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, confined, held_bytes
+from splineviz.io.chunked import is_lazy
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
 from splineviz.io.geometry import axis_aligned
+from splineviz.io.mapped import CHUNK_BYTES, lazy_threshold
 from splineviz.io.registry import register_format
 from splineviz.io.volume_data import VolumeData
 
@@ -434,28 +436,73 @@ def _read_series(series: Series, name: str, single_frames: bool = False):
     pos = np.array([_floats(ds.ImagePositionPatient, 3, "ImagePositionPatient", f.name)
                     for f, ds in heads])
     spacing_xy = _pixel_spacing(first.get("PixelSpacing"), name)
-    check_volume_size((cols, rows, len(heads)), 4, name)
     order = np.argsort(pos @ normal, kind="stable")
     _check_depths((pos @ normal)[order], name)  # before decoding a single pixel
     units = {value_unit(ds) for _, ds in heads}
     if len(units) > 1:
         raise InvalidDataError(f"the images of {name}'s series hold values in different units "
                                f"({', '.join(sorted(str(u) for u in units))}), not one volume")
-    stack = np.empty((len(heads), rows, cols), dtype=np.float32)
-    for k, idx in enumerate(order):
-        f = heads[idx][0]
-        ds, px = _pixels(f)
-        if px.shape != (rows, cols):
-            raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, expected "
-                                   f"{(rows, cols)}")
-        slope, inter = _rescale(ds)
-        stack[k] = px * slope + inter if (slope, inter) != (1.0, 0.0) else px
-        dose = _dose_scaling(ds, f.name)  # each file of a dose series has its own
-        if dose is not None:
-            stack[k] *= np.float32(dose)
+    slices = SeriesSlices([heads[i][0] for i in order], rows, cols)
+    depth = (pos @ normal)[order]
+    steps = np.diff(depth)
+    even = np.max(np.abs(steps - np.median(steps))) <= EVEN_STEP_TOLERANCE * np.median(steps)
+    if even and held_bytes(slices.shape, slices.dtype) > lazy_threshold():
+        stack = slices.lazy()  # read slice by slice as bricks need them
+    else:  # whole (uneven slices are resampled, which needs them all)
+        check_volume_size((cols, rows, len(heads)), slices.dtype, name)
+        stack = slices[:, :, :]
     meta = {"series": series.uid, "modality": series.modality, "value_unit": units.pop(),
             "description": series.description, "files": len(heads)}
     return _volume(stack, pos[order], row, col, normal, spacing_xy, name, meta)
+
+
+class SeriesSlices:
+    """A picklable region reader of a series of single-frame images, stored (slice, row,
+    column) in slice order: a region decodes only the files of its slices, each rescaled
+    (RescaleSlope/RescaleIntercept, DoseGridScaling) to float32.
+
+    Parameters
+    ----------
+    files : sequence of path-like
+        The images in slice order.
+    rows, cols : int
+        Their picture size.
+    """
+
+    def __init__(self, files, rows: int, cols: int):
+        self.files = [str(f) for f in files]
+        self.shape = (len(self.files), int(rows), int(cols))
+        self.dtype = np.dtype(np.float32)
+        self.ndim = 3
+
+    def __getitem__(self, key) -> np.ndarray:
+        """The values of ``key`` (three slices), float32, (slices, rows, columns)."""
+        key = tuple(key) + (slice(None),) * (3 - len(tuple(key)))
+        zs = range(*key[0].indices(self.shape[0]))
+        out = np.empty((len(zs),) + tuple(len(range(*k.indices(n))) for k, n in zip(
+            key[1:], self.shape[1:], strict=True)), dtype=np.float32)
+        for n, z in enumerate(zs):
+            f = Path(self.files[z])
+            ds, px = _pixels(f)
+            if px.shape != self.shape[1:]:
+                raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, expected "
+                                       f"{self.shape[1:]}")
+            px = px[key[1:]]
+            slope, inter = _rescale(ds)
+            out[n] = px * slope + inter if (slope, inter) != (1.0, 0.0) else px
+            dose = _dose_scaling(ds, f.name)  # each file of a dose series has its own
+            if dose is not None:
+                out[n] *= np.float32(dose)
+        return out
+
+    def lazy(self):
+        """A dask array of the series in chunks of whole slices (about
+        :data:`~splineviz.io.mapped.CHUNK_BYTES` each); nothing is read."""
+        import dask.array as da
+
+        per_slice = self.shape[1] * self.shape[2] * self.dtype.itemsize
+        depth = max(1, min(self.shape[0], CHUNK_BYTES // max(per_slice, 1)))
+        return da.from_array(self, chunks=(depth,) + self.shape[1:], asarray=False)
 
 
 def _functional(ds, frame: int, sequence: str, attr: str):
@@ -555,7 +602,8 @@ def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     data = stack.transpose(2, 1, 0)  # (columns, rows, slices)
     meta = {**meta, "affine": affine.tolist(), "space": "LPS"}
     data, orient = axis_aligned(data, affine, name, space="LPS")
-    return VolumeData(np.ascontiguousarray(data), orient.spacing, orient.origin, "dicom", meta)
+    return VolumeData(data if is_lazy(data) else np.ascontiguousarray(data), orient.spacing,
+                      orient.origin, "dicom", meta)
 
 
 def _check_depths(depth, name: str) -> None:
