@@ -38,6 +38,8 @@ class MappedArray:
     offset : int
         Bytes before the first sample.
     dtype : numpy dtype, byte order included
+        The type as stored; reads come in its native byte order (:attr:`dtype`), the
+        file's is kept in :attr:`stored`.
     shape : (nx, ny, nz)
         The volume's shape, ``data[i, j, k]`` with i along x.
     order : {"C", "F"}
@@ -47,7 +49,8 @@ class MappedArray:
     def __init__(self, path, offset: int, dtype, shape, order: str = "C"):
         self.path = str(path)
         self.offset = int(offset)
-        self.dtype = np.dtype(dtype)
+        self.stored = np.dtype(dtype)
+        self.dtype = self.stored.newbyteorder("=")
         self.shape = tuple(int(n) for n in shape)
         self.ndim = 3
         self.order = order
@@ -56,7 +59,7 @@ class MappedArray:
         import os
 
         st = os.stat(self.path)
-        return (self.path, st.st_mtime_ns, st.st_size, self.offset, self.dtype.str,
+        return (self.path, st.st_mtime_ns, st.st_size, self.offset, self.stored.str,
                 self.shape, self.order)
 
     def __getitem__(self, key) -> np.ndarray:
@@ -65,10 +68,10 @@ class MappedArray:
 
         The file is mapped for this read only: the pages read leave the process's resident
         memory with the mapping (one kept open would hold every page any brick read)."""
-        stored = np.memmap(self.path, dtype=self.dtype, mode="r", offset=self.offset,
+        stored = np.memmap(self.path, dtype=self.stored, mode="r", offset=self.offset,
                            shape=self.shape, order=self.order)
         # a copy: nothing refers to the mapping afterwards, so it is unmapped on return
-        return np.array(stored[key], dtype=self.dtype.newbyteorder("="), order="C")
+        return np.array(stored[key], dtype=self.dtype, order="C")
 
     def chunks(self) -> tuple[int, int, int]:
         """Dask chunks of this array (:func:`cube_chunks`)."""

@@ -136,3 +136,22 @@ def test_a_uint8_file_within_budget_only_in_its_own_type_opens(tmp_path, monkeyp
     vol = sv.read_volume(tmp_path / "v.nii")
     assert vol.dtype == np.uint8
     np.testing.assert_array_equal(vol.data, data)
+
+
+def test_a_big_endian_mgh_with_permuted_axes_maps_in_native_order(tmp_path, monkeypatch):
+    """MGH stores big-endian samples; its affine here swaps y and z and reverses x and z."""
+    data = _samples((20, 18, 16))
+    affine = np.array([[-1.0, 0, 0, 5], [0, 0, 2, 6], [0, -1.5, 0, 7], [0, 0, 0, 1]])
+    nib.MGHImage(data, affine).to_filename(tmp_path / "v.mgh")
+    with pytest.warns(sv.SplinevizWarning, match="negative spacing along x, z"):
+        whole = sv.read_volume(tmp_path / "v.mgh")
+    monkeypatch.setenv(LAZY_SHARE_ENV, "0")
+    with pytest.warns(sv.SplinevizWarning, match="negative spacing along x, z"):
+        lazy = sv.read_volume(tmp_path / "v.mgh")
+    assert lazy.dtype == np.dtype(np.int16) and lazy.dtype.isnative
+    assert lazy.shape == whole.shape == (20, 16, 18)
+    assert lazy.spacing == whole.spacing == (1.0, 2.0, 1.5)
+    assert lazy.origin == whole.origin
+    np.testing.assert_array_equal(np.asarray(lazy.data.compute()), whole.data)
+    # world y is the file's k, world z its j reversed
+    np.testing.assert_array_equal(whole.data, np.flip(data.transpose(0, 2, 1), (0, 2)))
