@@ -81,7 +81,8 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
 
 def _geometry(vd, name: str, channel) -> dict:
     """The index-to-world affine, its space, the world bounds of the grid's corners (the
-    affine may reorder and reverse axes), and the frames of a 4-D file."""
+    affine may reorder and reverse axes), the unit of the values where the reader knows it,
+    and the frames of a 4-D file."""
     from splineviz.io.geometry import orientation
     from splineviz.io.volume_data import select_frames
 

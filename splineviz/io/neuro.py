@@ -8,6 +8,12 @@ which maps array indices to RAS+ world millimetres; :func:`~splineviz.io.volumes
 makes it axis-aligned by :mod:`splineviz.io.geometry`'s rule. A 4-D (or 5-D) file gives its
 first frame and the others on demand (:class:`~splineviz.io.volume_data.Frames`, one frame
 read at a time), each axis named from the file's metadata where it says what the axis is.
+
+Uncompressed NIfTI, Analyze and MGH samples are memory-mapped (nibabel's ``mmap``): read
+whole, they are copied once, into the volume; a 3-D file too large to render in one piece
+(:func:`~splineviz.io.mapped.renders_in_pieces`) opens as a chunked volume whose bricks read
+their own box of the mapped file, scaled as nibabel scales it (:class:`ScaledArray`) and
+turned into world order (:class:`~splineviz.io.mapped.OrientedArray`).
 """
 
 from __future__ import annotations
