@@ -129,13 +129,17 @@ def test_the_size_check_counts_the_type_a_volume_keeps(monkeypatch):
 
 def test_a_uint8_file_within_budget_only_in_its_own_type_opens(tmp_path, monkeypatch):
     data = _samples((64, 64, 64), np.uint8)
-    nib.Nifti1Image(data, np.eye(4)).to_filename(tmp_path / "v.nii")
+    # gzipped: read whole, so the budget decides (a plain file this size would be mapped)
+    nib.Nifti1Image(data, np.eye(4)).to_filename(tmp_path / "v.nii.gz")
     # room for the stored samples and a uint8 volume (2 bytes a sample), not for a float32
     # copy beside them (5) nor nibabel's float64 values (9)
     monkeypatch.setenv("SPLINEVIZ_MAX_VOLUME_BYTES", str(3 * 64**3))
-    vol = sv.read_volume(tmp_path / "v.nii")
-    assert vol.dtype == np.uint8
+    vol = sv.read_volume(tmp_path / "v.nii.gz")
+    assert isinstance(vol, sv.Volume) and vol.dtype == np.uint8
     np.testing.assert_array_equal(vol.data, data)
+    monkeypatch.setenv("SPLINEVIZ_MAX_VOLUME_BYTES", str(64**3))
+    with pytest.raises(DataTooLargeError, match="v.nii.gz needs about"):
+        sv.read_volume(tmp_path / "v.nii.gz")
 
 
 def test_a_big_endian_mgh_with_permuted_axes_maps_in_native_order(tmp_path, monkeypatch):
