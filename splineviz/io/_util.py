@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import glob
 import os
+import re
 import stat
 import tempfile
 import warnings
@@ -16,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.errors import SplinevizError, SplinevizWarning
+from splineviz.core.volume import NATIVE_TYPES
 from splineviz.io.errors import (
     CorruptFileError,
     DataFileNotFoundError,
@@ -49,15 +52,46 @@ def memory_budget() -> int:
     return int(free * MEMORY_FRACTION)
 
 
-def check_volume_size(shape, itemsize: int, name: str) -> None:
+def held_bytes(shape, itemsize) -> int:
+    """Bytes a volume read in one piece holds at its peak: the samples as stored and the
+    :class:`~splineviz.Volume` made of them, which keeps the file's type where it can
+    (:data:`~splineviz.core.volume.NATIVE_TYPES`) and holds float32 otherwise.
+
+    Parameters
+    ----------
+    shape : sequence of int
+        Samples per axis.
+    itemsize : int or numpy dtype
+        The stored sample type, or its size in bytes: every 1- and 2-byte type but float16
+        is kept as it is, and every wider type becomes (or is) 4-byte float32.
+
+    Returns
+    -------
+    int
+    """
+    count = 1
+    for n in shape:
+        count *= int(n)  # Python ints: no overflow for absurd headers
+    if isinstance(itemsize, (int, np.integer)):
+        stored = int(itemsize)
+        held = stored if stored <= 2 else 4
+    else:
+        dtype = np.dtype(itemsize)
+        stored = dtype.itemsize
+        held = stored if dtype.newbyteorder("=") in NATIVE_TYPES or dtype.kind == "b" else 4
+    return count * (stored + held)
+
+
+def check_volume_size(shape, itemsize, name: str) -> None:
     """Refuse a volume before allocating it if it cannot fit.
 
     Parameters
     ----------
     shape : (3,) sequence of int
         Samples per axis as announced by a header.
-    itemsize : int
-        Bytes per stored sample; the float32 copy of :class:`~splineviz.Volume` is added.
+    itemsize : int or numpy dtype
+        The stored sample type, or its size in bytes; the :class:`~splineviz.Volume` made of
+        the samples is counted in the type it keeps (:func:`held_bytes`).
     name : str
         File name for the message.
     """
@@ -72,7 +106,7 @@ def check_volume_size(shape, itemsize: int, name: str) -> None:
             f"{name} announces {count:,} samples {tuple(dims)}, more than the "
             f"{MAX_SAMPLES:,} this program can index"
         )
-    need = count * (int(itemsize) + 4)
+    need = held_bytes(dims, itemsize)
     budget = memory_budget()
     if need > budget:
         raise DataTooLargeError(
@@ -81,12 +115,28 @@ def check_volume_size(shape, itemsize: int, name: str) -> None:
         )
 
 
-def regular_input(path, *, allow_dir: bool = False) -> Path:
-    """Return ``path`` as a :class:`Path` if it is an existing regular file (or folder).
+#: a printf-style number in a file name (``img_%03d.png``, ``slice%d.tif``)
+PRINTF_NUMBER = re.compile(r"%(0?)(\d*)d")
+
+
+def has_pattern(path) -> bool:
+    """Whether ``path`` names files by a pattern rather than being an existing file: a glob
+    pattern (``*``, ``?`` or ``[...]`` in its name) or a printf-style number
+    (``img_%03d.png``)."""
+    p = Path(os.fspath(path)).expanduser()
+    return (glob.has_magic(p.name) or PRINTF_NUMBER.search(p.name) is not None) and \
+        not p.exists()
+
+
+def regular_input(path, *, allow_dir: bool = False, allow_pattern: bool = False) -> Path:
+    """Return ``path`` as a :class:`Path` if it is an existing regular file (or folder, or
+    a pattern of files: :func:`has_pattern`).
 
     Device files, FIFOs and sockets are refused: reading ``/dev/zero`` or a pipe would hang.
     """
     p = Path(os.fspath(path)).expanduser()
+    if allow_pattern and has_pattern(p):
+        return p
     try:
         st = p.stat()
     except FileNotFoundError:

@@ -26,9 +26,9 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     -------
     dict
         For volumes: ``kind, format, dims, dtype, range, spacing, origin, bounds, affine``
-        (index to world, the file's own axes; with ``space``, ``unit`` (of lengths) and
-        ``frames`` where the file has them, ``oblique`` and ``direction`` for a rotated
-        grid); for points:
+        (index to world, the file's own axes; with ``space``, ``unit`` (of lengths),
+        ``values`` (the unit of the samples) and ``frames`` where the file has them,
+        ``oblique`` and ``direction`` for a rotated grid); for points:
         ``kind, format, points, normals, colors, bounds``; for sessions: ``kind,
         schema_version, objects, views``.
     """
@@ -37,7 +37,7 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
     from splineviz.io.session import load_session
     from splineviz.io.volumes import load_volume_data, validate_volume_data
 
-    p = regular_input(path, allow_dir=True)
+    p = regular_input(path, allow_dir=True, allow_pattern=True)
     if p.suffix.lower() == ".svs":
         s = load_session(p, check_data=False, allow_outside=allow_outside)
         return {"kind": "session", "file": str(p), "schema_version": s.schema_version,
@@ -82,8 +82,8 @@ def describe(path, *, allow_outside: bool = False, channel=None, **raw) -> dict:
 
 def _geometry(vd, name: str, channel) -> dict:
     """The index-to-world affine, its space, the world bounds of the grid's corners (the
-    affine may reorder, reverse and rotate axes), the direction an oblique grid keeps, and
-    the frames of a 4-D file."""
+    affine may reorder, reverse and rotate axes), the direction an oblique grid keeps, the
+    unit of the values where the reader knows it, and the frames of a 4-D file."""
     from splineviz.io.geometry import orientation
     from splineviz.io.volume_data import select_frames
 
@@ -93,6 +93,9 @@ def _geometry(vd, name: str, channel) -> dict:
     out = {"bounds": [[float(lo), float(hi)] for lo, hi in zip(world.min(axis=1),
                                                                world.max(axis=1), strict=True)],
            "affine": [[float(v) for v in row] for row in vd.affine]}
+    if vd.meta.get("value_unit"):  # what the samples measure (DICOM: Gy, relative dose, HU)
+        dose = vd.meta.get("dose")
+        out["values"] = str(vd.meta["value_unit"]) + (f" (RT dose, {dose})" if dose else "")
     if vd.space:
         out["space"] = vd.space
     if vd.meta.get("length_unit"):  # of spacing, origin and bounds, where the file says

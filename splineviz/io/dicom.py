@@ -15,7 +15,8 @@ slice or frame; RT dose: GridFrameOffsetVector along the slice normal) and kept 
 sign are transposed and flipped into place with a warning; an oblique grid keeps its
 rotation as its direction, never silently made axis-aligned. Slices spaced unevenly (a
 missing slice, variable spacing) are resampled to even steps by linear interpolation with a
-warning. Values: RescaleSlope/RescaleIntercept (per frame where given) and DoseGridScaling.
+warning. Values: RescaleSlope/RescaleIntercept (per frame where given) and DoseGridScaling
+(per file), in the unit ``meta["value_unit"]`` names (:func:`value_unit`).
 """
 
 from __future__ import annotations
@@ -29,9 +30,11 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.errors import SplinevizWarning
-from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, confined
+from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size, confined, held_bytes
+from splineviz.io.chunked import is_lazy
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
 from splineviz.io.geometry import axis_aligned
+from splineviz.io.mapped import CHUNK_BYTES, lazy_threshold
 from splineviz.io.registry import register_format
 from splineviz.io.volume_data import VolumeData
 
@@ -39,6 +42,8 @@ from splineviz.io.volume_data import VolumeData
 EVEN_STEP_TOLERANCE = 1e-3
 #: an uneven series is resampled to at most this many times its slice count
 MAX_RESAMPLE_FACTOR = 4
+#: DoseUnits (3004,0002) as splineviz names them
+DOSE_UNITS = {"GY": "Gy", "RELATIVE": "relative"}
 #: folder scans kept (header summaries of every file, keyed by the files' sizes and times)
 _SCAN_CACHE_SIZE = 8
 _scans: dict = {}
@@ -371,6 +376,32 @@ def _rescale(ds, seq_item=None) -> tuple[float, float]:
     return slope, inter
 
 
+def _dose_scaling(ds, name: str) -> float | None:
+    """DoseGridScaling: the dose of one stored unit (None when the file has none)."""
+    value = ds.get("DoseGridScaling")
+    if value is None or value == "":
+        return None
+    try:
+        scale = float(value)
+    except (TypeError, ValueError):
+        raise CorruptFileError(f"{name} has an unreadable DoseGridScaling {value!r}") from None
+    if not np.isfinite(scale) or scale <= 0:
+        raise CorruptFileError(f"{name} has an unusable DoseGridScaling {scale:g}")
+    return scale
+
+
+def value_unit(ds) -> str | None:
+    """The unit of a file's values once scaled: an RT dose's DoseUnits (``"Gy"``, or
+    ``"relative"``: a share of an unstated reference dose, never taken for Gy), ``"HU"``
+    for CT, else None (unknown)."""
+    units = str(ds.get("DoseUnits", "") or "").strip()
+    if units or str(ds.get("Modality", "")) == "RTDOSE":
+        return DOSE_UNITS.get(units.upper(), units or None)
+    if str(ds.get("Modality", "")) == "CT":
+        return "HU"
+    return None
+
+
 def _read_series(series: Series, name: str, single_frames: bool = False):
     """A series of single-frame images (or one multi-frame file); ``single_frames``: only
     the single-frame images of the series."""
@@ -405,22 +436,73 @@ def _read_series(series: Series, name: str, single_frames: bool = False):
     pos = np.array([_floats(ds.ImagePositionPatient, 3, "ImagePositionPatient", f.name)
                     for f, ds in heads])
     spacing_xy = _pixel_spacing(first.get("PixelSpacing"), name)
-    check_volume_size((cols, rows, len(heads)), 4, name)
     order = np.argsort(pos @ normal, kind="stable")
     _check_depths((pos @ normal)[order], name)  # before decoding a single pixel
-    stack = np.empty((len(heads), rows, cols), dtype=np.float32)
-    unit = "HU" if str(first.get("Modality", "")) == "CT" else None
-    for k, idx in enumerate(order):
-        f = heads[idx][0]
-        ds, px = _pixels(f)
-        if px.shape != (rows, cols):
-            raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, expected "
-                                   f"{(rows, cols)}")
-        slope, inter = _rescale(ds)
-        stack[k] = px * slope + inter if (slope, inter) != (1.0, 0.0) else px
-    meta = {"series": series.uid, "modality": series.modality, "unit": unit,
+    units = {value_unit(ds) for _, ds in heads}
+    if len(units) > 1:
+        raise InvalidDataError(f"the images of {name}'s series hold values in different units "
+                               f"({', '.join(sorted(str(u) for u in units))}), not one volume")
+    slices = SeriesSlices([heads[i][0] for i in order], rows, cols)
+    depth = (pos @ normal)[order]
+    steps = np.diff(depth)
+    even = np.max(np.abs(steps - np.median(steps))) <= EVEN_STEP_TOLERANCE * np.median(steps)
+    if even and held_bytes(slices.shape, slices.dtype) > lazy_threshold():
+        stack = slices.lazy()  # read slice by slice as bricks need them
+    else:  # whole (uneven slices are resampled, which needs them all)
+        check_volume_size((cols, rows, len(heads)), slices.dtype, name)
+        stack = slices[:, :, :]
+    meta = {"series": series.uid, "modality": series.modality, "value_unit": units.pop(),
             "description": series.description, "files": len(heads)}
     return _volume(stack, pos[order], row, col, normal, spacing_xy, name, meta)
+
+
+class SeriesSlices:
+    """A picklable region reader of a series of single-frame images, stored (slice, row,
+    column) in slice order: a region decodes only the files of its slices, each rescaled
+    (RescaleSlope/RescaleIntercept, DoseGridScaling) to float32.
+
+    Parameters
+    ----------
+    files : sequence of path-like
+        The images in slice order.
+    rows, cols : int
+        Their picture size.
+    """
+
+    def __init__(self, files, rows: int, cols: int):
+        self.files = [str(f) for f in files]
+        self.shape = (len(self.files), int(rows), int(cols))
+        self.dtype = np.dtype(np.float32)
+        self.ndim = 3
+
+    def __getitem__(self, key) -> np.ndarray:
+        """The values of ``key`` (three slices), float32, (slices, rows, columns)."""
+        key = tuple(key) + (slice(None),) * (3 - len(tuple(key)))
+        zs = range(*key[0].indices(self.shape[0]))
+        out = np.empty((len(zs),) + tuple(len(range(*k.indices(n))) for k, n in zip(
+            key[1:], self.shape[1:], strict=True)), dtype=np.float32)
+        for n, z in enumerate(zs):
+            f = Path(self.files[z])
+            ds, px = _pixels(f)
+            if px.shape != self.shape[1:]:
+                raise CorruptFileError(f"{f.name} holds pixels of shape {px.shape}, expected "
+                                       f"{self.shape[1:]}")
+            px = px[key[1:]]
+            slope, inter = _rescale(ds)
+            out[n] = px * slope + inter if (slope, inter) != (1.0, 0.0) else px
+            dose = _dose_scaling(ds, f.name)  # each file of a dose series has its own
+            if dose is not None:
+                out[n] *= np.float32(dose)
+        return out
+
+    def lazy(self):
+        """A dask array of the series in chunks of whole slices (about
+        :data:`~splineviz.io.mapped.CHUNK_BYTES` each); nothing is read."""
+        import dask.array as da
+
+        per_slice = self.shape[1] * self.shape[2] * self.dtype.itemsize
+        depth = max(1, min(self.shape[0], CHUNK_BYTES // max(per_slice, 1)))
+        return da.from_array(self, chunks=(depth,) + self.shape[1:], asarray=False)
 
 
 def _functional(ds, frame: int, sequence: str, attr: str):
@@ -472,9 +554,9 @@ def _read_multiframe(path: Path):
             pos.append(_floats(value, 3, "ImagePositionPatient", name))
         pos = np.array(pos)
     stack = np.asarray(px, dtype=np.float32)
-    scale = ds.get("DoseGridScaling")
+    scale = _dose_scaling(ds, name)
     if scale is not None:
-        stack = stack * np.float32(float(scale))
+        stack = stack * np.float32(scale)
     for k in range(frames):
         value, item = _functional(ds, k, "PixelValueTransformationSequence", "RescaleSlope")
         slope, inter = _rescale(ds, item) if item is not None else _rescale(ds)
@@ -482,14 +564,12 @@ def _read_multiframe(path: Path):
             stack[k] = stack[k] * np.float32(slope) + np.float32(inter)
     depth = pos @ normal
     order = np.argsort(depth, kind="stable")
-    unit = None
-    if scale is not None:
-        unit = {"GY": "Gy", "RELATIVE": "relative"}.get(str(ds.get("DoseUnits", "")).upper(),
-                                                        str(ds.get("DoseUnits", "")) or None)
-    elif str(ds.get("Modality", "")) == "CT":
-        unit = "HU"
     meta = {"series": str(ds.get("SeriesInstanceUID", "") or ""),
-            "modality": str(ds.get("Modality", "") or ""), "unit": unit, "frames": frames}
+            "modality": str(ds.get("Modality", "") or ""), "value_unit": value_unit(ds),
+            "frames": frames}
+    if "DoseType" in ds or "DoseSummationType" in ds:
+        meta["dose"] = " ".join(str(ds.get(k, "") or "").lower()
+                                for k in ("DoseType", "DoseSummationType")).strip()
     return _volume(stack[order], pos[order], row, col, normal,
                    _pixel_spacing(ps_value, name), name, meta)
 
@@ -523,8 +603,8 @@ def _volume(stack, pos, row, col, normal, spacing_xy, name: str, meta: dict):
     # DICOM positions and spacings are millimetres (PS3.3 C.7.6.2)
     meta = {**meta, "affine": affine.tolist(), "space": "LPS", "length_unit": "mm"}
     data, orient = axis_aligned(data, affine, name, space="LPS")
-    return VolumeData(np.ascontiguousarray(data), orient.spacing, orient.origin, "dicom", meta,
-                      orient.volume_direction, "LPS")
+    return VolumeData(data if is_lazy(data) else np.ascontiguousarray(data), orient.spacing,
+                      orient.origin, "dicom", meta, orient.volume_direction, "LPS")
 
 
 def _check_depths(depth, name: str) -> None:

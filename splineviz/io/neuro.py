@@ -8,6 +8,12 @@ which maps array indices to RAS+ world millimetres; :func:`~splineviz.io.volumes
 makes it axis-aligned by :mod:`splineviz.io.geometry`'s rule. A 4-D (or 5-D) file gives its
 first frame and the others on demand (:class:`~splineviz.io.volume_data.Frames`, one frame
 read at a time), each axis named from the file's metadata where it says what the axis is.
+
+Uncompressed NIfTI, Analyze and MGH samples are memory-mapped (nibabel's ``mmap``): read
+whole, they are copied once, into the volume; a 3-D file too large to render in one piece
+(:func:`~splineviz.io.mapped.renders_in_pieces`) opens as a chunked volume whose bricks read
+their own box of the mapped file, scaled as nibabel scales it (:class:`ScaledArray`) and
+turned into world order (:class:`~splineviz.io.mapped.OrientedArray`).
 """
 
 from __future__ import annotations
@@ -253,10 +259,12 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
         raise InvalidDataError(f"{path.name} has a degenerate voxel-to-world affine "
                                f"(voxel sizes {', '.join(f'{s:g}' for s in steps)})")
     proxy = img.dataobj
-    # nibabel scales to float64 (MINC always, others when a slope or intercept applies):
-    # the budget is checked for that, before any sample is read
-    itemsize = max(8, np.dtype(img.get_data_dtype()).itemsize)
-    check_volume_size([shape[a] for a in spatial], itemsize, path.name)
+    if not extra:
+        mapped = _mapped(img, path, shape, spatial, affine, fmt)
+        if mapped is not None:
+            return mapped
+    # the budget is checked for the type nibabel's values come in, before any is read
+    check_volume_size([shape[a] for a in spatial], _value_dtype(img), path.name)
 
     def read(index: tuple[int, ...]) -> np.ndarray:
         key: list = [slice(None)] * len(shape)
@@ -285,6 +293,114 @@ def _read_nibabel(path: Path, description: str, fmt: str) -> VolumeData:
                       tuple(float(v) for v in affine[:3, 3]), fmt, meta,
                       None if np.array_equal(direction, np.eye(3)) else direction, "RAS",
                       frames)
+
+
+def _plain_array_proxy(img):
+    """nibabel's ArrayProxy of an image whose samples lie uncompressed in one file, in
+    Fortran order (NIfTI, Analyze and MGH files that are not gzipped), else None."""
+    from nibabel.arrayproxy import ArrayProxy
+    from nibabel.openers import ImageOpener
+
+    proxy = img.dataobj
+    if type(proxy) is not ArrayProxy or proxy.order != "F":
+        return None
+    holder = getattr(img, "file_map", {}).get("image")
+    name = getattr(holder, "filename", None)
+    if name is None or Path(name).suffix.lower() in ImageOpener.compress_ext_map:
+        return None
+    return proxy
+
+
+def _value_dtype(img) -> np.dtype:
+    """The type of nibabel's values (``dataobj[...]``): the stored type when no scaling
+    applies, the float type nibabel scales in when one does (float64 for the proxies
+    other than ArrayProxy: MINC, PAR/REC, AFNI)."""
+    from nibabel.arrayproxy import ArrayProxy
+    from nibabel.volumeutils import apply_read_scaling
+
+    proxy = img.dataobj
+    if type(proxy) is not ArrayProxy:
+        return np.dtype(np.float64)
+    stored = np.zeros(1, np.dtype(img.get_data_dtype()))
+    return np.asarray(apply_read_scaling(stored, np.asanyarray(proxy.slope),
+                                         np.asanyarray(proxy.inter))).dtype
+
+
+class ScaledArray:
+    """Region reads of stored samples with nibabel's read scaling applied
+    (``stored * slope + inter``, exactly as ``ArrayProxy`` computes it), as float32, the
+    type splineviz computes in.
+
+    Parameters
+    ----------
+    source : region reader (:class:`~splineviz.io.mapped.MappedArray`)
+    slope, inter : NumPy scalars
+        The proxy's scale factors, in their own types (they choose nibabel's float type).
+    """
+
+    def __init__(self, source, slope, inter):
+        self.source = source
+        self.slope = np.asanyarray(slope)
+        self.inter = np.asanyarray(inter)
+        self.shape = tuple(source.shape)
+        self.dtype = np.dtype(np.float32)
+        self.ndim = 3
+
+    def __dask_tokenize__(self):
+        from dask.base import tokenize
+
+        return ("scaled", tokenize(self.source), float(self.slope), float(self.inter))
+
+    def __getitem__(self, key) -> np.ndarray:
+        """The values of ``key`` (a NumPy index), float32."""
+        from nibabel.volumeutils import apply_read_scaling
+
+        # ArrayProxy._get_scaled: the intercept takes the slope's type where it can
+        inter = self.inter.astype(self.slope.dtype) if np.can_cast(
+            self.inter, self.slope.dtype) else self.inter
+        return np.asarray(apply_read_scaling(self.source[key], self.slope, inter),
+                          dtype=np.float32)
+
+
+def _mapped(img, path: Path, shape, spatial, affine, fmt: str) -> VolumeData | None:
+    """A 3-D volume too large to render in one piece
+    (:func:`~splineviz.io.mapped.renders_in_pieces`) whose samples lie uncompressed in one
+    file: read brick by brick from the mapped file (scaled as nibabel scales them, turned
+    into world order as :func:`~splineviz.io.volumes.to_volume` would), or None for the
+    eager path (smaller volumes, compressed files, other proxies, oblique grids)."""
+    from splineviz.io.geometry import orientation, warn_flips
+    from splineviz.io.mapped import (
+        MappedArray,
+        OrientedArray,
+        lazy_array,
+        renders_in_pieces,
+    )
+
+    proxy = _plain_array_proxy(img)
+    if proxy is None or tuple(spatial) != (0, 1, 2):
+        return None
+    dims = tuple(shape[:3])
+    if not renders_in_pieces(dims, _value_dtype(img)):
+        return None
+    orient = orientation(affine, dims, path.name, space="RAS")
+    if orient.oblique:
+        return None  # read whole: refused or resampled by to_volume
+    image = Path(img.file_map["image"].filename)
+    stored = np.dtype(proxy.dtype)
+    if image.stat().st_size < int(proxy.offset) + int(np.prod(dims, dtype=object)) * \
+            stored.itemsize:
+        raise CorruptFileError(f"{path.name} announces {dims} samples of {stored.name} but "
+                               f"{image.name} is shorter")
+    source = MappedArray(image, int(proxy.offset), stored, dims, "F")
+    if (proxy.slope, proxy.inter) != (1, 0):
+        source = ScaledArray(source, proxy.slope, proxy.inter)
+    if not orient.identity:
+        source = OrientedArray(source, orient.perm, orient.flips)
+        warn_flips(orient, path.name, stacklevel=7)
+    meta = {"class": type(img).__name__, "spatial_axes": tuple(spatial), "levels": (),
+            "source": source, "affine": affine.tolist()}
+    return VolumeData(lazy_array(source), orient.spacing, orient.origin, fmt, meta, None,
+                      "RAS")
 
 
 def _reader(description: str, fmt: str):

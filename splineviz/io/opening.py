@@ -73,10 +73,6 @@ def open_path(path, *, repoint=None, allow_outside: bool = False, **volume_optio
     if p.suffix.lower() in SESSION_SUFFIXES:
         return Opened("session", load_session(p, repoint=repoint,
                                                     allow_outside=allow_outside), p)
-    from splineviz.io.tiff import has_pattern, read_slice_volume
-
-    if has_pattern(p):  # a glob pattern of numbered slices, e.g. scan/slice_*.tif
-        return Opened("volume", read_slice_volume(p), p)
     try:
         return Opened("volume", read_volume(p, allow_outside=allow_outside, **volume_options),
                       p)

@@ -4,8 +4,8 @@ A TIFF volume is the first series of the file as tifffile sees it: a multi-page 
 BigTIFF, an ImageJ hyperstack or an OME-TIFF; stored z, y, x, it becomes ``data[i, j, k]``
 with i along x. Spacing comes from the file's metadata: ImageJ's ``spacing`` for z and the
 XResolution/YResolution tags (pixels per unit) for x and y, or OME's PhysicalSizeX/Y/Z; a
-plain TIFF has spacing 1. A folder (or glob pattern) of numbered 2-D TIFF or PNG slices is a
-stack in natural order (``s2`` before ``s10``).
+plain TIFF has spacing 1. A folder or pattern (``scan/*.tif``, ``scan/img_%03d.png``) of
+numbered 2-D TIFF or PNG slices is a stack in natural order (``s2`` before ``s10``).
 
 A volume larger than :func:`lazy_threshold` is read lazily: a dask array whose bricks read
 only the pages (TIFF tiles or strips through ``TiffFile.aszarr``) or slice files they meet,
@@ -23,7 +23,12 @@ from pathlib import Path
 import numpy as np
 
 from splineviz.core.units import canonical_unit
-from splineviz.io._util import MIN_SAMPLES_PER_AXIS, check_volume_size
+from splineviz.io._util import (
+    MIN_SAMPLES_PER_AXIS,
+    PRINTF_NUMBER,
+    check_volume_size,
+    held_bytes,
+)
 from splineviz.io.chunked import AxisSource
 from splineviz.io.errors import CorruptFileError, FileFormatError, InvalidDataError
 from splineviz.io.mapped import LAZY_SHARE_ENV, lazy_threshold  # noqa: F401  (tests set it)
@@ -46,10 +51,6 @@ _AXIS_NAMES = {"C": "channels", "T": "time points", "S": "colour samples", "Z": 
 _UNITS_UM = {"nm": 1e-3, "nanometer": 1e-3, "um": 1.0, "µm": 1.0, "\u03bcm": 1.0,
              "micron": 1.0, "microns": 1.0, "micrometer": 1.0, "mm": 1e3, "millimeter": 1e3,
              "cm": 1e4, "m": 1e6, "meter": 1e6, "pixel": None, "px": None, "": None}
-
-
-def _eager_bytes(shape, dtype) -> int:
-    return int(np.prod([int(n) for n in shape], dtype=object)) * (np.dtype(dtype).itemsize + 4)
 
 
 def _chunks(stored, dtype) -> tuple[int, int, int]:
@@ -235,8 +236,8 @@ def _read_tiff(path: Path):
         if min(stored) < MIN_SAMPLES_PER_AXIS:
             raise InvalidDataError(f"{path.name} has {stored[::-1]} samples; a spline volume "
                                    f"needs at least {MIN_SAMPLES_PER_AXIS} along each axis")
-        if _eager_bytes(stored, dtype) <= lazy_threshold():
-            check_volume_size(stored, dtype.itemsize, path.name)
+        if held_bytes(stored, dtype) <= lazy_threshold():
+            check_volume_size(stored, dtype, path.name)
             try:
                 data = np.asarray(series.asarray())[index]
             except (ValueError, NotImplementedError, RuntimeError) as exc:
@@ -261,15 +262,14 @@ def _decode_error(name: str, tif, exc) -> Exception:
 
 
 # ---------------------------------------------------------------------------- slice stacks
-def has_pattern(path) -> bool:
-    """Whether ``path`` is a glob pattern (``*``, ``?`` or ``[...]`` in its name) rather
-    than an existing file."""
-    p = Path(os.fspath(path)).expanduser()
-    return glob.has_magic(p.name) and not p.exists()
-
-
 def slice_files(path) -> list[Path]:
-    """The 2-D slices of a folder or glob pattern, TIFF or PNG, in natural order.
+    """The 2-D slices of a folder or pattern, TIFF or PNG, in natural order.
+
+    Parameters
+    ----------
+    path : path-like
+        A folder, a glob pattern (``scan/slice_*.tif``) or a printf-style one
+        (``scan/img_%03d.png``: every file whose number is written that way).
 
     Raises
     ------
@@ -282,15 +282,37 @@ def slice_files(path) -> list[Path]:
                  and not f.name.startswith(".")]
         where = f"folder {p.name}"
     else:
-        files = [Path(f) for f in glob.glob(str(p)) if Path(f).is_file()
-                 and Path(f).suffix.lower() in SLICE_SUFFIXES]
-        where = f"pattern {p.name}"
+        if PRINTF_NUMBER.search(p.name):
+            named = _printf_names(p)
+        else:
+            named = [Path(f) for f in glob.glob(str(p))]
+        files = [f for f in named if f.is_file() and f.suffix.lower() in SLICE_SUFFIXES]
+        where = f"pattern {p.name} in {p.parent}"
     if not files:
         raise InvalidDataError(f"{where} matches no TIFF or PNG slices")
     kinds = {f.suffix.lower() == ".png" for f in files}
     if len(kinds) > 1:
         raise InvalidDataError(f"{where} mixes TIFF and PNG slices; keep one kind per stack")
     return sorted(files, key=lambda f: natural_key(f.name))
+
+
+def _printf_names(pattern: Path) -> list[Path]:
+    """The files of ``pattern``'s folder whose names its printf-style number matches:
+    ``%03d`` three digits or more (zero-padded), ``%d`` any."""
+    parts = PRINTF_NUMBER.split(pattern.name)
+    # split keeps the two groups of each number: (text, zero, width, text, ...)
+    regex = re.escape(parts[0])
+    for k in range(1, len(parts), 3):
+        zero, width = parts[k], parts[k + 1]
+        regex += rf"\d{{{int(width)},}}" if zero and width else r"\d+"
+        regex += re.escape(parts[k + 2])
+    folder = pattern.parent
+    try:
+        names = [e.name for e in os.scandir(folder)]
+    except OSError:
+        return []
+    rx = re.compile(regex)
+    return [folder / n for n in names if rx.fullmatch(n)]
 
 
 def _read_picture(path: Path) -> np.ndarray:
@@ -396,8 +418,8 @@ def read_slices(path):
     meta = {"files": len(files), "unit": unit, "length_unit": canonical_unit(unit),
             "first": files[0].name}
     src = SliceFiles(files, stored, first.dtype)
-    if _eager_bytes(stored, first.dtype) <= lazy_threshold():
-        check_volume_size(stored, first.dtype.itemsize, name)
+    if held_bytes(stored, first.dtype) <= lazy_threshold():
+        check_volume_size(stored, first.dtype, name)
         data = np.empty(stored, dtype=first.dtype)
         data[0] = first
         for z in range(1, len(files)):
@@ -407,25 +429,6 @@ def read_slices(path):
     lazy = da.from_array(volume_src, chunks=_chunks(stored, first.dtype), asarray=False)
     return VolumeData(lazy, spacing, (0.0, 0.0, 0.0), "slices",
                       {**meta, "levels": (), "source": volume_src})
-
-
-def read_slice_volume(path):
-    """A folder or glob pattern of 2-D slices as a float32
-    :class:`~splineviz.core.volume.Volume`, or a
-    :class:`~splineviz.core.chunked.ChunkedVolume` when read lazily (what
-    :func:`~splineviz.io.volumes.read_volume` gives for a folder; patterns are not paths
-    and come here)."""
-    from splineviz.io._util import reader_errors
-    from splineviz.io.chunked import is_lazy, to_chunked_volume
-    from splineviz.io.volumes import to_volume, validate_volume_data
-
-    name = Path(os.fspath(path)).name
-    with reader_errors(name, "slices"):
-        vd = read_slices(path)
-    if is_lazy(vd.data):
-        validate_volume_data(vd, name)
-        return to_chunked_volume(vd, name)
-    return to_volume(vd, name)
 
 
 def _is_slice_folder(path: Path) -> bool:

@@ -838,9 +838,11 @@ def load_volume_data(path, *, format=None, dims=None, dtype=None, byteorder="lit
     :func:`~splineviz.io.volume_data.select_frames` makes with ``channel``; ``frames``
     still reads any other, and ``meta["frame"]`` holds the file index read.
     """
-    p = regular_input(path, allow_dir=True)
+    p = regular_input(path, allow_dir=True, allow_pattern=True)
     if dims is not None or dtype is not None:
         format = format or "raw"
+    elif not p.exists():  # a pattern of numbered 2-D slices: scan/slice_*.tif, img_%03d.png
+        format = format or "slices"
     fmt = find_format(p, "volume", name=format)
     with reader_errors(p.name, fmt.name), outside_allowed(allow_outside):
         if fmt.name == "raw":
@@ -874,8 +876,9 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
     ----------
     path : path-like
         VTI, NRRD/NHDR, MHD/MHA, legacy .vtk, SLC, NIfTI, Analyze (.hdr/.img), MGH/MGZ, MINC1/2,
-        PAR/REC, AFNI (BRIK/HEAD), MRC/MAP, DICOM folder, .npy, raw, and the chunked and
-        plugin formats of the registry. A 4-D file gives its first frame, with a
+        PAR/REC, AFNI (BRIK/HEAD), MRC/MAP, DICOM folder, .npy, raw, TIFF, a folder or pattern
+        of numbered 2-D TIFF or PNG slices (``scan/*.tif``, ``scan/img_%03d.png``), and the
+        chunked and plugin formats of the registry. A 4-D file gives its first frame, with a
         :class:`~splineviz.core.errors.SplinevizWarning` that says how many there are
         (:func:`~splineviz.io.sequence.read_volume_sequence` reads them all).
     format : str, optional

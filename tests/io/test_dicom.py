@@ -123,10 +123,10 @@ def test_rtdose_is_a_15_frame_dose_grid_with_its_spacing_and_unit(tmp_path):
     assert vd.origin == pytest.approx((189.43125, 199.43125, -761.87))
     ds = pydicom.dcmread(str(TEST_FILES / "rtdose.dcm"))
     np.testing.assert_allclose(vd.data, ds.pixel_array.transpose(2, 1, 0) * 1e-6, rtol=1e-6)
-    assert vd.meta["unit"] == "relative"  # the file's DoseUnits says RELATIVE
+    assert vd.meta["value_unit"] == "relative"  # the file's DoseUnits says RELATIVE
     ds.DoseUnits = "GY"
     ds.save_as(tmp_path / "gy.dcm")
-    assert load_volume_data(tmp_path / "gy.dcm").meta["unit"] == "Gy"
+    assert load_volume_data(tmp_path / "gy.dcm").meta["value_unit"] == "Gy"
 
 
 def _write_ct_series(folder: Path, n=6, z0=-40.0, dz=2.5, uid=None, iop=(1, 0, 0, 0, 1, 0),
@@ -162,7 +162,7 @@ def test_one_file_of_a_written_ct_series_opens_the_whole_series(tmp_path):
     (tmp_path / "ct" / "notes.txt").write_text("not DICOM")
     some = sorted((tmp_path / "ct").glob("*.dcm"))[2]
     vd = load_volume_data(some)
-    assert vd.format == "dicom" and vd.meta["series"] == uid and vd.meta["unit"] == "HU"
+    assert vd.format == "dicom" and vd.meta["series"] == uid and vd.meta["value_unit"] == "HU"
     np.testing.assert_array_equal(vd.data, values.transpose(2, 1, 0))
     assert vd.spacing == pytest.approx((0.661468, 0.661468, 2.5))
     assert vd.origin == pytest.approx((-10.0, 20.0, -40.0))
