@@ -219,3 +219,36 @@ def test_a_flipped_chunked_grid_is_turned_lazily_levels_included():
     lo = orientation(affine_from(level.spacing, origin, direction), coarse.shape, "f.zarr")
     np.testing.assert_array_equal(got, lo.apply(coarse))
     assert lv.origin == lo.origin and lv.spacing == lo.spacing
+
+
+def test_a_large_oblique_dicom_series_keeps_its_direction_lazily(tmp_path, monkeypatch):
+    """A series tilted by 20 degrees about z, above the lazy share: read slice by slice with
+    the rotation the series read whole keeps (it was refused before)."""
+    import copy
+    from pathlib import Path
+
+    pydicom = pytest.importorskip("pydicom")
+    from pydicom.uid import generate_uid
+
+    template = pydicom.dcmread(str(Path(pydicom.__file__).parent / "data" / "test_files"
+                                   / "CT_small.dcm"))
+    c, s = np.cos(np.radians(20.0)), np.sin(np.radians(20.0))
+    row, col = np.array([c, s, 0.0]), np.array([-s, c, 0.0])
+    uid = generate_uid()
+    folder = tmp_path / "ct"
+    folder.mkdir()
+    for k in range(5):
+        ds = copy.deepcopy(template)
+        ds.SeriesInstanceUID, ds.SOPInstanceUID = uid, generate_uid()
+        ds.ImageOrientationPatient = [f"{v:.8f}" for v in (*row, *col)]
+        ds.ImagePositionPatient = [f"{v:g}" for v in (5.0, 8.0, 2.0 * k)]
+        ds.save_as(folder / f"img{k}.dcm")
+    whole = sv.read_volume(folder)
+    monkeypatch.setenv(LAZY_SHARE_ENV, "0")
+    lazy = sv.read_volume(folder)
+    assert isinstance(whole, sv.Volume) and isinstance(lazy, ChunkedVolume)
+    assert not whole.axis_aligned
+    np.testing.assert_allclose(lazy.direction, whole.direction, atol=1e-12)
+    assert lazy.spacing == whole.spacing and lazy.origin == whole.origin
+    np.testing.assert_allclose(lazy.world_bounds, whole.world_bounds)
+    np.testing.assert_array_equal(np.asarray(lazy.data.compute()), whole.data)
