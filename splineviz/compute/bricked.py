@@ -14,6 +14,14 @@ polynomials in every cell, so each brick's first hits are that caster's, bit for
 client composites the returned fragments (:mod:`splineviz.core.compositing`): least depth for
 opaque surfaces, back-to-front brick order for translucent ones.
 
+A volume with a direction (an oblique scan) is cast in its own axis-aligned frame: the camera
+and clip planes are moved there once, when a frame starts, every brick is cast and composited
+there (its samples are an axis-aligned box of that frame, :meth:`ChunkedVolume.read`), and the
+composite is turned into world once (:mod:`splineviz.core.frame`; a rigid map keeps window
+depths, so hidden-brick culling and compositing need no change). The coarse preview keeps the
+direction (:meth:`ChunkedVolume.preview_volume`) and its ray caster moves the world camera
+itself.
+
 Work skipped, exactly:
 
 * *empty bricks*: each rendered brick reports conservative bounds of its spline (the root of
@@ -39,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from splineviz.compute.raycast import RayCaster, RayCastError, renders_in_bricks
+from splineviz.core import frame as volume_frame
 from splineviz.core.bricks import (
     BrickGrid,
     Placement,
@@ -472,15 +481,22 @@ class BrickedRayCaster:
         w, h = parse_size(size)
         t_start = time.perf_counter()
         vol = self._volume
+        world_planes = normalize_clip_planes(clip_planes)
+        # the bricks are cast in the volume's own frame (module notes): camera and planes
+        # moved there once, the composite moved back once
+        inside = volume_frame.camera_to_volume(vol, camera)
         # one clipping range for every brick: the whole volume's, so window depths agree
-        clip = camera.fit_clipping_range(vol.bounds)
-        cam = Camera(camera.position, camera.focal_point, camera.view_up, camera.view_angle,
+        clip = inside.fit_clipping_range(vol.bounds)
+        cam = Camera(inside.position, inside.focal_point, inside.view_up, inside.view_angle,
                      clip)
-        user = [tuple(map(tuple, p)) for p in normalize_clip_planes(clip_planes)]
+        user = [tuple(map(tuple, p)) for p in volume_frame.planes_to_volume(vol, world_planes)]
         self.stats.update(preview_s=None, brick_times=[])
         if preview and isinstance(vol, ChunkedVolume) and vol.levels:
             t = time.perf_counter()
-            coarse = self._render_preview(cam, (w, h), user)
+            # the preview volume keeps the direction: its caster takes the world camera
+            coarse = self._render_preview(
+                Camera(camera.position, camera.focal_point, camera.view_up, camera.view_angle,
+                       clip), (w, h), world_planes)
             self.stats["preview_s"] = time.perf_counter() - t
             yield "preview", 0, len(self.grid), coarse
         order = self.grid.visibility_order(cam.position, vol.spacing, vol.origin)
@@ -544,8 +560,8 @@ class BrickedRayCaster:
                 done += 1
                 self._record(frag)
                 if queue or self._pending:
-                    yield "bricks", done, total, Frame(comp.hit, comp.position, comp.normal,
-                                                      comp.depth, comp.color)
+                    yield "bricks", done, total, volume_frame.frame_to_world(vol, Frame(
+                        comp.hit, comp.position, comp.normal, comp.depth, comp.color))
         finally:
             # a closed generator (a newer camera) cancels what is still out
             self.cancel()
@@ -559,7 +575,7 @@ class BrickedRayCaster:
                           bricks_culled=len(culled), bricks_rendered=total - len(culled),
                           composite_s=t_comp, render_s=time.perf_counter() - t_start,
                           workers=nworkers, classified="visible")
-        yield "exact", total, total, comp.frame()
+        yield "exact", total, total, volume_frame.frame_to_world(vol, comp.frame())
 
     @staticmethod
     def _next_brick(queue, inflight, steps, foot, cull, window: int = 64):

@@ -1,11 +1,14 @@
 """Volumes too big for memory: a lazily read, chunked 3-D grid with coarser levels.
 
 Convention as :class:`~splineviz.core.volume.Volume`: ``data[i, j, k]`` is the sample at world
-point ``origin + (i*sx, j*sy, k*sz)``; here ``data`` is a :mod:`dask.array` (OME-Zarr, Zarr,
-HDF5 or any dask graph), never computed whole. ``levels`` are coarser versions of the same box
-(an OME-Zarr multiscale pyramid, a pyramid sampled from an analytic field, or one built by
-dask), each with its own spacing and origin, for previews and summaries that must not read
-the full data.
+point ``origin + direction @ (i*sx, j*sy, k*sz)``; here ``data`` is a :mod:`dask.array`
+(OME-Zarr, Zarr, HDF5 or any dask graph), never computed whole. ``levels`` are coarser versions
+of the same box (an OME-Zarr multiscale pyramid, a pyramid sampled from an analytic field, or
+one built by dask), each with its own spacing and origin, for previews and summaries that must
+not read the full data. Levels, :attr:`ChunkedVolume.bounds` and the boxes
+:meth:`ChunkedVolume.read` returns are in the volume's own axis-aligned frame
+``origin + (i*sx, j*sy, k*sz)`` (world when ``direction`` is the identity), which
+:mod:`splineviz.core.frame` turns about ``origin`` into world, as for a ``Volume``.
 
 The *preview level* (:meth:`ChunkedVolume.preview_level`) is the finest level of at most
 :data:`PREVIEW_SAMPLES` samples; a volume without such a level gets a strided downsample of
@@ -75,6 +78,10 @@ class ChunkedVolume:
         meets, an analytic field samples just the brick; without it bricks come from dask.
     unit : str, optional
         The unit of world coordinates (see :attr:`splineviz.Volume.unit`).
+    direction : (3, 3) array_like, optional
+        World direction of the i, j, k axes (columns): a rotation, the identity by default,
+        checked as :class:`~splineviz.core.volume.Volume` checks its own (an oblique scan
+        read brick by brick).
 
     Examples
     --------
@@ -91,6 +98,7 @@ class ChunkedVolume:
     name: str = "chunked volume"
     source: object = None
     unit: str = ""
+    direction: np.ndarray | None = None
     _cache: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self):
@@ -105,10 +113,12 @@ class ChunkedVolume:
                 np.issubdtype(data.dtype, np.complexfloating):
             raise VolumeError(f"volume samples must be real numbers, got dtype {data.dtype}")
         # the geometry checks of Volume, on a 1-sample stand-in (nothing is read)
-        probe = Volume(np.zeros((1, 1, 1), np.float32), self.spacing, self.origin, unit=self.unit)
+        probe = Volume(np.zeros((1, 1, 1), np.float32), self.spacing, self.origin,
+                       self.direction, self.unit)
         object.__setattr__(self, "data", data)
         object.__setattr__(self, "spacing", probe.spacing)
         object.__setattr__(self, "origin", probe.origin)
+        object.__setattr__(self, "direction", probe.direction)
         object.__setattr__(self, "levels", tuple(self.levels))
         object.__setattr__(self, "unit", probe.unit)
 
@@ -134,9 +144,23 @@ class ChunkedVolume:
 
     @property
     def bounds(self) -> tuple[tuple[float, float], ...]:
-        """((xmin, xmax), (ymin, ymax), (zmin, zmax)) of the sample grid."""
+        """((xmin, xmax), (ymin, ymax), (zmin, zmax)) of the sample grid in the volume's own
+        frame (world when axis-aligned; :attr:`world_bounds` in general)."""
         return tuple((o, o + (n - 1) * s)
                      for o, n, s in zip(self.origin, self.shape, self.spacing, strict=True))
+
+    @property
+    def axis_aligned(self) -> bool:
+        """Whether the grid's axes are the world axes (``direction`` is the identity)."""
+        return not np.any(self.direction != np.eye(3))
+
+    @property
+    def world_bounds(self) -> tuple[tuple[float, float], ...]:
+        """((xmin, xmax), ...) of the grid's eight corners in world (:attr:`bounds` when
+        axis-aligned)."""
+        from splineviz.core.frame import world_bounds
+
+        return world_bounds(self)
 
     def all_levels(self) -> list[Level]:
         """The full-resolution level followed by the coarser ones."""
@@ -165,7 +189,7 @@ class ChunkedVolume:
 
     def preview_volume(self, max_samples: int = PREVIEW_SAMPLES) -> Volume:
         """The samples of :meth:`preview_level` in memory (read once), as a volume spanning
-        this volume's world box.
+        this volume's world box (its direction kept: the grid turns about the same origin).
 
         A level of ``m`` samples along an axis gets the spacing ``(n - 1) s / (m - 1)`` of
         the full level's ``n`` samples of spacing ``s``, and the full level's origin: the
@@ -178,7 +202,7 @@ class ChunkedVolume:
             data = level.read_all()
             spacing = tuple((n - 1) * s / (m - 1) for n, s, m in zip(
                 self.shape, self.spacing, data.shape, strict=True))
-            self._cache[key] = Volume(data, spacing, self.origin, unit=self.unit)
+            self._cache[key] = Volume(data, spacing, self.origin, self.direction, self.unit)
         return self._cache[key]
 
     @property
@@ -197,7 +221,10 @@ class ChunkedVolume:
         return self._cache["range"]
 
     def read(self, box) -> Volume:
-        """The samples of an index box as an in-memory :class:`Volume` (world geometry kept).
+        """The samples of an index box as an in-memory, axis-aligned :class:`Volume` placed in
+        this volume's own frame (world when this volume is axis-aligned): a brick or slab
+        is cast and cut there, and :mod:`splineviz.core.frame` turns the results into
+        world by this volume's direction.
 
         Parameters
         ----------

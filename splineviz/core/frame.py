@@ -11,8 +11,8 @@ A rigid map keeps distances, so a ray cast in the volume frame from the camera m
 hits at the same ray parameter and the same window depth as in world; only positions,
 normals and Hessians are rotated back. Every function here returns its input unchanged for
 an axis-aligned volume (no arithmetic at all: frames of such volumes stay bit-identical).
-The functions take any volume-like object (a :class:`~splineviz.core.chunked.ChunkedVolume`
-has no direction and is axis-aligned).
+The functions take any volume-like object with ``origin`` and ``direction`` (a
+:class:`~splineviz.core.volume.Volume`, a :class:`~splineviz.core.chunked.ChunkedVolume`).
 """
 
 from __future__ import annotations

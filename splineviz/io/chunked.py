@@ -275,24 +275,71 @@ def is_lazy(data) -> bool:
     return isinstance(data, da.Array)
 
 
-def to_chunked_volume(vd, name: str, *, spacing=None, origin=None):
-    """A :class:`~splineviz.core.chunked.ChunkedVolume` of lazily read :class:`VolumeData`."""
+def to_chunked_volume(vd, name: str, *, spacing=None, origin=None, oblique="direction"):
+    """A :class:`~splineviz.core.chunked.ChunkedVolume` of lazily read :class:`VolumeData`.
+
+    The file's direction is applied by :mod:`splineviz.io.geometry`'s rule, as
+    :func:`~splineviz.io.volumes.to_volume` applies it, without reading a sample: axes
+    transposed and flipped lazily (the dask array, the region reader through
+    :class:`~splineviz.io.mapped.OrientedArray`, every coarser level; flips announced by a
+    warning) and an oblique grid's rotation kept as the volume's ``direction``.
+
+    Parameters
+    ----------
+    vd : VolumeData
+        ``data`` a (n0, n1, n2) dask array in the file's index order.
+    name : str
+        File name for messages.
+    spacing, origin : (3,) float, optional
+        Replace the file's.
+    oblique : {"direction", "resample", "error"}
+        As :func:`~splineviz.io.volumes.read_volume`'s; resampling needs every sample, so
+        a grid read brick by brick is never resampled: refused in one sentence, as is a
+        sheared one.
+    """
     from splineviz.core.chunked import ChunkedVolume
     from splineviz.core.volume import VolumeError
-    from splineviz.io.geometry import orientation
+    from splineviz.io.geometry import affine_from, check_oblique, orientation, warn_flips
+    from splineviz.io.mapped import OrientedArray
 
-    orient = None if vd.direction is None else orientation(vd.affine, vd.data.shape, name)
-    if orient is not None and (not orient.identity or orient.oblique):
-        # read brick by brick in the file's order: a transpose, flip or rotation would put
-        # the surface elsewhere than the file says
-        raise InvalidDataError(f"{name} is read brick by brick (chunked, or too large to "
-                               "render in one piece) and its direction matrix turns or flips "
-                               "its axes, which bricked rendering does not carry; it is "
-                               "refused rather than shown in the wrong place")
+    sp = _triplet(vd.spacing if spacing is None else spacing, 1.0)
+    og = _triplet(vd.origin if origin is None else origin, 0.0)
+    orient = orientation(affine_from(sp, og, vd.direction), vd.data.shape, name,
+                         space=vd.space)
+    check_oblique(orient, name, oblique)
+    if orient.oblique and (orient.sheared or oblique == "resample"):
+        what = ("a sheared grid (its axes are not perpendicular)" if orient.sheared else
+                f"an oblique scan (rotated by {orient.angle:.3g} degrees)")
+        raise InvalidDataError(f"{name} is {what} and is read brick by brick (chunked, or too "
+                               "large to render in one piece), so it cannot be resampled onto "
+                               "axis-aligned axes; read it with oblique='direction' or "
+                               "resample it with another tool")
+    source, levels = vd.meta.get("source"), tuple(vd.meta.get("levels", ()))
+    if not orient.identity:
+        warn_flips(orient, name, stacklevel=4)
+        source = None if source is None else OrientedArray(source, orient.perm, orient.flips)
+        levels = tuple(_oriented_level(level, vd.direction, orient, name) for level in levels)
     try:
-        return ChunkedVolume(vd.data, vd.spacing if spacing is None else spacing,
-                             vd.origin if origin is None else origin,
-                             vd.meta.get("levels", ()), name, source=vd.meta.get("source"),
-                             unit=vd.meta.get("length_unit", ""))
+        return ChunkedVolume(orient.apply(vd.data), orient.spacing, orient.origin, levels,
+                             name, source=source, unit=vd.meta.get("length_unit", ""),
+                             direction=orient.volume_direction)
     except (VolumeError, ValueError) as exc:
         raise CorruptFileError(f"{name} cannot be used as a volume: {exc}") from None
+
+
+def _oriented_level(level, direction, full, name: str):
+    """A coarser :class:`~splineviz.core.chunked.Level` (file index order, the file's
+    ``direction``) transposed and flipped as the full level ``full`` (an
+    :class:`~splineviz.io.geometry.Orientation`), placed in the full volume's own frame:
+    its first sample's world point turned back about the full level's origin."""
+    from splineviz.core.chunked import Level
+    from splineviz.io.geometry import affine_from, orientation
+
+    own = orientation(affine_from(level.spacing, level.origin, direction), level.data.shape,
+                      name)
+    origin = np.asarray(own.origin, dtype=np.float64)
+    if full.oblique:
+        o = np.asarray(full.origin, dtype=np.float64)
+        origin = o + full.rotation.T @ (origin - o)
+    return Level(own.apply(level.data), own.spacing, tuple(float(v) for v in origin),
+                 level.label)

@@ -366,8 +366,9 @@ def _mapped(img, path: Path, shape, spatial, affine, fmt: str) -> VolumeData | N
     """A 3-D volume too large to render in one piece
     (:func:`~splineviz.io.mapped.renders_in_pieces`) whose samples lie uncompressed in one
     file: read brick by brick from the mapped file (scaled as nibabel scales them, turned
-    into world order as :func:`~splineviz.io.volumes.to_volume` would), or None for the
-    eager path (smaller volumes, compressed files, other proxies, oblique grids)."""
+    into world order as :func:`~splineviz.io.volumes.to_volume` would; an oblique grid's
+    rotation kept as the direction), or None for the eager path (smaller volumes,
+    compressed files, other proxies, sheared grids, which are resampled)."""
     from splineviz.io.geometry import orientation, warn_flips
     from splineviz.io.mapped import (
         MappedArray,
@@ -383,8 +384,8 @@ def _mapped(img, path: Path, shape, spatial, affine, fmt: str) -> VolumeData | N
     if not renders_in_pieces(dims, _value_dtype(img)):
         return None
     orient = orientation(affine, dims, path.name, space="RAS")
-    if orient.oblique:
-        return None  # read whole: refused or resampled by to_volume
+    if orient.sheared:
+        return None  # read whole: resampled by to_volume
     image = Path(img.file_map["image"].filename)
     stored = np.dtype(proxy.dtype)
     if image.stat().st_size < int(proxy.offset) + int(np.prod(dims, dtype=object)) * \
@@ -399,8 +400,8 @@ def _mapped(img, path: Path, shape, spatial, affine, fmt: str) -> VolumeData | N
         warn_flips(orient, path.name, stacklevel=7)
     meta = {"class": type(img).__name__, "spatial_axes": tuple(spatial), "levels": (),
             "source": source, "affine": affine.tolist()}
-    return VolumeData(lazy_array(source), orient.spacing, orient.origin, fmt, meta, None,
-                      "RAS")
+    return VolumeData(lazy_array(source), orient.spacing, orient.origin, fmt, meta,
+                      orient.volume_direction, "RAS")
 
 
 def _reader(description: str, fmt: str):

@@ -64,7 +64,8 @@ class VolumeSequence(Sequence):
         if is_lazy(vd.data):
             validate_volume_data(vd, self.name)
             return to_chunked_volume(vd, self.name, spacing=self._options.get("spacing"),
-                                     origin=self._options.get("origin"))
+                                     origin=self._options.get("origin"),
+                                     oblique=self._options.get("oblique", "direction"))
         return to_volume(vd, self.name, **self._options)
 
     @property

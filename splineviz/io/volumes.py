@@ -947,7 +947,7 @@ def read_volume(path, *, format=None, dims=None, dtype=None, byteorder="little",
                                    "their magnitude is taken only for volumes read whole")
         validate_volume_data(vd, name)
         return to_chunked_volume(vd, Path(os.fspath(path)).name, spacing=spacing,
-                                 origin=origin)
+                                 origin=origin, oblique=oblique)
     return to_volume(vd, name, spacing=spacing, origin=origin, nonfinite=nonfinite,
                      complex=complex, oblique=oblique)
 

@@ -348,8 +348,9 @@ def test_slice_planes_of_an_oblique_volume_are_drawn_turned_into_world():
     marker.close()
 
 
-def test_a_chunked_volume_with_a_direction_is_refused_in_one_sentence():
-    """Bricked rendering does not carry a direction: refused, never drawn misplaced."""
+def test_a_chunked_volume_keeps_its_direction():
+    """Bricked rendering carries a direction (tests/compute/test_bricked_oblique.py): a lazily
+    read oblique grid keeps its rotation, never made axis-aligned silently."""
     import dask.array as da
 
     from splineviz.io.chunked import to_chunked_volume
@@ -357,11 +358,11 @@ def test_a_chunked_volume_with_a_direction_is_refused_in_one_sentence():
 
     vd = VolumeData(da.zeros((8, 8, 8), chunks=4), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0), "zarr",
                     {}, rotation(0.0, 0.0, 20.0))
-    with pytest.raises(InvalidDataError, match="bricked rendering does not carry") as err:
-        to_chunked_volume(vd, "big.zarr")
-    assert "\n" not in str(err.value)
+    vol = to_chunked_volume(vd, "big.zarr")
+    assert not vol.axis_aligned
+    np.testing.assert_allclose(vol.direction, rotation(0.0, 0.0, 20.0), atol=1e-12)
     vd.direction = None
-    assert to_chunked_volume(vd, "big.zarr").shape == (8, 8, 8)
+    assert to_chunked_volume(vd, "big.zarr").axis_aligned
 
 
 def test_kernel_hessians_and_picked_values_of_an_oblique_volume_are_in_world(tmp_path):
