@@ -106,7 +106,7 @@ def _geometry(vd, name: str, channel) -> dict:
                           "axes when read")
     elif orient.oblique:
         out["oblique"] = (f"rotated by {orient.angle:.3g} degrees: shown in place with its "
-                          "direction (--oblique resample resamples it)")
+                          "direction (--oblique resample resamples it when it fits in memory)")
         # the rotation the volume keeps, after the transpose and flips (world = origin +
         # direction @ (i*sx, j*sy, k*sz) of the reordered grid)
         out["direction"] = [[float(v) for v in row] for row in orient.rotation]
