@@ -1,10 +1,11 @@
 """The window's view layouts (View > Layout): the 3-D view alone, the 3-D view with the
 axial, coronal and sagittal slices (3D Slicer's "four-up"), or one slice alone.
 
-The layout is :attr:`splineviz.model.slices.SliceViewNode.layout`; :class:`ViewLayout`
-follows it. The central widget is a vertical splitter of two rows: the top row holds the
-3-D views (:class:`~splineviz.gui.split.LinkedViews`' splitter) and the axial slice, the
-bottom row the coronal and sagittal slices. A layout hides the panes it does not use (the
+The layout is :attr:`splineviz.model.slices.SliceViewNode.layout` (kept in sessions
+through the scene's view, :mod:`splineviz.gui.slice_views`); :class:`ViewLayout` follows
+it. The central widget is a vertical splitter of two rows: the top row holds the 3-D views
+(:class:`~splineviz.gui.split.LinkedViews`' splitter) and the axial slice, the bottom row
+the coronal and sagittal slices. A layout hides the panes it does not use (the
 3-D view keeps its widget and OpenGL context). The slice views are made when a layout
 first shows them: black panes take their places at once (the 3-D view is resized once),
 then each view is made in one turn of the event loop and replaces its pane in the next
@@ -69,6 +70,8 @@ class ViewLayout:
         self.state.events.layout.connect(self._apply)
         self.state.events.single.connect(self._apply)
         self.actions: dict[tuple, QAction] = {}
+        if self.state.shown:  # the scene's view asks for slices (a session's layout)
+            QTimer.singleShot(0, self.widget, self._apply)
 
     @property
     def views(self) -> dict:

@@ -477,6 +477,11 @@ class View3D(QObject):
             self._schedule_refine()
 
     @property
+    def computing(self) -> bool:
+        """Whether exact frames are being computed (what :meth:`cancel_refine` stops)."""
+        return self._refine_job is not None
+
+    @property
     def refining(self) -> bool:
         return (self._refine_job is not None or self._refine_timer.isActive()
                 or self._render_timer.isActive())
