@@ -135,8 +135,16 @@ class ViewLayout:
             self._to_make.pop(0)
             pane = self._stand_ins.pop(name)
             view = self.views[name]
-            row.replaceWidget(row.indexOf(pane), view.widget)
+            # the view is already the row's (QSplitter takes its child widgets, at the end):
+            # moved to the pane's place with the pane's size, the pane dropped
+            share = dict(zip((row.widget(i) for i in range(row.count())), row.sizes(),
+                             strict=True))
+            row.insertWidget(row.indexOf(pane), view.widget)
+            pane.hide()
+            pane.setParent(None)
             pane.deleteLater()
+            share[view.widget] = share.get(pane, 0)
+            row.setSizes([share.get(row.widget(i), 0) for i in range(row.count())])
             self._show_panes()
         if self._to_make:
             self._make_timer.start()
