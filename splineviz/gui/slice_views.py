@@ -344,6 +344,12 @@ class SliceViews(QObject):
             if self.marker is not None:
                 self.marker.set_ruler(None, None)
             if volume is not None:
+                # the new box first: the crosshair's lines span it (drawn with the old
+                # box, they were short ticks after a file or session of another size)
+                for view in self.views.values():
+                    view.scene.set_extent(volume.active.bounds)
+                    view.scene.set_ruler(None, None)
+                    view._framed = False
                 saved = self.scene.view.crosshair
                 self._syncing = True
                 try:
@@ -352,14 +358,13 @@ class SliceViews(QObject):
                         self.state.move_to(saved, volume.active)
                 finally:
                     self._syncing = False
+                for view in self.views.values():  # also when the point stayed the same
+                    view.scene.set_crosshair(self.state.crosshair)
+                    view.request_render()
                 # placed by the app, not an edit: no "unsaved changes" after a session load
                 modified = self.scene.modified
                 self._to_scene()
                 self.scene.modified = modified
-                for view in self.views.values():
-                    view.scene.set_extent(volume.active.bounds)
-                    view.scene.set_ruler(None, None)
-                    view._framed = False
         if volume is None:
             if self.state.shown and self.scene.volumes:
                 # chunked stores are rendered in bricks and have no in-memory spline

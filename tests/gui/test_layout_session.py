@@ -5,12 +5,16 @@ the document it saved before these fields existed."""
 
 import json
 
+import numpy as np
 import pytest
 
 pytest.importorskip("pytestqt")
 pytest.importorskip("pyvistaqt")
 
 from interaction import close_window, open_window, pump, wheel  # noqa: E402
+
+from splineviz.core.volume import Volume  # noqa: E402
+from splineviz.model.slices import IN_PLANE  # noqa: E402
 
 
 @pytest.fixture
@@ -58,17 +62,30 @@ def test_layout_and_crosshair_are_saved_and_restored(window, tmp_path):
     assert entry["slice_layout"] == "four-up"
     assert entry["crosshair"] == pytest.approx(list(moved))
 
-    # elsewhere, then the session brings the layout and the crosshair back
+    # elsewhere (one slice of a volume 100 times as big), then the session brings the
+    # layout and the crosshair back
     lay.actions[("one-slice", "sagittal")].trigger()
+    big = Volume(np.random.default_rng(0).random((20, 20, 20)), spacing=(10.0,) * 3)
+    w.scene.clear()
+    w.scene.add_volume(big, name="big", isovalue=0.5)
+    assert pump(30, lambda: lay.slices.volume is not None
+                and lay.slices.volume.active is big and not lay.slices._refresh_timer.isActive())
     lay.slices.scroll("sagittal", 3)
     assert lay.state.crosshair != moved
+    w.scene.mark_saved()
     w.open_path(four_up, mode="replace", block=True)
     assert pump(60, lambda: lay.state.layout == "four-up" and _settled(w)
-                and lay.slices.volume is not None
+                and lay.slices.volume is not None and lay.slices.volume.active is not big
                 and lay.state.crosshair == pytest.approx(moved))
     assert lay.actions[("four-up", None)].isChecked()
     assert set(lay.views) == {"axial", "coronal", "sagittal"}
     assert all(lay.views[n].widget.isVisible() for n in ("axial", "coronal", "sagittal"))
+    # the crosshair's lines span the restored volume's box, not the big one's or a tick
+    bounds = np.asarray(lay.slices.volume.active.bounds)
+    for name, view in lay.views.items():
+        u, v = IN_PLANE[name]
+        lines = np.asarray(view.scene._cross_mapper.GetInput().GetBounds()).reshape(3, 2)
+        assert lines[0] == pytest.approx(bounds[u]) and lines[1] == pytest.approx(bounds[v])
     pump(0.3)
     assert not w.scene.modified, "loading the session left unsaved changes"
 
