@@ -194,8 +194,6 @@ class View3D(QObject):
         self._refine_again = False
         self._refine_held = False
         self._closed = False
-        #: the frame quad's shaders were compiled in this view's OpenGL context
-        self._warmed = False
         self._t_frame = None
         self.frame_times: list[float] = []
         self._refine_timer = QTimer(self)
@@ -314,29 +312,6 @@ class View3D(QObject):
         # a render can happen while the model is in the middle of moving the camera itself
         self._camera_timer.start()
         self.frame_rendered.emit(dt)
-        if not self._warmed:
-            self._warmed = True
-            QTimer.singleShot(0, self, self._warm_up)
-
-    def _warm_up(self) -> None:
-        """Compile the shaders of the ray-cast frames' quad in this view's OpenGL context
-        now, in a turn of its own after the view's first frame: the first frame of an
-        isosurface did it, 100-120 ms of software OpenGL on top of that frame (measured:
-        first quad render 123 ms, later ones 16 ms). The quad drawn has no hit pixel, so
-        nothing shows."""
-        if self._closed:
-            return
-        from splineviz.render.quad import FrameQuad
-
-        quad = FrameQuad(((0.0, 1.0),) * 3)
-        quad.set_textures((1, 1), np.zeros((1, 4), np.uint8), np.zeros((1, 3), np.uint8))
-        quad.actor.VisibilityOn()
-        renderer = self.plotter.renderer
-        renderer.AddActor(quad.actor)
-        try:
-            self.plotter.render_window.Render()
-        finally:
-            renderer.RemoveActor(quad.actor)
 
     def _interaction_started(self, *_):
         if self.spline_scene is None:
