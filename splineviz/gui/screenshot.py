@@ -92,7 +92,7 @@ class ScreenshotExport(QObject):
     def _cast(self) -> None:
         """Step 2: the exact frames of every view, in a job."""
         self._round += 1
-        requests = [(view.spline_scene, view.spline_scene.view_state())
+        requests = [(view.spline_scene, view.spline_scene.next_view_state())
                     for _pl, view in self._views]
         self._job = self.window.jobs.run(
             f"Screenshot {self.path.name}", _cast_frames, requests,

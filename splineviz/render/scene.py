@@ -214,6 +214,13 @@ class SplineScene:
     def view_state(self) -> ViewState:
         return view_state_of(self.renderer, self.window_size(), self._clip_planes)
 
+    def next_view_state(self) -> ViewState:
+        """The view the next render is for: the near and far planes reset as a render
+        resets them (frames cast in a worker for a render to come must be of this view, or
+        that render casts them again)."""
+        self._reset_clipping_range()
+        return self.view_state()
+
     def set_interacting(self, flag: bool) -> None:
         """Tell the scene a camera drag is in progress (previews) or over (refine)."""
         self._interacting = bool(flag)

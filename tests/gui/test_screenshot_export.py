@@ -2,6 +2,8 @@
 dialogs answered), the exact frames are cast in a job with progress and Cancel while the
 window goes on, and the PNG written is the picture the command line's screenshot makes."""
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -48,15 +50,26 @@ def _exports(w):
     return w.findChildren(ScreenshotExport)
 
 
-def test_the_screenshot_is_made_in_the_background(window, answers, tmp_path):
+def test_the_screenshot_is_made_in_the_background(window, answers, tmp_path, monkeypatch):
     from splineviz.io.meshes import read_image
+    from splineviz.render.isosurface import IsosurfaceLayer
     from splineviz.render.scene_view import render_scene
 
     w = window
     w.open_default()
     assert pump(120, lambda: bool(w.scene.isosurfaces) and not w.jobs.jobs)
     w.scene.isosurfaces[0].model = "cubic-c1"  # a caster the export builds in its job
+    assert pump(120, lambda: not w.view.refining and not w.spline_scene.needs_refine())
     answers["path"] = tmp_path / "shot.png"
+    # every frame of the export is cast in a job's thread, none in the GUI thread (a
+    # frame made for another near / far range than the render's was cast again there)
+    compute, cast_in = IsosurfaceLayer.compute, []
+
+    def recording(self, *args, **kwargs):
+        cast_in.append(threading.current_thread() is threading.main_thread())
+        return compute(self, *args, **kwargs)
+
+    monkeypatch.setattr(IsosurfaceLayer, "compute", recording)
 
     w.actions_by_name["screenshot"].trigger()
     # the action returned at once: the frames are cast in a job the status bar shows
@@ -67,6 +80,8 @@ def test_the_screenshot_is_made_in_the_background(window, answers, tmp_path):
     assert pump(120, lambda: export.state != "running")
     assert export.state == "done", w.last_error
     assert w.last_error is None
+    assert cast_in and not any(cast_in), "a frame of the export was cast in the GUI thread"
+    monkeypatch.undo()
 
     img = read_image(answers["path"])
     assert img.shape[:2] == (SIZE[1], SIZE[0])
