@@ -3,14 +3,16 @@ budget.
 
 A script drives the main window as a user would: open data (the embedded default volume, or
 a volume file), orbit, zoom with the wheel, drag the isovalue slider, split the view (View >
-Split view) and drag in the new view, switch to every spline model with a kernel, smooth and
-revert, add an isosurface, open a point cloud, remesh it and cancel. Each action is measured
+Split view) and drag in the new view, show the four-up layout (View > Layout) and move its
+crosshair with the wheel, switch to every spline model with a kernel, smooth and revert, add
+an isosurface, open a point cloud, remesh it and cancel. Each action is measured
 ``repeats`` times (undone between two measurements) by a :class:`~splineviz.bench.driving.
 StallMeter`: the longest gap between the ticks of a 10 ms timer from the action until the
 window settles (jobs done, exact frames shown). The table gives per action the median, 95th
-percentile and maximum stall, the budget and whether the median keeps it, and the median time
-from the action's start until the window settled (the exact frames on screen); a line after
-it the time a cancelled job took to stop (budget 1 s).
+percentile and maximum stall, the stall of the first run (what a user meets the first time:
+a caster built, a kernel compiled, a view made), the budget and whether the median keeps it,
+and the median time from the action's start until the window settled (the exact frames on
+screen); a line after it the time a cancelled job took to stop (budget 1 s).
 
 A stall is a property of our GUI thread only when the machine is otherwise idle: another
 process can take a core for one tick. The median of several repeats is the figure the budget
@@ -67,15 +69,16 @@ class Stalls:
     cancel_s: list[float] = field(default_factory=list)
 
     def rows(self, budget_ms: float = MAX_STALL_MS) -> list[dict]:
-        """One dict per action: ``action, n, median_ms, p95_ms, max_ms, budget_ms, ok,
-        settled_s`` (ok: the median keeps the budget; settled_s: a median, or None)."""
+        """One dict per action: ``action, n, median_ms, p95_ms, max_ms, first_ms, budget_ms,
+        ok, settled_s`` (ok: the median keeps the budget; first_ms: the first run's stall;
+        settled_s: a median, or None)."""
         out = []
         for name, values in self.ms.items():
             med = statistics.median(values)
             settled = self.settled_s.get(name)
             out.append({"action": name, "n": len(values), "median_ms": med,
                         "p95_ms": float(np.percentile(values, 95)), "max_ms": max(values),
-                        "budget_ms": budget_ms, "ok": med <= budget_ms,
+                        "first_ms": values[0], "budget_ms": budget_ms, "ok": med <= budget_ms,
                         "settled_s": statistics.median(settled) if settled else None})
         return out
 
@@ -85,13 +88,13 @@ def print_table(stalls: Stalls, out=print, budget_ms: float = MAX_STALL_MS) -> l
     rows = stalls.rows(budget_ms)
     out("GUI-thread stall per action (ms; ok: the median keeps the budget)")
     out(f"| {'action':32} | {'n':>2} | {'median':>7} | {'p95':>7} | {'max':>7} | "
-        f"{'budget':>6} | ok  | {'settled s':>9} |")
-    out("|" + "|".join("-" * w for w in (34, 4, 9, 9, 9, 8, 5, 11)) + "|")
+        f"{'first':>7} | {'budget':>6} | ok  | {'settled s':>9} |")
+    out("|" + "|".join("-" * w for w in (34, 4, 9, 9, 9, 9, 8, 5, 11)) + "|")
     for r in rows:
         settled = "-" if r["settled_s"] is None else f"{r['settled_s']:.2f}"
         out(f"| {r['action']:32} | {r['n']:2d} | {r['median_ms']:7.1f} | {r['p95_ms']:7.1f} | "
-            f"{r['max_ms']:7.1f} | {r['budget_ms']:6.0f} | {'yes' if r['ok'] else 'NO ':3} | "
-            f"{settled:>9} |")
+            f"{r['max_ms']:7.1f} | {r['first_ms']:7.1f} | {r['budget_ms']:6.0f} | "
+            f"{'yes' if r['ok'] else 'NO ':3} | {settled:>9} |")
     if stalls.cancel_s:
         c = stalls.cancel_s
         out(f"cancel: the job stopped after {statistics.median(c):.2f} s (median of {len(c)}, "
@@ -330,6 +333,39 @@ class _Script:
                      lambda: len(w.scene.isosurfaces) == count + 1 and self.idle_and_exact(),
                      remove_added)
 
+    def slices_settled(self) -> bool:
+        """The layout's slice views all made, computed and rendered."""
+        w = self.w
+        slices = w.view_layout.slices
+        return (w.view_layout.ready and not slices.rendering and not slices.worker.busy
+                and self.idle_and_exact())
+
+    def four_up(self) -> None:
+        """View > Layout > Four-up (its slice views are made the first time), the wheel
+        turned over the axial slice, and back to the 3-D view alone."""
+        w = self.w
+        layout = w.view_layout
+        four_up = layout.actions[("four-up", None)]
+        three_d = layout.actions[("3d", None)]
+
+        def back():
+            three_d.trigger()
+            self.settle(lambda: layout.state.layout == "3d" and self.idle_and_exact(),
+                        "3-D only")
+
+        self.measure("four-up layout", four_up.trigger, self.slices_settled, back)
+        _check(layout.state.layout == "four-up" and set(layout.views) ==
+               {"axial", "coronal", "sagittal"}, "View > Layout > Four-up showed no slices")
+        axial = layout.views["axial"].widget
+        before = layout.state.position("axial")
+        self.measure("slice wheel (2 notches)",
+                     lambda: self.drive.wheel(axial, (axial.width() / 2, axial.height() / 2),
+                                              clicks=2),
+                     self.slices_settled, lambda: None)
+        _check(layout.state.position("axial") != before,
+               "the wheel over the axial slice did not move it")
+        back()
+
     def points_remesh_cancel(self, cloud_path) -> None:
         from splineviz.model import PointsNode
 
@@ -376,6 +412,7 @@ class _Script:
         self.orbit_and_zoom()
         self.slider_drag()
         self.split_and_drag()
+        self.four_up()  # with the first model (the slices of a plugin's are NumPy's)
         self.models_and_smoothing()
         self.points_remesh_cancel(cloud_path)
         return self.stalls

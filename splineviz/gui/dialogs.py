@@ -88,9 +88,11 @@ def export_screenshot(window) -> None:
         return
     path, _ = QFileDialog.getSaveFileName(window, "Export screenshot", "screenshot.png",
                                           "PNG images (*.png)")
-    if path:
-        window.guard(window.commands.export_screenshot, path,
-                     (dlg.width.value(), dlg.height.value()), dlg.transparent.isChecked())
+    if path:  # rendered in the background (the window stays responsive)
+        from splineviz.gui.screenshot import export_screenshot as export
+
+        window.guard(export, window, path, (dlg.width.value(), dlg.height.value()),
+                     dlg.transparent.isChecked())
 
 
 def export_mesh(window, method: str = "flying-edges") -> None:

@@ -99,6 +99,9 @@ class Job:
         self.message = ""
         self.started = time.perf_counter()
         self._runner = runner
+        #: called with the job when it ended (done, failed or cancelled); None: nobody is
+        #: told
+        self.on_end = None
         self._on_done = on_done
         self._on_error = on_error
         self._cancel = threading.Event()
@@ -171,6 +174,8 @@ class Job:
     def _finish(self, state: str) -> None:
         self.state = state
         self._runner._finished(self)
+        if self.on_end is not None and not self._runner.closed:
+            self._runner._call(self.on_end, self)
 
     def wait(self, timeout_s: float) -> bool:
         """Block until the thread ends (tests, shutdown); True if it did."""

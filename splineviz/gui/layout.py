@@ -1,10 +1,11 @@
 """The window's view layouts (View > Layout): the 3-D view alone, the 3-D view with the
 axial, coronal and sagittal slices (3D Slicer's "four-up"), or one slice alone.
 
-The layout is :attr:`splineviz.model.slices.SliceViewNode.layout`; :class:`ViewLayout`
-follows it. The central widget is a vertical splitter of two rows: the top row holds the
-3-D views (:class:`~splineviz.gui.split.LinkedViews`' splitter) and the axial slice, the
-bottom row the coronal and sagittal slices. A layout hides the panes it does not use (the
+The layout is :attr:`splineviz.model.slices.SliceViewNode.layout` (kept in sessions
+through the scene's view, :mod:`splineviz.gui.slice_views`); :class:`ViewLayout` follows
+it. The central widget is a vertical splitter of two rows: the top row holds the 3-D views
+(:class:`~splineviz.gui.split.LinkedViews`' splitter) and the axial slice, the bottom row
+the coronal and sagittal slices. A layout hides the panes it does not use (the
 3-D view keeps its widget and OpenGL context). The slice views are made when a layout
 first shows them: black panes take their places at once (the 3-D view is resized once),
 then each view is made in one turn of the event loop and replaces its pane in the next
@@ -69,6 +70,8 @@ class ViewLayout:
         self.state.events.layout.connect(self._apply)
         self.state.events.single.connect(self._apply)
         self.actions: dict[tuple, QAction] = {}
+        if self.state.shown:  # the scene's view asks for slices (a session's layout)
+            QTimer.singleShot(0, self.widget, self._apply)
 
     @property
     def views(self) -> dict:
@@ -132,8 +135,16 @@ class ViewLayout:
             self._to_make.pop(0)
             pane = self._stand_ins.pop(name)
             view = self.views[name]
-            row.replaceWidget(row.indexOf(pane), view.widget)
+            # the view is already the row's (QSplitter takes its child widgets, at the end):
+            # moved to the pane's place with the pane's size, the pane dropped
+            share = dict(zip((row.widget(i) for i in range(row.count())), row.sizes(),
+                             strict=True))
+            row.insertWidget(row.indexOf(pane), view.widget)
+            pane.hide()
+            pane.setParent(None)
             pane.deleteLater()
+            share[view.widget] = share.get(pane, 0)
+            row.setSizes([share.get(row.widget(i), 0) for i in range(row.count())])
             self._show_panes()
         if self._to_make:
             self._make_timer.start()

@@ -45,10 +45,21 @@ def _preload() -> None:
     """Import now what the first volume needs: a module imported later by a worker thread
     holds the GIL while it executes (pyopencl's import alone is ~0.3 s), stalling the
     window; before the window is shown nobody waits."""
+    from importlib import import_module
+
+    import scipy.ndimage  # noqa: F401  (the B-spline plugin's prefilter, the readout)
+
     import splineviz.compute.raycast  # noqa: F401
+    import splineviz.compute.raycast.to_program  # noqa: F401  (truncated octahedra)
     import splineviz.compute.smoothing  # noqa: F401
     import splineviz.core.testfunctions  # noqa: F401
     import splineviz.model.opening  # noqa: F401
+    from splineviz.core.splines import MODELS
+
+    # every model's module: the first switch to a model imported it (and scipy.ndimage for
+    # the plugin's B-spline) in the worker that builds its caster, holding the GIL
+    for name in MODELS.names():
+        import_module(MODELS[name].target.split(":")[0])
 
 
 class MainWindow(QMainWindow):

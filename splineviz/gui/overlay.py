@@ -30,6 +30,8 @@ class ViewOverlay:
         self.label.setStyleSheet(STYLE)
         self.label.setAttribute(Qt.WidgetAttribute.WA_TransparentForMouseEvents)
         self.label.setTextFormat(Qt.TextFormat.PlainText)
+        # lines wrap inside the view (a four-up pane or a split half is narrow)
+        self.label.setWordWrap(True)
         self.label.move(6, 6)
         self.label.hide()
 
@@ -46,5 +48,6 @@ class ViewOverlay:
         if text == self.text:
             return
         self.label.setText(text)
+        self.label.setMaximumWidth(max(self.label.parentWidget().width() - 12, 60))
         self.label.adjustSize()
         self.label.setVisible(bool(text))

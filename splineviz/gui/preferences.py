@@ -147,8 +147,8 @@ def apply(window, prefs: Preferences, previous: Preferences | None = None) -> No
 
     With ``previous`` (the preferences before the dialog's OK) the background and the
     layout change only where the preference changed: a session's own background and the
-    layout the user chose stay. An unmodified scene stays unmodified (a colour preference is
-    no edit to save)."""
+    layout the user chose stay. An unmodified scene stays unmodified (a colour or layout
+    preference is no edit to save)."""
     from splineviz.io.mapped import LAZY_SHARE_ENV
 
     scene = window.scene
@@ -157,6 +157,9 @@ def apply(window, prefs: Preferences, previous: Preferences | None = None) -> No
     if previous is None or previous.background != prefs.background:
         if tuple(scene.view.background) != tuple(prefs.background):
             scene.view.background = tuple(prefs.background)
+    if previous is None or previous.layout != prefs.layout:
+        layout, _, single = prefs.layout.partition(":")
+        window.view_layout.set_layout(layout, single or None)
     if not was_modified:
         scene.mark_saved()
     for view in window.linked_views.views:
@@ -166,9 +169,6 @@ def apply(window, prefs: Preferences, previous: Preferences | None = None) -> No
     if prefs.lazy_share != Preferences.defaults().lazy_share or _lazy_written:
         os.environ[LAZY_SHARE_ENV] = repr(float(prefs.lazy_share))
         globals()["_lazy_written"] = True
-    if previous is None or previous.layout != prefs.layout:
-        layout, _, single = prefs.layout.partition(":")
-        window.view_layout.set_layout(layout, single or None)
 
 
 class PreferencesDialog(QDialog):

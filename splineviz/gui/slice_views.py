@@ -14,6 +14,13 @@ turned out of it (:mod:`splineviz.core.frame`). A chunked volume (OME-Zarr, bric
 stores) is sliced too: the worker reads the slab of samples around each slice, never the
 whole volume; the window / level comes from the histogram the volume already has.
 
+The layout and the crosshair are also kept in the scene's view
+(:attr:`~splineviz.model.nodes.ViewNode.slice_layout`, ``slice_single``, ``crosshair``), so
+sessions save and restore them: a change of either side is copied to the other. The
+crosshair goes into the scene only once the slices were shown or it was placed there (a
+scene that never used the slice views saves no crosshair); a crosshair from a session is
+kept when its volume appears (moved into its box), a new volume otherwise centres it.
+
 Mouse and keyboard in a slice view (the documented bindings, nothing else of VTK's):
 
 * wheel: the next / previous slice (one grid step); Ctrl + wheel: zoom;
@@ -281,6 +288,14 @@ class SliceViews(QObject):
         self.state.events.volume_id.connect(lambda *_: self._schedule())
         scene.changed.connect(self._schedule)
         scene.selection.connect(self._schedule)
+        #: True while the state and the scene's view are copied into each other
+        self._syncing = False
+        self.state.events.layout.connect(self._to_scene)
+        self.state.events.single.connect(self._to_scene)
+        for name in ("slice_layout", "slice_single", "crosshair"):
+            getattr(scene.view.events, name).connect(self._from_scene)
+        scene.removed.connect(self._node_removed)
+        self._from_scene()
 
     # -- views ---------------------------------------------------------------------------
 
@@ -359,11 +374,27 @@ class SliceViews(QObject):
             if self.marker is not None:
                 self.marker.set_ruler(None, None)
             if volume is not None:
-                fit(self.state, volume.active)
+                # the new box first: the crosshair's lines span it (drawn with the old
+                # box, they were short ticks after a file or session of another size)
                 for view in self.views.values():
                     view.scene.set_extent(volume.active.bounds)
                     view.scene.set_ruler(None, None)
                     view._framed = False
+                saved = self.scene.view.crosshair
+                self._syncing = True
+                try:
+                    fit(self.state, volume.active)
+                    if saved is not None:  # restored with a session
+                        self.state.move_to(saved, volume.active)
+                finally:
+                    self._syncing = False
+                for view in self.views.values():  # also when the point stayed the same
+                    view.scene.set_crosshair(self.state.crosshair)
+                    view.request_render()
+                # placed by the app, not an edit: no "unsaved changes" after a session load
+                modified = self.scene.modified
+                self._to_scene()
+                self.scene.modified = modified
         if volume is None:
             self._update_marker()
             return
@@ -411,6 +442,7 @@ class SliceViews(QObject):
     # -- the state's events --------------------------------------------------------------
 
     def _crosshair_changed(self, point) -> None:
+        self._to_scene()
         for view in self.views.values():
             view.scene.set_crosshair(point)
             view.request_render()
@@ -446,6 +478,50 @@ class SliceViews(QObject):
         self.marker.update(bounds if bounds is not None else ((0, 0),) * 3,
                            self.state.crosshair, shown)
         self.view3d.request_render()
+
+    # -- the scene's view: what sessions keep ---------------------------------------------
+
+    def _to_scene(self, *_):
+        """Copy the layout and the crosshair into the scene's view (see module docstring)."""
+        if self._syncing or self._closed:
+            return
+        st, view = self.state, self.scene.view
+        values = {"slice_layout": st.layout, "slice_single": st.single}
+        if self._volume is not None and (st.layout != "3d" or view.crosshair is not None):
+            values["crosshair"] = tuple(st.crosshair)
+        changed = {k: v for k, v in values.items() if getattr(view, k) != v}
+        if changed:
+            self._syncing = True
+            try:
+                view.update(changed)
+            finally:
+                self._syncing = False
+
+    def _from_scene(self, *_):
+        """The scene's view changed (a session was loaded): the layout and the crosshair
+        follow it (a crosshair for a volume not shown yet waits for :meth:`refresh`)."""
+        if self._syncing or self._closed:
+            return
+        view = self.scene.view
+        self._syncing = True
+        try:
+            self.state.update(layout=view.slice_layout, single=view.slice_single)
+            if (view.crosshair is not None and self._volume is not None
+                    and self._volume.id in self.scene
+                    and self.scene.get(self._volume.id) is self._volume):
+                self.state.move_to(view.crosshair, self._volume.active)
+        finally:
+            self._syncing = False
+
+    def _node_removed(self, node) -> None:
+        """The volume shown left the scene: its crosshair means nothing for the next one."""
+        if node is self._volume and self.scene.view.crosshair is not None \
+                and not self._closed:
+            self._syncing = True
+            try:
+                self.scene.view.crosshair = None
+            finally:
+                self._syncing = False
 
     # -- what the views do ---------------------------------------------------------------
 
@@ -553,6 +629,9 @@ class SliceViews(QObject):
         self._to_render.clear()
         self.scene.changed.disconnect(self._schedule)
         self.scene.selection.disconnect(self._schedule)
+        self.scene.removed.disconnect(self._node_removed)
+        for name in ("slice_layout", "slice_single", "crosshair"):
+            getattr(self.scene.view.events, name).disconnect(self._from_scene)
         if self.view3d is not None:
             self.view3d.plotter.removeEventFilter(self)
         self.worker.close()

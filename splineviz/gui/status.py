@@ -1,6 +1,10 @@
 """The main window's status bar: the readout under the cursor, the last frame's time, the
 cells the ray casters visit, the running job's progress with its Cancel button, and the
-view's "ray casting..." while exact frames are made."""
+view's "ray casting..." while exact frames are made.
+
+Cancel does what Esc does (:meth:`~splineviz.gui.main_window.MainWindow.cancel_all`): it
+stops the running jobs and the exact frames every view is computing; it shows while either
+runs."""
 
 from __future__ import annotations
 
@@ -28,9 +32,10 @@ class StatusBar:
         self.progress.setMaximumWidth(200)
         self.progress.setVisible(False)
         self.cancel_button = QPushButton("Cancel")
-        self.cancel_button.setToolTip("Stop the running job (Esc)")
+        self.cancel_button.setToolTip("Stop the running jobs and the exact frames being "
+                                      "computed (Esc)")
         self.cancel_button.setVisible(False)
-        self.cancel_button.clicked.connect(window.jobs.cancel_all)
+        self.cancel_button.clicked.connect(window.cancel_all)
         sb.addWidget(self.readout_label, 1)
         for w in (self.progress, self.cancel_button, self.fps_label, self.cells_label):
             sb.addPermanentWidget(w)
@@ -62,13 +67,12 @@ class StatusBar:
             return
         jobs = self.window.jobs.jobs
         self.progress.setVisible(bool(jobs))
-        self.cancel_button.setVisible(any(j.cancellable for j in jobs))
+        self._update_cancel()
         if not jobs:
             self.window.statusBar().clearMessage()
             return
         job = jobs[-1]
         cancelling = job.state == "cancelling"
-        self.cancel_button.setEnabled(not cancelling)
         if job.fraction is None or cancelling:
             self.progress.setRange(0, 0)
         else:
@@ -82,7 +86,25 @@ class StatusBar:
     def view_busy(self, message: str) -> None:
         """"ray casting..." while exact frames are made; cleared when they are shown (unless
         a job's message is up)."""
+        if self.window._closed:
+            return
+        self._update_cancel()
         if message:
             self.window.statusBar().showMessage(message)
         elif not self.window.jobs.jobs:
             self.window.statusBar().clearMessage()
+
+    def _views_computing(self) -> bool:
+        """Whether a view of the window computes exact frames (the views of a split too)."""
+        linked = getattr(self.window, "linked_views", None)  # made after the status bar
+        views = linked.views if linked is not None else [self.window.view]
+        return any(view.computing for view in views)
+
+    def _update_cancel(self) -> None:
+        """Cancel shows while a cancellable job runs or a view computes exact frames; it is
+        disabled while the only thing left is a job being cancelled."""
+        jobs = self.window.jobs.jobs
+        running = any(j.cancellable and j.state == "running" for j in jobs)
+        computing = self._views_computing()
+        self.cancel_button.setVisible(computing or any(j.cancellable for j in jobs))
+        self.cancel_button.setEnabled(computing or running)

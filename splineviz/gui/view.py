@@ -8,7 +8,8 @@ after every render, so sessions and standard views see where the user looks. Und
 cursor the view reports the world position and data value of the first isosurface hit.
 
 The GUI thread never waits on that work (issue 26): a preview it cannot make at once (the
-caster is busy or not built) leaves the last frame on screen; a change of view or state
+caster is busy or not built) leaves the last frame on screen, as does a resize of the view
+(a layout change, a split: :meth:`SplineScene.view_resized`); a change of view or state
 gives up the exact frame under way (its thread is left to end by itself) and starts the new
 one; the worker shows what it makes on the way (a preview of a new model or data, coarser
 images of a slow model). While an exact frame takes longer than :data:`OVERLAY_DELAY_MS`
@@ -477,6 +478,11 @@ class View3D(QObject):
             self._schedule_refine()
 
     @property
+    def computing(self) -> bool:
+        """Whether exact frames are being computed (what :meth:`cancel_refine` stops)."""
+        return self._refine_job is not None
+
+    @property
     def refining(self) -> bool:
         return (self._refine_job is not None or self._refine_timer.isActive()
                 or self._render_timer.isActive())
@@ -518,6 +524,8 @@ class View3D(QObject):
             elif event.type() == QEvent.Type.Resize:
                 size = event.size()
                 self.scene.aspect = size.width() / max(size.height(), 1)
+                if self.spline_scene is not None:
+                    self.spline_scene.view_resized()
             elif event.type() == QEvent.Type.Leave:
                 self._cursor = None
                 self.readout.emit("")

@@ -282,7 +282,8 @@ class Layout(_Model):
 
 class View(_Model):
     """A render view: camera, background (a gradient up to ``background2`` when set),
-    lights, its cell in the layout, the objects it hides and its decorations.
+    lights, its cell in the layout, the objects it hides, its decorations and the window's
+    slice views (layout and crosshair).
 
     ``lights`` round-trips in documents, but the renderer has one headlight (the shading of
     :mod:`splineviz.core.material`): a scene loaded from a session with other lights says
@@ -300,6 +301,13 @@ class View(_Model):
                       Field(max_length=MAX_OBJECTS)] = []
     show_axes: bool = True
     show_scale: bool = True
+    #: the window's layout of the 3-D view and slice views, the slice a "one-slice" layout
+    #: shows and where the slice planes meet (None: the volume's centre). Written only when
+    #: not the defaults, so documents of scenes that never used the slice views stay as
+    #: they were (schema 4; a reader older than these fields refuses a document using them)
+    slice_layout: Literal["3d", "four-up", "one-slice"] = "3d"
+    slice_single: Literal["axial", "coronal", "sagittal"] = "axial"
+    crosshair: Vec3 | None = None
 
     @field_validator("camera", mode="before")
     @classmethod

@@ -390,6 +390,12 @@ class CameraNode(Node):
         return {k: getattr(self, k) for k in self.properties()}
 
 
+#: the view layouts: the 3-D view alone, the 3-D view with the three slices (Slicer's
+#: "four-up"), one slice alone (:mod:`splineviz.model.slices`)
+LAYOUTS = ("3d", "four-up", "one-slice")
+SliceName = Literal["axial", "coronal", "sagittal"]
+
+
 class ViewNode(Node):
     """What the view shows around the objects: background (a gradient up to
     ``background2`` when set, as ParaView's), axes, scale bar, and whether it is split
@@ -403,6 +409,13 @@ class ViewNode(Node):
     show_axes: bool = True
     show_scale: bool = True
     split: bool = per_view(False)
+    #: the window's layout of the 3-D view and the slice views (see
+    #: :class:`splineviz.model.slices.SliceViewNode`; sessions write it only when not "3d")
+    slice_layout: Literal[LAYOUTS] = "3d"
+    #: the slice the "one-slice" layout shows
+    slice_single: SliceName = "axial"
+    #: where the slice planes meet (world); None: the centre of the volume shown
+    crosshair: Vec3 | None = None
 
 
 #: node kind -> node class

@@ -7,7 +7,9 @@ the view's normal by one grid step of the volume. Every slice view and the 3-D v
 :class:`SliceViewNode`, so moving the crosshair in one moves the planes of the others.
 
 The node is view state like :class:`~splineviz.model.nodes.CameraNode`: it is not one of
-the scene's objects and sessions do not write it.
+the scene's objects. Sessions keep its layout and crosshair through the scene's
+:class:`~splineviz.model.nodes.ViewNode` (``slice_layout``, ``slice_single``,
+``crosshair``), which the GUI's slice views follow and update.
 
 Conventions: world coordinates; axis 0, 1, 2 is x, y, z; the slice named ``"sagittal"``
 is normal to x, ``"coronal"`` to y and ``"axial"`` to z (a patient lying along z, as in
@@ -22,16 +24,12 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from splineviz.model.nodes import Finite, Node, Vec3
+from splineviz.model.nodes import LAYOUTS, Finite, Node, SliceName, Vec3
 
 #: slice name -> the axis normal to it
 AXES = {"axial": 2, "coronal": 1, "sagittal": 0}
 #: slice name -> (axis shown to the right, axis shown up)
 IN_PLANE = {"axial": (0, 1), "coronal": (0, 2), "sagittal": (1, 2)}
-SliceName = Literal["axial", "coronal", "sagittal"]
-#: the view layouts: the 3-D view alone, the 3-D view with the three slices (Slicer's
-#: "four-up"), one slice alone
-LAYOUTS = ("3d", "four-up", "one-slice")
 #: colour maps offered for the slice image (matplotlib names)
 SLICE_COLORMAPS = ("gray", "bone", "viridis", "inferno", "magma", "cividis")
 

@@ -122,6 +122,8 @@ class SplineScene:
         self._clip_planes: list = []
         self._interacting = False
         self._force_exact = False
+        #: the window was resized since the last render (:meth:`view_resized`)
+        self._resized = False
         self.last_frame_s = None
         self.frame_times: list[float] = []
         #: the finest preview resolution factor (the preview quality the GUI's preferences
@@ -216,9 +218,24 @@ class SplineScene:
     def view_state(self) -> ViewState:
         return view_state_of(self.renderer, self.window_size(), self._clip_planes)
 
+    def next_view_state(self) -> ViewState:
+        """The view the next render is for: the near and far planes reset as a render
+        resets them (frames cast in a worker for a render to come must be of this view, or
+        that render casts them again)."""
+        self._reset_clipping_range()
+        return self.view_state()
+
     def set_interacting(self, flag: bool) -> None:
         """Tell the scene a camera drag is in progress (previews) or over (refine)."""
         self._interacting = bool(flag)
+
+    def view_resized(self) -> None:
+        """The view is being resized: its next render casts no preview of the new size for
+        a layer whose last frame is of its current state; that frame stays, stale, until
+        the exact frame (on software OpenGL a widget resize renders at once, and a layout
+        change resizes the view two or three times: a preview in each held the GUI thread
+        40-90 ms)."""
+        self._resized = True
 
     def _apply_appearance(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
         q = lv.quad
@@ -341,6 +358,9 @@ class SplineScene:
                 continue
             if not self.progressive or self._force_exact:
                 self._show(layer, layer.compute(view))
+            elif (self._resized and lv.shown is not None and lv.shown.state == layer.state
+                  and tuple(lv.shown.view.size) != tuple(view.size)):
+                stale.append(layer)
             else:
                 scale, fast = self._preview_scale(layer, lv, view)
                 t_preview = time.perf_counter()
@@ -359,6 +379,7 @@ class SplineScene:
                     lv.preview_seconds = spent if size in lv.preview_sizes else None
                     lv.preview_sizes.add(size)
                 stale.append(layer)
+        self._resized = False
         self._order_quads()
         self._fit_scalar_bars()
         self.last_frame_s = time.perf_counter() - t0
