@@ -184,6 +184,13 @@ def run(args) -> int:
 
             bricked.configure(**saved)
             bricked.close_clients()
+    if args.measures:
+        from splineviz.model.quantities import quantities_over_time
+
+        steps = None if args.all_times or not scene.time_steps() else [scene.step_index()]
+        quantities_over_time(scene, steps=steps).to_csv(args.measures)
+        print(f"{args.measures}: area and enclosed volume of the isosurface"
+              f"{' at each step' if args.all_times else ''}")
     iso = scene.isosurfaces[0]
     what = f"{len(outputs)} steps" if args.all_times else args.output
     print(f"{what}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
@@ -234,4 +241,7 @@ def register(subparsers) -> None:
     p.add_argument("--all-times", action="store_true",
                    help="render every step, to -o with {t} (the step) in it, e.g. "
                    "frame_{t:04d}.png")
+    p.add_argument("--measures", default=None, metavar="CSV",
+                   help="also write the area and enclosed volume of the isosurface (from the "
+                   "spline surface; at every step with --all-times) to a CSV file")
     p.set_defaults(func=run)
