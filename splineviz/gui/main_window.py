@@ -37,6 +37,7 @@ from splineviz.gui.panels import (
 )
 from splineviz.gui.split import LinkedViews
 from splineviz.gui.status import StatusBar
+from splineviz.gui.time_toolbar import TimeToolbar
 from splineviz.gui.view import View3D
 from splineviz.model import Scene
 
@@ -90,6 +91,8 @@ class MainWindow(QMainWindow):
         self.plane_widgets = PlaneWidgets(self.scene, self.plotter, self.view.request_render)
         self._build_panels()
         self.actions_by_name = build_actions(self)
+        self.time_toolbar = TimeToolbar(self)
+        self.addToolBar(Qt.ToolBarArea.BottomToolBarArea, self.time_toolbar)
         self.status = StatusBar(self)
         self._view_busy = self.status.view_busy  # each view of a split reports to it
         self._add_panel_toggles()
@@ -322,6 +325,7 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self._closed = True
+        self.time_toolbar.pause()
         if self.autosaver is not None:
             self.autosaver.close()  # a clean quit: nothing to recover
         self.jobs.close()

@@ -70,6 +70,9 @@ class TimeSeries(Sequence):
     cache_bytes : int, optional
         Most bytes of steps kept (default :func:`default_cache_bytes`); at least the step
         asked for last is always kept.
+    axis : str
+        What the steps run along, as the file names it (``"time"``, ``"echo"``,
+        ``"channel"``, ``"frame"``).
 
     Examples
     --------
@@ -80,7 +83,7 @@ class TimeSeries(Sequence):
 
     def __init__(self, name: str, count: int, read: Callable[[int], Volume], *,
                  times: Sequence[float] | None = None, unit: str = "",
-                 cache_bytes: int | None = None):
+                 cache_bytes: int | None = None, axis: str = "time"):
         if count < 1:
             raise TimeSeriesError(f"{name} holds no time step")
         times = tuple(float(t) for t in (range(count) if times is None else times))
@@ -91,6 +94,7 @@ class TimeSeries(Sequence):
         self.name = name
         self.times = times
         self.unit = unit
+        self.axis = axis
         self.cache_bytes = default_cache_bytes() if cache_bytes is None else int(cache_bytes)
         self._count = count
         self._read = read
@@ -354,7 +358,7 @@ def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
                                    **read_options)
         return TimeSeries(seq.name, len(seq), seq.__getitem__, times=seq.times,
                           unit=seq.axis.unit if seq.times is not None else "",
-                          cache_bytes=cache_bytes)
+                          cache_bytes=cache_bytes, axis=seq.axis.name)
     name = Path(os.fspath(path)).name
     opts = {"channel": channel, "allow_outside": allow_outside, **read_options}
     # the first step is read now (its errors are the series' errors) and handed over once
