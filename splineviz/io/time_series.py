@@ -17,6 +17,7 @@ NumPy or dask array with a leading time axis.
 from __future__ import annotations
 
 import glob
+import mmap
 import os
 import re
 import threading
@@ -34,6 +35,9 @@ from splineviz.io.errors import InvalidDataError
 DEFAULT_CACHE_FRACTION = 0.25
 #: most bytes of steps one series keeps cached, however much memory is free
 MAX_CACHE_BYTES = 4 << 30
+#: most steps one series keeps, whatever their size (memory-mapped steps hold no memory of
+#: their own, but each keeps its view of the file)
+MAX_CACHED_STEPS = 64
 #: seconds per unit of the time units a ``--time 2.5s`` may name
 TIME_UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0, "sec": 1.0,
               "min": 60.0, "h": 3600.0}
@@ -49,6 +53,20 @@ def default_cache_bytes() -> int:
     import psutil
 
     return int(min(MAX_CACHE_BYTES, DEFAULT_CACHE_FRACTION * psutil.virtual_memory().available))
+
+
+def held_bytes(volume) -> int:
+    """Bytes of memory a step holds: its samples, unless they are memory-mapped from the
+    file (the page cache holds them) or a chunked volume's (read brick by brick)."""
+    data = getattr(volume, "data", None)
+    if not isinstance(data, np.ndarray):
+        return 0
+    base = data
+    while base is not None:
+        if isinstance(base, np.memmap | mmap.mmap):
+            return 0
+        base = getattr(base, "base", None)
+    return int(data.nbytes)
 
 
 class TimeSeries(Sequence):
@@ -162,7 +180,7 @@ class TimeSeries(Sequence):
         holds them beside step ``i``."""
         i = self.check_index(i)
         with self._lock:
-            nbytes = next((v.data.nbytes for v in self._cache.values()), 0)
+            nbytes = max((held_bytes(v) for v in self._cache.values()), default=0)
         room = count if not nbytes else min(count, self.cache_bytes // nbytes - 1)
         for n in range(1, max(room, 0) + 1):
             k = i + direction * n
@@ -252,10 +270,11 @@ class TimeSeries(Sequence):
             self.reads += 1
             self._cache[i] = vol
             self._cache.move_to_end(i)
-            total = sum(v.data.nbytes for v in self._cache.values())
-            while len(self._cache) > 1 and total > self.cache_bytes:
+            total = sum(held_bytes(v) for v in self._cache.values())
+            while len(self._cache) > 1 and (total > self.cache_bytes
+                                            or len(self._cache) > MAX_CACHED_STEPS):
                 _, old = self._cache.popitem(last=False)
-                total -= old.data.nbytes
+                total -= held_bytes(old)
         return vol
 
     def __repr__(self) -> str:
