@@ -69,6 +69,9 @@ def test_play_a_4d_file_forward_without_stalls(window, nifti4d):
     pump(0.2)
     assert bar.isVisible()
     assert "step 1/6" in bar.label.text() and "t = 0 s" in bar.label.text()
+    from splineviz.gui.panels.data import describe
+
+    assert describe(vol) == "24x24x24, step 1/6"  # the Data panel tells it varies
     w.wait_for_refine()
     bar.speed.setValue(20.0)
 
