@@ -452,7 +452,8 @@ class Scene:
             return
         volume = node.series.step(index)
         if volume is not node.data:
-            node.update(data=volume, smoothed=None, smoothed_sigma=0.0)
+            # the old step's smoothing goes first: listeners of ``data`` see it pending
+            node.update(smoothed=None, smoothed_sigma=0.0, data=volume)
 
     def _check_section(self, node: SectionNode) -> None:
         if not isinstance(self._nodes.get(node.isosurface_id), IsosurfaceNode):

@@ -103,3 +103,14 @@ def test_play_a_4d_file_forward_without_stalls(window, nifti4d):
     rf = w.spline_scene.shown_frame(layer)
     assert rf is not None and rf.final and rf.state == layer.state
     _shot(w, "paused.png")
+
+    # smoothing follows the step: the new step is smoothed, not the old one shown
+    vol.sigma = 1.0
+    w.wait_idle()
+    before = vol.smoothed
+    assert before is not None
+    bar.show_step(4)
+    assert pump(30, lambda: w.scene.step_index() == 4)
+    w.wait_idle()
+    assert vol.smoothed is not None and vol.smoothed is not before
+    assert not vol.smoothing_pending
