@@ -210,3 +210,23 @@ def test_info_prints_steps_and_times(nifti4d, capsys):
     out = capsys.readouterr().out
     assert "steps: 3" in out
     assert "times: 0, 0.5, 1 s" in out
+
+
+def test_dask_array_with_a_leading_time_axis_computes_one_step_per_read():
+    da = pytest.importorskip("dask.array")
+    steps = np.arange(4 * 6**3, dtype=np.float32).reshape(4, 6, 6, 6)
+    computed = []
+
+    def block(b, block_info=None):
+        computed.append(block_info[0]["chunk-location"][0])
+        return b
+
+    lazy = da.from_array(steps, chunks=(1, 6, 6, 6)).map_blocks(block, dtype=np.float32)
+    series = TimeSeries.from_array(lazy, spacing=(2.0, 2.0, 2.0), times=[0, 5, 10, 15],
+                                   unit="ms")
+    vol = series.step(2)
+    np.testing.assert_array_equal(vol.data, steps[2])
+    assert vol.spacing == (2.0, 2.0, 2.0) and computed == [2]
+    assert series.parse_step("0.01s") == 2
+    with pytest.raises(TimeSeriesError, match=r"must be 4-D \(t, x, y, z\)"):
+        TimeSeries.from_array(steps[0])
