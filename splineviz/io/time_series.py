@@ -341,6 +341,44 @@ def series_info(path, *, channel=None, allow_outside: bool = False) -> dict | No
             "times": f"{times} {series.unit}".rstrip() if series.unit else times}
 
 
+#: OME-NGFF time units -> the short names of :data:`TIME_UNITS`
+_NGFF_TIME_UNITS = {"nanosecond": "ns", "microsecond": "us", "millisecond": "ms",
+                    "second": "s", "minute": "min", "hour": "h"}
+
+
+def _ome_zarr_series(path: Path, cache_bytes, spacing=None, origin=None) -> TimeSeries | None:
+    """The steps of an OME-Zarr image along its ``t`` axis (each a chunked volume read brick
+    by brick), or None when ``path`` is no OME-Zarr image with one."""
+    import zarr
+
+    from splineviz.io.chunked import _is_zarr_folder, _ome_levels, _read_zarr, to_chunked_volume
+    from splineviz.io.volumes import validate_volume_data
+
+    if not (path.is_dir() and _is_zarr_folder(path)):
+        return None
+    ome = _ome_levels(path)
+    if ome is None or "t" not in ome[0]:
+        return None
+    axes, levels, _ = ome
+    k = axes.index("t")
+    dataset, scale, shift = levels[0]
+    count = int(zarr.open_array(str(path / dataset), mode="r").shape[k])
+    attrs = dict(zarr.open_group(str(path), mode="r").attrs)
+    multiscales = attrs.get("multiscales") or attrs.get("ome", {}).get("multiscales") or [{}]
+    unit = next((a.get("unit", "") for a in multiscales[0].get("axes", [])
+                 if isinstance(a, dict) and a.get("name") == "t"), "")
+    name = path.name
+
+    def read(i: int) -> Volume:
+        vd = _read_zarr(path, t=i)
+        validate_volume_data(vd, name)
+        return to_chunked_volume(vd, name, spacing=spacing, origin=origin)
+
+    return TimeSeries(name, count, read, times=[shift[k] + scale[k] * i for i in range(count)],
+                      unit=_NGFF_TIME_UNITS.get(unit, unit),
+                      cache_bytes=cache_bytes)
+
+
 def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
                      allow_outside: bool = False, **read_options) -> TimeSeries:
     """A time series from a 4-D file, a folder of 3-D files or a file pattern.
@@ -348,7 +386,8 @@ def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
     Parameters
     ----------
     path : path-like
-        A file with a fourth (time) axis, read step by step
+        An OME-Zarr image with a ``t`` axis (its steps chunked volumes, rendered in bricks;
+        times from its scale and unit), a file with a fourth (time) axis, read step by step
         (:func:`~splineviz.io.sequence.read_volume_sequence`: its times and their unit come
         from the file); a folder of 3-D volume files of one format, or a pattern
         (``run_####.vti``: ``#`` stands for one digit; ``run_*.npy``), one step per file in
@@ -372,6 +411,11 @@ def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
     from splineviz.io.volumes import read_volume
 
     files = series_files(path)
+    zarr_series = None if files is not None else _ome_zarr_series(
+        Path(os.fspath(path)).expanduser(), cache_bytes, read_options.get("spacing"),
+        read_options.get("origin"))
+    if zarr_series is not None:
+        return zarr_series
     if files is None:
         seq = read_volume_sequence(path, channel=channel, allow_outside=allow_outside,
                                    **read_options)

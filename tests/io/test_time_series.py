@@ -230,3 +230,29 @@ def test_dask_array_with_a_leading_time_axis_computes_one_step_per_read():
     assert series.parse_step("0.01s") == 2
     with pytest.raises(TimeSeriesError, match=r"must be 4-D \(t, x, y, z\)"):
         TimeSeries.from_array(steps[0])
+
+
+def test_ome_zarr_t_axis_steps_with_times(tmp_path):
+    pytest.importorskip("ome_zarr")
+    import warnings
+
+    import zarr
+    from ome_zarr.io import parse_url
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        from ome_zarr.writer import write_image
+    data = _ball_steps(n=3, shape=(12, 10, 8))  # (x, y, z, t)
+    path = tmp_path / "run.ome.zarr"
+    root = zarr.group(store=parse_url(str(path), mode="w").store)
+    write_image(data.transpose(3, 2, 1, 0), root, axes="tzyx", scale_factors=[],
+                axes_units={"t": "millisecond", "z": "micrometer", "y": "micrometer",
+                            "x": "micrometer"},
+                storage_options={"chunks": (1, 4, 4, 4)},
+                scale={"t": 250.0, "z": 1.0, "y": 1.0, "x": 1.0})
+    series = open_time_series(path)
+    assert (len(series), series.unit) == (3, "ms")
+    assert series.times == (0.0, 250.0, 500.0)
+    np.testing.assert_array_equal(series.step(2).read(((0, 12), (0, 10), (0, 8))).data,
+                                  data[..., 2])
+    assert series.parse_step("0.25s") == 1
