@@ -75,7 +75,7 @@ def test_table_over_time_and_csv(tmp_path):
     scene.add_time_series(series, "grow", isovalue=16.0, model="to-quadratic")
     scene.set_step(1)
     table = quantities_over_time(scene)
-    assert scene.step_index() == 1  # back where it was
+    assert scene.step_index() == 1  # the scene is not moved
     assert table.column("time") == [0.0, 0.5, 1.0]
     for k, volume in enumerate(table.column("volume")):
         # the spline of f / c is (f + 3 h^2 / 4) / c: a sphere of radius^2 16 c - 3 h^2 / 4

@@ -35,6 +35,7 @@ from splineviz.gui.panels import (
     Smoother,
     SmoothingPanel,
 )
+from splineviz.gui.quantities_dock import QuantitiesPanel
 from splineviz.gui.split import LinkedViews
 from splineviz.gui.status import StatusBar
 from splineviz.gui.time_toolbar import TimeToolbar
@@ -132,6 +133,7 @@ class MainWindow(QMainWindow):
         self.smooth_panel = SmoothingPanel(self.scene)
         self.remesh_panel = RemeshPanel(self.scene, self.jobs)
         self.analysis_panel = AnalysisPanel(self.scene)
+        self.quantities_panel = QuantitiesPanel(self.scene, self.jobs)
         self.log = LogPanel()
         left, right = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
         self.docks = {
@@ -141,12 +143,14 @@ class MainWindow(QMainWindow):
             "Smoothing": self._dock("Smoothing", self.smooth_panel, right),
             "Remeshing": self._dock("Remeshing", self.remesh_panel, right),
             "Analysis": self._dock("Analysis", self.analysis_panel, right),
+            "Quantities": self._dock("Quantities", self.quantities_panel, right),
             "Log": self._dock("Log", self.log, Qt.DockWidgetArea.BottomDockWidgetArea),
         }
         # the right column as tabs: narrower, so the 3-D view keeps its room
         self.tabifyDockWidget(self.docks["Clipping"], self.docks["Smoothing"])
         self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Remeshing"])
         self.tabifyDockWidget(self.docks["Remeshing"], self.docks["Analysis"])
+        self.tabifyDockWidget(self.docks["Analysis"], self.docks["Quantities"])
         self.docks["Clipping"].raise_()
         self.docks["Log"].hide()
 

@@ -20,12 +20,13 @@ from splineviz.model.scene import Scene
 COLUMNS = ("step", "time", "isosurface", "area", "volume")
 
 
-def measure(scene: Scene, iso: IsosurfaceNode, **options) -> SurfaceMeasures:
-    """Area and enclosed volume of ``iso`` at the step its volume shows now (``options``:
-    ``order``, ``refine`` of :func:`~splineviz.core.surface_measures.measure_isosurface`)."""
+def measure(scene: Scene, iso: IsosurfaceNode, volume=None, **options) -> SurfaceMeasures:
+    """Area and enclosed volume of ``iso`` in ``volume`` (default: the samples its volume
+    node shows now, smoothed where it is; ``options``: ``order``, ``refine`` of
+    :func:`~splineviz.core.surface_measures.measure_isosurface`)."""
     from splineviz.core.splines import build_spline
 
-    volume = scene.volume_of(iso).active
+    volume = scene.volume_of(iso).active if volume is None else volume
     spline = build_spline(volume, iso.model, **iso.model_options())
     return measure_isosurface(spline, iso.isovalue, **options)
 
@@ -59,11 +60,16 @@ class QuantityTable:
                 out.writerow([step, repr(float(time)), name, repr(area), repr(volume)])
 
 
-def quantities_over_time(scene: Scene, isosurfaces=None, steps=None,
+def quantities_over_time(scene: Scene, isosurfaces=None, steps=None, cancelled=None,
                          **options) -> QuantityTable:
     """Area and enclosed volume of ``isosurfaces`` (default: all) at each of ``steps``
     (indices of :meth:`Scene.time_steps`; default all, or the one step of a scene that does
-    not vary). The scene comes back to its time afterwards.
+    not vary).
+
+    The steps are read from the volumes' series (their samples as read: a smoothing the
+    view applies is left out, except at a volume that does not vary); the scene is not
+    moved, so this may run on a job thread. ``cancelled()``, when given, is asked between
+    steps: True stops the table where it is.
 
     Returns
     -------
@@ -79,13 +85,15 @@ def quantities_over_time(scene: Scene, isosurfaces=None, steps=None,
             m = measure(scene, iso, **options)
             table.rows.append((0, scene.time, iso.name, m.area, m.volume))
         return table
-    back = scene.time
-    try:
-        for k in (range(len(times)) if steps is None else steps):
-            scene.set_step(k)
-            for iso in isos:
-                m = measure(scene, iso, **options)
-                table.rows.append((k, scene.time, iso.name, m.area, m.volume))
-    finally:
-        scene.set_time(back)
+    for k in (range(len(times)) if steps is None else steps):
+        for iso in isos:
+            if cancelled is not None and cancelled():
+                return table
+            node = scene.volume_of(iso)
+            volume = None
+            if node.series is not None:
+                volume = node.series.step(node.series.index_at_or_before(
+                    times[k] - node.time_offset))
+            m = measure(scene, iso, volume, **options)
+            table.rows.append((k, times[k], iso.name, m.area, m.volume))
     return table
