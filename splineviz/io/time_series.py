@@ -135,15 +135,20 @@ class TimeSeries(Sequence):
         if len(getattr(array, "shape", ())) != 4:
             raise TimeSeriesError(f"{name}: a time series array must be 4-D (t, x, y, z), "
                                   f"got shape {tuple(getattr(array, 'shape', ()))}")
-        spacing, origin = tuple(map(float, spacing)), tuple(map(float, origin))
+        return cls(name, int(array.shape[0]), _ArraySteps(array, spacing, origin), times=times,
+                   unit=unit, cache_bytes=cache_bytes)
 
-        def read(i: int) -> Volume:
-            step = array[i]
-            step = step.compute() if hasattr(step, "compute") else step
-            return Volume(np.ascontiguousarray(step), spacing=spacing, origin=origin)
+    # -- pickling (a session's series is opened in a job process) --------------------------
 
-        return cls(name, int(array.shape[0]), read, times=times, unit=unit,
-                   cache_bytes=cache_bytes)
+    def __getstate__(self) -> dict:
+        # the steps read so far travel with it; the lock, the reads under way and the
+        # read-ahead thread are the process's own
+        with self._lock:
+            return {k: v for k, v in self.__dict__.items()
+                    if k not in ("_lock", "_pending", "_pool")}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _lock=threading.Lock(), _pending={}, _pool=None)
 
     # -- access ----------------------------------------------------------------------------
 
@@ -283,6 +288,80 @@ class TimeSeries(Sequence):
                 f"{format_time(self.times[-1], self.unit)}>")
 
 
+class _ArraySteps:
+    """Reads step ``i`` of a ``(t, x, y, z)`` array (a dask array computes that step)."""
+
+    def __init__(self, array, spacing, origin):
+        self.array = array
+        self.spacing = tuple(map(float, spacing))
+        self.origin = tuple(map(float, origin))
+
+    def __call__(self, i: int) -> Volume:
+        step = self.array[i]
+        step = step.compute() if hasattr(step, "compute") else step
+        return Volume(np.ascontiguousarray(step), spacing=self.spacing, origin=self.origin)
+
+
+class _SequenceSteps:
+    """Reads frame ``i`` of a 4-D file (:func:`~splineviz.io.sequence.read_volume_sequence`,
+    opened again after pickling, on the first read)."""
+
+    def __init__(self, path, options: dict, sequence=None):
+        self.path = os.fspath(path)
+        self.options = options
+        self._sequence = sequence
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_sequence": None}
+
+    def __call__(self, i: int) -> Volume:
+        from splineviz.io.sequence import read_volume_sequence
+
+        if self._sequence is None:
+            self._sequence = read_volume_sequence(self.path, **self.options)
+        return self._sequence[i]
+
+
+class _FileSteps:
+    """Reads the ``i``-th file of a series; every step must have the first one's shape."""
+
+    def __init__(self, name: str, files: list[Path], options: dict):
+        self.name = name
+        self.files = files
+        self.options = options
+        self.shape = None
+
+    def __call__(self, i: int) -> Volume:
+        from splineviz.io.volumes import read_volume
+
+        if self.shape is None and i != 0:
+            self.shape = read_volume(self.files[0], **self.options).shape
+        vol = read_volume(self.files[i], **self.options)
+        self.shape = self.shape or vol.shape
+        if vol.shape != self.shape:
+            raise TimeSeriesError(f"{self.files[i].name} holds {vol.shape} samples, but the "
+                                  f"first file of {self.name} {self.shape}; a series keeps "
+                                  "one shape")
+        return vol
+
+
+class _ZarrSteps:
+    """Reads time index ``i`` of an OME-Zarr image as a chunked volume."""
+
+    def __init__(self, path: Path, spacing=None, origin=None):
+        self.path = path
+        self.spacing = spacing
+        self.origin = origin
+
+    def __call__(self, i: int) -> Volume:
+        from splineviz.io.chunked import _read_zarr, to_chunked_volume
+        from splineviz.io.volumes import validate_volume_data
+
+        vd = _read_zarr(self.path, t=i)
+        validate_volume_data(vd, self.path.name)
+        return to_chunked_volume(vd, self.path.name, spacing=self.spacing, origin=self.origin)
+
+
 def format_time(t: float, unit: str = "") -> str:
     """``t`` as the user reads it: ``"2.5 s"``, or ``"3"`` without a unit."""
     return f"{t:g} {unit}" if unit else f"{t:g}"
@@ -351,8 +430,7 @@ def _ome_zarr_series(path: Path, cache_bytes, spacing=None, origin=None) -> Time
     by brick), or None when ``path`` is no OME-Zarr image with one."""
     import zarr
 
-    from splineviz.io.chunked import _is_zarr_folder, _ome_levels, _read_zarr, to_chunked_volume
-    from splineviz.io.volumes import validate_volume_data
+    from splineviz.io.chunked import _is_zarr_folder, _ome_levels
 
     if not (path.is_dir() and _is_zarr_folder(path)):
         return None
@@ -367,16 +445,9 @@ def _ome_zarr_series(path: Path, cache_bytes, spacing=None, origin=None) -> Time
     multiscales = attrs.get("multiscales") or attrs.get("ome", {}).get("multiscales") or [{}]
     unit = next((a.get("unit", "") for a in multiscales[0].get("axes", [])
                  if isinstance(a, dict) and a.get("name") == "t"), "")
-    name = path.name
-
-    def read(i: int) -> Volume:
-        vd = _read_zarr(path, t=i)
-        validate_volume_data(vd, name)
-        return to_chunked_volume(vd, name, spacing=spacing, origin=origin)
-
-    return TimeSeries(name, count, read, times=[shift[k] + scale[k] * i for i in range(count)],
-                      unit=_NGFF_TIME_UNITS.get(unit, unit),
-                      cache_bytes=cache_bytes)
+    return TimeSeries(path.name, count, _ZarrSteps(path, spacing, origin),
+                      times=[shift[k] + scale[k] * i for i in range(count)],
+                      unit=_NGFF_TIME_UNITS.get(unit, unit), cache_bytes=cache_bytes)
 
 
 def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
@@ -391,7 +462,8 @@ def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
         (:func:`~splineviz.io.sequence.read_volume_sequence`: its times and their unit come
         from the file); a folder of 3-D volume files of one format, or a pattern
         (``run_####.vti``: ``#`` stands for one digit; ``run_*.npy``), one step per file in
-        natural order (``run_2`` before ``run_10``), at times 0, 1, 2, ...; a 3-D file is a
+        natural order (``run_2`` before ``run_10``), at times 0, 1, 2, ... (each file is
+        read when its step is: one of another shape is refused then); a 3-D file is a
         series of one step.
     channel : int, optional
         The channel of a 5-D or multi-channel file.
@@ -408,7 +480,6 @@ def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
         differ in shape.
     """
     from splineviz.io.sequence import read_volume_sequence
-    from splineviz.io.volumes import read_volume
 
     files = series_files(path)
     zarr_series = None if files is not None else _ome_zarr_series(
@@ -417,22 +488,12 @@ def open_time_series(path, *, channel=None, cache_bytes: int | None = None,
     if zarr_series is not None:
         return zarr_series
     if files is None:
-        seq = read_volume_sequence(path, channel=channel, allow_outside=allow_outside,
-                                   **read_options)
-        return TimeSeries(seq.name, len(seq), seq.__getitem__, times=seq.times,
-                          unit=seq.axis.unit if seq.times is not None else "",
+        options = {"channel": channel, "allow_outside": allow_outside, **read_options}
+        seq = read_volume_sequence(path, **options)
+        return TimeSeries(seq.name, len(seq), _SequenceSteps(path, options, seq),
+                          times=seq.times, unit=seq.axis.unit if seq.times is not None else "",
                           cache_bytes=cache_bytes, axis=seq.axis.name)
     name = Path(os.fspath(path)).name
-    opts = {"channel": channel, "allow_outside": allow_outside, **read_options}
-    # the first step is read now (its errors are the series' errors) and handed over once
-    first = {0: read_volume(files[0], **opts)}
-    shape = first[0].shape
-
-    def read(i: int) -> Volume:
-        vol = first.pop(i) if i in first else read_volume(files[i], **opts)
-        if vol.shape != shape:
-            raise TimeSeriesError(f"{files[i].name} holds {vol.shape} samples, but the first "
-                                  f"file of {name} {shape}; a series keeps one shape")
-        return vol
-
+    read = _FileSteps(name, files, {"channel": channel, "allow_outside": allow_outside,
+                                    **read_options})
     return TimeSeries(name, len(files), read, cache_bytes=cache_bytes)

@@ -229,11 +229,15 @@ def read_session_data(session: Session, *, allow_outside: bool = False) -> dict:
 
 def _open_series(p, allow_outside: bool):
     """The :class:`~splineviz.io.time_series.TimeSeries` of a time-varying VolumeFile's
-    properties ``p`` (its steps are read when shown)."""
+    properties ``p``, with the step the session shows read (the other steps are read when
+    shown; a job process hands the series, that step included, to the GUI)."""
     from splineviz.io.time_series import open_time_series
 
     options = {k: getattr(p, k) for k in READ_OPTIONS if getattr(p, k) is not None}
-    return open_time_series(p.path, allow_outside=allow_outside, **options)
+    series = open_time_series(p.path, allow_outside=allow_outside, **options)
+    if p.time_index < len(series):
+        series.step(p.time_index)
+    return series
 
 
 def _plane_volume(session: Session, obj) -> str | None:

@@ -141,3 +141,20 @@ def test_quantities_dock_tabulates_plots_and_exports(window, nifti4d, tmp_path):
     lines = (tmp_path / "q.csv").read_text().splitlines()
     assert lines[0] == "step,time [s],isosurface,area [mm^2],volume [mm^3]"
     assert len(lines) == STEPS + 1
+
+
+def test_session_reopens_at_its_step_in_the_window(window, nifti4d, tmp_path):
+    w = window
+    w.open_path(nifti4d, mode="replace", block=True)
+    assert pump(60, lambda: bool(w.scene.time_varying) and not w.jobs.jobs)
+    w.time_toolbar.speed.setValue(7.0)
+    w.time_toolbar.show_step(3)
+    assert pump(30, lambda: w.scene.step_index() == 3)
+    assert w.save_session(tmp_path / "t.svs") is not None
+    w.open_path(tmp_path / "t.svs", mode="replace", block=True)  # read in a job process
+    assert pump(60, lambda: bool(w.scene.time_varying) and not w.jobs.jobs)
+    vol = w.scene.time_varying[0]
+    assert (vol.time_index, w.scene.play_rate, w.scene.step_index()) == (3, 7.0, 3)
+    pump(0.2)
+    assert "step 4/6" in w.time_toolbar.label.text()
+    assert w.time_toolbar.speed.value() == 7.0

@@ -256,3 +256,21 @@ def test_ome_zarr_t_axis_steps_with_times(tmp_path):
     np.testing.assert_array_equal(series.step(2).read(((0, 12), (0, 10), (0, 8))).data,
                                   data[..., 2])
     assert series.parse_step("0.25s") == 1
+
+
+def test_series_pickle_with_the_steps_read(nifti4d, tmp_path):
+    """A session's series is opened in a job process and handed over pickled."""
+    import pickle
+
+    path, data = nifti4d
+    np.save(tmp_path / "s_0.npy", data[..., 0])
+    np.save(tmp_path / "s_1.npy", data[..., 1])
+    for series in (open_time_series(path), open_time_series(tmp_path / "s_#.npy"),
+                   TimeSeries.from_array(np.moveaxis(data, -1, 0))):
+        series.step(1)
+        series.read_ahead(0, 1)
+        again = pickle.loads(pickle.dumps(series))
+        assert again.cached(1) and again.times == series.times and again.reads == 1
+        np.testing.assert_array_equal(again.step(0).data, data[..., 0])
+        np.testing.assert_array_equal(again.step(1).data, data[..., 1])
+        series.close()
