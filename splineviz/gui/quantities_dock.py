@@ -45,8 +45,11 @@ class QuantitiesPanel(QWidget):
                                        "time step, from the spline surface")
         self.export_button = QPushButton("Export CSV...")
         self.export_button.setEnabled(False)
+        self.export_button.setToolTip("Write the table as a CSV file")
         self.grid = QTableWidget(0, 5)
         self.grid.setHorizontalHeaderLabels(["step", "time", "isosurface", "area", "volume"])
+        self.grid.setToolTip("Area and enclosed volume (empty where the surface leaves the "
+                             "data box) per isosurface and time step")
         self.figure = Figure(figsize=(3.0, 3.0), layout="constrained")
         self.canvas = FigureCanvasQTAgg(self.figure)
         self.canvas.setMinimumHeight(180)
@@ -93,7 +96,10 @@ class QuantitiesPanel(QWidget):
         self.grid.setRowCount(len(table.rows))
         for r, row in enumerate(table.rows):
             for c, value in enumerate(row):
-                text = f"{value:.8g}" if isinstance(value, float) else str(value)
+                if isinstance(value, float):  # no volume of an open surface: left empty
+                    text = "" if math.isnan(value) else f"{value:.8g}"
+                else:
+                    text = str(value)
                 self.grid.setItem(r, c, QTableWidgetItem(text))
         self.figure.clear()
         area_ax, vol_ax = self.figure.subplots(2, 1, sharex=True)
