@@ -122,6 +122,9 @@ class TimeSeries(Sequence):
         self._pool: ThreadPoolExecutor | None = None
         #: reads done (a cache hit is none): what tests and the benchmark count
         self.reads = 0
+        #: ``prepare(volume)``, run on the reading thread after each read: what the views
+        #: of a step need computed (its range, its histogram) is then ready when it shows
+        self.prepare: Callable[[Volume], None] | None = None
 
     # -- construction ----------------------------------------------------------------------
 
@@ -145,10 +148,11 @@ class TimeSeries(Sequence):
         # read-ahead thread are the process's own
         with self._lock:
             return {k: v for k, v in self.__dict__.items()
-                    if k not in ("_lock", "_pending", "_pool")}
+                    if k not in ("_lock", "_pending", "_pool", "prepare")}
 
     def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state, _lock=threading.Lock(), _pending={}, _pool=None)
+        self.__dict__.update(state, _lock=threading.Lock(), _pending={}, _pool=None,
+                             prepare=None)
 
     # -- access ----------------------------------------------------------------------------
 
@@ -268,6 +272,8 @@ class TimeSeries(Sequence):
     def _load(self, i: int) -> Volume:
         try:
             vol = self._read(i)
+            if self.prepare is not None:
+                self.prepare(vol)
         finally:
             with self._lock:
                 self._pending.pop(i, None)

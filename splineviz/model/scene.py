@@ -87,6 +87,21 @@ def first_isovalue(volume) -> float:
     return isovalue_from_histogram(np.rint(np.expm1(log_counts)), edges)
 
 
+def _summarise(volume) -> None:
+    """What the panels show of a volume (its range and histogram), computed where it is
+    read: a time step's reading thread, not the GUI thread that shows it."""
+    from splineviz.model.summaries import cached_histogram
+
+    _ = volume.finite_range
+    cached_histogram(volume)
+
+
+def _prepare_steps(node: VolumeNode, *_args) -> None:
+    # the steps of a time-varying volume come with their summaries
+    if node.series is not None:
+        node.series.prepare = _summarise
+
+
 class Scene:
     """Objects of one scene, in insertion order (inputs before the objects that use them).
 
@@ -283,8 +298,12 @@ class Scene:
             self._nodes = dict(items)
         node.events.connect(self._node_changed)
         if isinstance(node, VolumeNode):
-            slot = self._step_slots[node.id] = partial(self._follow_step, node)
+            slot = partial(self._follow_step, node)
+            adopt = partial(_prepare_steps, node)
+            self._step_slots[node.id] = (slot, adopt)
             node.events.time_index.connect(slot)
+            node.events.series.connect(adopt)
+            adopt()
             if node.series is not None:
                 if node.data is None:
                     slot(node.time_index)
@@ -315,7 +334,9 @@ class Scene:
         del self._nodes[node.id]
         node.events.disconnect(self._node_changed)
         if isinstance(node, VolumeNode):
-            node.events.time_index.disconnect(self._step_slots.pop(node.id))
+            slot, adopt = self._step_slots.pop(node.id)
+            node.events.time_index.disconnect(slot)
+            node.events.series.disconnect(adopt)
         if self.selected is node:
             self.select(None)
         self.removed.emit(node)

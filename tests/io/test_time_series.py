@@ -160,6 +160,10 @@ def test_scene_time_moves_every_time_varying_volume():
     assert a.time_index == 0
     a.time_index = 2  # a step set on the node itself is read as well
     np.testing.assert_array_equal(a.data.data, data[..., 2])
+    # the reading thread made the panels' summaries of each step it read
+    from splineviz.model import summaries
+
+    assert summaries._kept_value("histogram", a.data) is not None
 
 
 def test_session_keeps_time_axis_step_and_rate(nifti4d, tmp_path):
