@@ -116,9 +116,9 @@ def _frame_names(pattern: str, times) -> list[str]:
     ``{time}``: its time); a one-sentence error when the pattern names every step alike."""
     try:
         names = [pattern.format(t=k, time=t) for k, t in enumerate(times)]
-    except (KeyError, IndexError, ValueError) as exc:
-        raise RenderArgumentError(f"-o {pattern!r} is not a pattern of {{t}} (step index) and "
-                                  f"{{time}} ({exc})") from None
+    except (KeyError, IndexError, ValueError):
+        raise RenderArgumentError(f"-o {pattern!r} may name only {{t}} (the step index) and "
+                                  "{time} (its time), e.g. frame_{t:04d}.png") from None
     if len(set(names)) != len(names):
         raise RenderArgumentError("--all-times needs -o with the step in it, e.g. "
                                   "frame_{t:04d}.png")
