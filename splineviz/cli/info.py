@@ -49,7 +49,8 @@ def _run(args) -> int:
                     dims=args.dims, dtype=args.dtype,
                     byteorder=args.byteorder, offset=args.offset,
                     allow_outside=args.allow_outside_data, channel=args.channel)
-    if files is not None or "frames" in info:  # time steps: how many, and when
+    if files is not None or "frames" in info or info.get("format") == "ome-zarr":
+        # time steps (a 4-D file's, a series', an OME-Zarr t axis'): how many, and when
         info.update(series_info(path if files is not None else info["file"],
                                 channel=args.channel,
                                 allow_outside=args.allow_outside_data) or {})

@@ -236,7 +236,7 @@ def test_dask_array_with_a_leading_time_axis_computes_one_step_per_read():
         TimeSeries.from_array(steps[0])
 
 
-def test_ome_zarr_t_axis_steps_with_times(tmp_path):
+def test_ome_zarr_t_axis_steps_with_times(tmp_path, capsys):
     pytest.importorskip("ome_zarr")
     import warnings
 
@@ -260,6 +260,9 @@ def test_ome_zarr_t_axis_steps_with_times(tmp_path):
     np.testing.assert_array_equal(series.step(2).read(((0, 12), (0, 10), (0, 8))).data,
                                   data[..., 2])
     assert series.parse_step("0.25s") == 1
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "steps: 3" in out and "times: 0, 250, 500 ms" in out
 
 
 def test_series_pickle_with_the_steps_read(nifti4d, tmp_path):
