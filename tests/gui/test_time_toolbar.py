@@ -14,7 +14,14 @@ import pytest
 
 pytest.importorskip("pytestqt")
 
-from interaction import StallMeter, close_window, open_window, pump  # noqa: E402
+from interaction import (  # noqa: E402
+    FRESH,
+    StallMeter,
+    close_window,
+    in_fresh_process,
+    open_window,
+    pump,
+)
 from PySide6.QtCore import Qt  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QApplication  # noqa: E402
@@ -58,6 +65,8 @@ def _shot(w, name: str) -> None:
         w.grab().save(str(Path(folder) / name))
 
 
+@pytest.mark.skipif(os.environ.get(FRESH) != "1", reason="run in a fresh process by "
+                    "test_play_a_4d_file_forward_without_stalls_alone")
 def test_play_a_4d_file_forward_without_stalls(window, nifti4d):
     w = window
     bar = w.time_toolbar
@@ -115,6 +124,13 @@ def test_play_a_4d_file_forward_without_stalls(window, nifti4d):
     w.wait_idle()
     assert vol.smoothed is not None and vol.smoothed is not before
     assert not vol.smoothing_pending
+
+
+@pytest.mark.skipif(os.environ.get(FRESH) == "1", reason="this process is the fresh one")
+def test_play_a_4d_file_forward_without_stalls_alone():
+    """The stall guard measures this app's GUI thread, not what earlier tests of the suite
+    left behind (see :func:`interaction.in_fresh_process`)."""
+    in_fresh_process("tests/gui/test_time_toolbar.py::test_play_a_4d_file_forward_without_stalls")
 
 
 def test_quantities_dock_tabulates_plots_and_exports(window, nifti4d, tmp_path):
