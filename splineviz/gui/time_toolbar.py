@@ -6,11 +6,14 @@ the arrow keys step. The toolbar shows while the scene holds a time-varying volu
 opened from a 4-D file becomes one (its steps are found by a job, not the GUI thread).
 
 The GUI thread never reads a step: a step not yet read is read by a job (or by the series'
-read-ahead thread while playing) and shown when it arrives. The ray casting of a new step
-happens in the view's worker like any change of data. While playing, the player moves to
-the next step once it is read and the view shows a frame of the current one, so every step
-is seen, and steps only ever go forward (until a loop starts over); the frame rate is what
-reading and ray casting allow, at most the chosen speed.
+read-ahead thread while playing, which also makes the step's range and histogram there) and
+shown when it arrives. A new step is ray cast in the view's worker like any change of data:
+first a reduced-resolution preview with the cheap caster, then the exact frame. While
+playing, the player moves to the next step once it is read and the view shows a frame of
+the current one (the preview), which gives up the exact frame under way; so every step is
+seen, steps only ever go forward (until a loop starts over), and on pause the exact frame of
+the step shown follows. The rate is what reading and previews allow, at most the chosen
+speed.
 """
 
 from __future__ import annotations
