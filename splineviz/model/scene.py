@@ -402,11 +402,15 @@ class Scene:
                         read_options=None, **kwargs) -> VolumeNode:
         """Add a time-varying volume showing ``step`` of ``series`` (and, unless
         ``isosurface=False``, its first isosurface, from that step's samples); the scene's
-        time moves to that step's. ``kwargs`` as for :meth:`add_volume`."""
+        time moves to that step's. ``path``: the file, folder or pattern the series was
+        opened from (:func:`~splineviz.io.time_series.open_time_series`), which sessions
+        keep; ``kwargs`` as for :meth:`add_volume`."""
         step = series.check_index(step)
         node = self.add_volume(series.step(step), name or series.name, path=path,
                                read_options=read_options, **kwargs)
-        node.update(series=series, time_series=True, time_index=step)
+        # a session reopens the series from its file; one without (an array's) is saved as
+        # the step shown
+        node.update(series=series, time_series=path is not None, time_index=step)
         self._time = node.time
         return node
 

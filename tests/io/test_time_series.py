@@ -281,3 +281,15 @@ def test_series_pickle_with_the_steps_read(nifti4d, tmp_path):
         np.testing.assert_array_equal(again.step(0).data, data[..., 0])
         np.testing.assert_array_equal(again.step(1).data, data[..., 1])
         series.close()
+
+
+def test_an_array_series_is_saved_as_the_step_shown(tmp_path):
+    from splineviz.model.session import load_scene, save_scene
+
+    data = _ball_steps(n=3, shape=(8, 8, 8))
+    scene = Scene()
+    scene.add_time_series(TimeSeries.from_array(np.moveaxis(data, -1, 0)), "sim", step=2)
+    save_scene(scene, tmp_path / "a.svs")
+    again = load_scene(tmp_path / "a.svs").volumes[0]
+    assert again.series is None and not again.time_series
+    np.testing.assert_array_equal(again.data.data, data[..., 2])
