@@ -84,6 +84,27 @@ def test_table_over_time_and_csv(tmp_path):
     table.to_csv(tmp_path / "q.csv")
     with open(tmp_path / "q.csv", newline="") as fh:
         rows = list(csv.reader(fh))
-    assert rows[0] == ["step", "time [s]", "isosurface", "area", "volume"]
+    assert rows[0] == ["step", "time [s]", "object", "area", "volume", "length"]
     assert [r[0] for r in rows[1:]] == ["0", "1", "2"]
     assert float(rows[3][4]) == table.rows[2][4]
+
+
+def test_section_length_and_area_over_time():
+    h = 0.5
+    base = np.asarray(_sphere_field(n=24, h=h).data)
+    steps = np.stack([base / (1.0 + 0.25 * t) for t in range(2)])
+    scene = Scene()
+    vol = scene.add_time_series(TimeSeries.from_array(steps, spacing=(h,) * 3,
+                                                      origin=(-5.75,) * 3), "grow",
+                                isovalue=16.0, model="cubic-c1")
+    iso = scene.isosurfaces[0]
+    plane = scene.add_clip_plane((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), volume=vol)
+    scene.add_section(iso, plane, name="equator")
+    table = quantities_over_time(scene)
+    assert table.column("object") == ["isosurface", "equator"] * 2
+    for k in range(2):
+        r = math.sqrt(16.0 * (1.0 + 0.25 * k) - 0.75 * h * h)  # the equator of the sphere
+        assert table.column("length", "equator")[k] == pytest.approx(2 * math.pi * r, rel=1e-5)
+        assert table.column("area", "equator")[k] == pytest.approx(math.pi * r * r, rel=1e-5)
+        assert math.isnan(table.column("volume", "equator")[k])
+        assert math.isnan(table.column("length", "isosurface")[k])

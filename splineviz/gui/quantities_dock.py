@@ -1,9 +1,11 @@
-"""The Quantities dock: area and enclosed volume of the isosurfaces over time.
+"""The Quantities dock: area and enclosed volume of the isosurfaces, length and enclosed area
+of their cross sections, over time.
 
-*Measure* tabulates every isosurface at every time step (one step for a scene that does not
-vary) from the spline surface itself (:func:`splineviz.model.quantities.quantities_over_time`,
-in a job: the GUI thread measures nothing), plots both against time with matplotlib (one
-line per isosurface) and *Export CSV...* writes the table.
+*Measure* tabulates every isosurface and section at every time step (one step for a scene
+that does not vary) from the spline surface itself
+(:func:`splineviz.model.quantities.quantities_over_time`, in a job: the GUI thread measures
+nothing), plots area and volume against time with matplotlib (one line per object) and
+*Export CSV...* writes the table.
 """
 
 from __future__ import annotations
@@ -46,10 +48,12 @@ class QuantitiesPanel(QWidget):
         self.export_button = QPushButton("Export CSV...")
         self.export_button.setEnabled(False)
         self.export_button.setToolTip("Write the table as a CSV file")
-        self.grid = QTableWidget(0, 5)
-        self.grid.setHorizontalHeaderLabels(["step", "time", "isosurface", "area", "volume"])
-        self.grid.setToolTip("Area and enclosed volume (empty where the surface leaves the "
-                             "data box) per isosurface and time step")
+        self.grid = QTableWidget(0, 6)
+        self.grid.setHorizontalHeaderLabels(["step", "time", "object", "area", "volume",
+                                             "length"])
+        self.grid.setToolTip("Per time step: area and enclosed volume of each isosurface "
+                             "(empty where it leaves the data box), length and enclosed area "
+                             "of each cross section")
         self.figure = Figure(figsize=(3.0, 3.0), layout="constrained")
         self.canvas = FigureCanvasQTAgg(self.figure)
         self.canvas.setMinimumHeight(180)
@@ -104,7 +108,7 @@ class QuantitiesPanel(QWidget):
         self.figure.clear()
         area_ax, vol_ax = self.figure.subplots(2, 1, sharex=True)
         lu, tu = table.length_unit, table.time_unit
-        for name in dict.fromkeys(table.column("isosurface")):
+        for name in dict.fromkeys(table.column("object")):
             t = table.column("time", name)
             area_ax.plot(t, table.column("area", name), marker="o", label=name)
             vols = table.column("volume", name)

@@ -156,7 +156,7 @@ def test_quantities_dock_tabulates_plots_and_exports(window, nifti4d, tmp_path):
     _shot(w, "quantities.png")
     panel.export_csv(tmp_path / "q.csv")
     lines = (tmp_path / "q.csv").read_text().splitlines()
-    assert lines[0] == "step,time [s],isosurface,area [mm^2],volume [mm^3]"
+    assert lines[0] == "step,time [s],object,area [mm^2],volume [mm^3],length [mm]"
     assert len(lines) == STEPS + 1
 
 
