@@ -2,7 +2,8 @@
 baselines run in the same run (VTK flying edges and trilinear ray casting for ``raycast``;
 flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 dask workers for
 ``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
-the 100 ms budget of the GUI thread for ``gui``)."""
+the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render of each step
+for ``time``)."""
 
 from __future__ import annotations
 
@@ -31,8 +32,15 @@ def _run(args) -> int:
 
         workers = tuple(int(n) for n in args.workers.split(","))
         model = args.models.split(",")[0] if args.models else "cubic-c1"
-        run_bricks_bench(n=args.n, model=model, size=(w, h), brick=args.brick,
+        run_bricks_bench(n=args.n or 512, model=model, size=(w, h), brick=args.brick,
                          workers=workers, device=args.device)
+    elif args.which == "time":
+        from splineviz.bench.time import MODELS, run_time_bench
+
+        pw, ph = (int(v) for v in args.preview.lower().split("x"))
+        models = tuple(args.models.split(",")) if args.models else MODELS
+        run_time_bench(n=args.n or 256, steps=args.steps, models=models, size=(w, h),
+                       preview=(pw, ph), device=args.device, timeout=args.timeout or 900.0)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -50,7 +58,7 @@ def _run(args) -> int:
 def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
-    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui"],
+    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
@@ -63,8 +71,10 @@ def register(subparsers) -> None:
                    help="isovalue: comma-separated spline models (default: all four)")
     p.add_argument("--repeats", type=int, default=3,
                    help="raycast: frames per measurement; gui: measurements per action")
-    p.add_argument("--n", type=int, default=512,
-                   help="bricks: samples per axis of the lazy gyroid (2048: 32 GiB as float32)")
+    p.add_argument("--n", type=int, default=None,
+                   help="bricks: samples per axis of the lazy gyroid (default 512; 2048: 32 GiB "
+                   "as float32); time: samples per axis of each step (default 256)")
+    p.add_argument("--steps", type=int, default=20, help="time: steps of the series")
     p.add_argument("--brick", type=int, default=128, help="bricks: cells per brick and axis")
     p.add_argument("--workers", default="1,2",
                    help="bricks: LocalCluster sizes to compare, comma-separated")

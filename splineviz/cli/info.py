@@ -41,9 +41,18 @@ def _run(args) -> int:
         print(json.dumps(listed, indent=2) if args.json else "\n".join(
             [rest, *(f"{'series':>15}: {s}" for s in listed["series"])]))
         return 0
-    info = describe(path if args.series is None else series_file(path, args.series),
+    from splineviz.io.time_series import series_files, series_info
+
+    files = series_files(path) if args.series is None else None
+    info = describe(path if files is None and args.series is None else
+                    files[0] if files is not None else series_file(path, args.series),
                     dims=args.dims, dtype=args.dtype,
                     byteorder=args.byteorder, offset=args.offset,
                     allow_outside=args.allow_outside_data, channel=args.channel)
+    if files is not None or "frames" in info or info.get("format") == "ome-zarr":
+        # time steps (a 4-D file's, a series', an OME-Zarr t axis'): how many, and when
+        info.update(series_info(path if files is not None else info["file"],
+                                channel=args.channel,
+                                allow_outside=args.allow_outside_data) or {})
     print(json.dumps(info, indent=2) if args.json else format_info(info))
     return 0

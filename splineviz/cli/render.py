@@ -84,6 +84,47 @@ def _configure_bricks(scene, args):
     return bar, saved
 
 
+def _time_scene(args, options: dict):
+    """The scene of a time-varying volume (``--time``, ``--all-times``): its step ``--time``
+    (the first with ``--all-times``), or a session's scene moved to that step."""
+    from splineviz.io.opening import SESSION_SUFFIXES, data_name
+    from splineviz.io.time_series import open_time_series
+    from splineviz.model.opening import override, scene_from_path
+    from splineviz.model.scene import Scene
+
+    if str(args.volume).lower().endswith(SESSION_SUFFIXES):
+        scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
+                                allow_outside=args.allow_outside_data, **options)
+        if not scene.time_varying:
+            raise RenderArgumentError(f"{args.volume} holds no time-varying volume; --time "
+                                      "and --all-times need one")
+        if args.time is not None:
+            node = scene.time_varying[0]
+            scene.set_time(node.times[node.series.parse_step(args.time)])
+        return scene
+    series = open_time_series(args.volume, allow_outside=args.allow_outside_data, **options)
+    step = 0 if args.time is None else series.parse_step(args.time)
+    scene = Scene()
+    scene.add_time_series(series, data_name(args.volume), step=step, path=str(args.volume))
+    scene.frame(view="isometric")
+    override(scene, isovalue=args.iso, model=args.model)
+    return scene
+
+
+def _frame_names(pattern: str, times) -> list[str]:
+    """The file of each step of ``--all-times -o PATTERN`` (``{t}``: the step index,
+    ``{time}``: its time); a one-sentence error when the pattern names every step alike."""
+    try:
+        names = [pattern.format(t=k, time=t) for k, t in enumerate(times)]
+    except (KeyError, IndexError, ValueError):
+        raise RenderArgumentError(f"-o {pattern!r} may name only {{t}} (the step index) and "
+                                  "{time} (its time), e.g. frame_{t:04d}.png") from None
+    if len(set(names)) != len(names):
+        raise RenderArgumentError("--all-times needs -o with the step in it, e.g. "
+                                  "frame_{t:04d}.png")
+    return names
+
+
 def run(args) -> int:
     from splineviz.core.splines import model_spec
     from splineviz.model.opening import scene_from_path
@@ -94,10 +135,15 @@ def run(args) -> int:
         from splineviz.io.dicom import series_file
 
         args.volume = str(series_file(args.volume, args.series))
-    scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
-                            allow_outside=args.allow_outside_data,
-                            **{k: v for k, v in (("channel", args.channel),
-                                                 ("oblique", args.oblique)) if v is not None})
+    options = {k: v for k, v in (("channel", args.channel), ("oblique", args.oblique))
+               if v is not None}
+    if args.time is not None and args.all_times:
+        raise RenderArgumentError("give either --time or --all-times, not both")
+    if args.time is not None or args.all_times:
+        scene = _time_scene(args, options)
+    else:
+        scene = scene_from_path(args.volume, isovalue=args.iso, model=args.model,
+                                allow_outside=args.allow_outside_data, **options)
     if not scene.isosurfaces:
         raise RenderArgumentError(f"{args.volume} holds no volume to render")
     for vol in scene.volumes:
@@ -119,8 +165,17 @@ def run(args) -> int:
     if spec.family is None:
         print(f"splineviz: note: model {spec.name!r} renders on the NumPy reference path "
               "(slow): it has no OpenCL kernel", file=sys.stderr)
+    outputs = [(None, args.output)]
+    if args.all_times:
+        steps = scene.time_steps()
+        outputs = list(enumerate(_frame_names(args.output, steps)))
     try:
-        render_scene(scene, size, args.output, device=args.device)
+        for step, output in outputs:
+            if step is not None:
+                scene.set_step(step)
+            render_scene(scene, size, output, device=args.device)
+            if step is not None:
+                print(f"{output}: step {step}, time {scene.time:g}")
     finally:
         if chunked is not None:
             bar, saved = chunked
@@ -129,8 +184,16 @@ def run(args) -> int:
 
             bricked.configure(**saved)
             bricked.close_clients()
+    if args.measures:
+        from splineviz.model.quantities import quantities_over_time
+
+        steps = None if args.all_times or not scene.time_steps() else [scene.step_index()]
+        quantities_over_time(scene, steps=steps).to_csv(args.measures)
+        print(f"{args.measures}: area and enclosed volume of the isosurface"
+              f"{' at each step' if args.all_times else ''}")
     iso = scene.isosurfaces[0]
-    print(f"{args.output}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
+    what = f"{len(outputs)} steps" if args.all_times else args.output
+    print(f"{what}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
     return 0
 
 
@@ -171,4 +234,14 @@ def register(subparsers) -> None:
                    help="a scan rotated against the world axes: show it in place with its "
                    "direction (default), resample it trilinearly onto axis-aligned axes, or "
                    "refuse it")
+    p.add_argument("--time", default=None, metavar="T",
+                   help="time-varying volumes (4-D files, a folder or a pattern such as "
+                   "run_####.vti): the step to render, by index (0, -1) or by time with its "
+                   "unit (2.5s, 250ms)")
+    p.add_argument("--all-times", action="store_true",
+                   help="render every step, to -o with {t} (the step) in it, e.g. "
+                   "frame_{t:04d}.png")
+    p.add_argument("--measures", default=None, metavar="CSV",
+                   help="also write the area and enclosed volume of the isosurface (from the "
+                   "spline surface; at every step with --all-times) to a CSV file")
     p.set_defaults(func=run)

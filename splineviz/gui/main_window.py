@@ -35,8 +35,10 @@ from splineviz.gui.panels import (
     Smoother,
     SmoothingPanel,
 )
+from splineviz.gui.quantities_dock import QuantitiesPanel
 from splineviz.gui.split import LinkedViews
 from splineviz.gui.status import StatusBar
+from splineviz.gui.time_toolbar import TimeToolbar
 from splineviz.gui.view import View3D
 from splineviz.model import Scene
 
@@ -101,6 +103,8 @@ class MainWindow(QMainWindow):
         self.plane_widgets = PlaneWidgets(self.scene, self.plotter, self.view.request_render)
         self._build_panels()
         self.actions_by_name = build_actions(self)
+        self.time_toolbar = TimeToolbar(self)
+        self.addToolBar(Qt.ToolBarArea.BottomToolBarArea, self.time_toolbar)
         self.status = StatusBar(self)
         self._view_busy = self.status.view_busy  # each view of a split reports to it
         self._add_panel_toggles()
@@ -140,6 +144,7 @@ class MainWindow(QMainWindow):
         self.smooth_panel = SmoothingPanel(self.scene)
         self.remesh_panel = RemeshPanel(self.scene, self.jobs)
         self.analysis_panel = AnalysisPanel(self.scene)
+        self.quantities_panel = QuantitiesPanel(self.scene, self.jobs)
         self.log = LogPanel()
         left, right = Qt.DockWidgetArea.LeftDockWidgetArea, Qt.DockWidgetArea.RightDockWidgetArea
         self.docks = {
@@ -149,12 +154,14 @@ class MainWindow(QMainWindow):
             "Smoothing": self._dock("Smoothing", self.smooth_panel, right),
             "Remeshing": self._dock("Remeshing", self.remesh_panel, right),
             "Analysis": self._dock("Analysis", self.analysis_panel, right),
+            "Quantities": self._dock("Quantities", self.quantities_panel, right),
             "Log": self._dock("Log", self.log, Qt.DockWidgetArea.BottomDockWidgetArea),
         }
         # the right column as tabs: narrower, so the 3-D view keeps its room
         self.tabifyDockWidget(self.docks["Clipping"], self.docks["Smoothing"])
         self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Remeshing"])
         self.tabifyDockWidget(self.docks["Remeshing"], self.docks["Analysis"])
+        self.tabifyDockWidget(self.docks["Analysis"], self.docks["Quantities"])
         self.docks["Clipping"].raise_()
         self.docks["Log"].hide()
 
@@ -333,6 +340,7 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self._closed = True
+        self.time_toolbar.pause()
         if self.autosaver is not None:
             self.autosaver.close()  # a clean quit: nothing to recover
         self.jobs.close()

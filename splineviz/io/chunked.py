@@ -141,8 +141,9 @@ def _ome_levels(path: Path):
     return None
 
 
-def _read_zarr(path: Path):
-    """An OME-Zarr image (multiscale levels) or a plain 3-D Zarr array, lazily."""
+def _read_zarr(path: Path, t: int = 0):
+    """An OME-Zarr image (multiscale levels) or a plain 3-D Zarr array, lazily; an image
+    with a ``t`` axis at time index ``t`` (its other non-space axes at 0)."""
     import dask.array as da
     import zarr
 
@@ -157,7 +158,8 @@ def _read_zarr(path: Path):
         out = []
         for ds, scale, shift in levels:
             arr = zarr.open_array(str(path / ds), mode="r")
-            index = tuple(slice(None) if n in spatial else 0 for n in range(arr.ndim))
+            index = tuple(slice(None) if n in spatial else int(t) if axes[n] == "t" else 0
+                          for n in range(arr.ndim))
             # a reader of the spatial axes only: drop leading t/c axes by fixed indices
             view = arr if arr.ndim == 3 else _Fixed(arr, index)
             kept = [n for n in range(arr.ndim) if n in spatial]

@@ -26,7 +26,7 @@ from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from psygnal import EventedModel
-from pydantic import AfterValidator, ConfigDict, Field, ValidationError
+from pydantic import AfterValidator, ConfigDict, Field, ValidationError, model_validator
 
 from splineviz.core.chunked import ChunkedVolume
 from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
@@ -35,6 +35,8 @@ from splineviz.core.material import FRONT_COLOR, MATERIALS
 from splineviz.core.points import PointCloud
 from splineviz.core.volume import Volume
 from splineviz.io.session import ID_PATTERN, MAX_MAGNITUDE
+from splineviz.io.time_series import TimeSeries
+from splineviz.io.volume_data import MAX_FRAMES
 
 Unit = Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False)]
 RGB = tuple[Unit, Unit, Unit]
@@ -208,6 +210,49 @@ class VolumeNode(Node):
     smoothed: Volume | None = Field(default=None, exclude=True, repr=False)
     #: the sigma ``smoothed`` was made with
     smoothed_sigma: float = Field(default=0.0, exclude=True)
+    #: read as a series of time steps (a 4-D file's time axis, a folder or a file pattern:
+    #: :func:`~splineviz.io.time_series.open_time_series`); ``data`` is step ``time_index``
+    time_series: bool = False
+    time_index: Annotated[int, Field(ge=0, le=MAX_FRAMES)] = 0
+    #: added to the series' times on the scene's time line (volumes whose times differ)
+    time_offset: Finite = 0.0
+    #: steps per second while the scene plays
+    play_rate: Annotated[float, Field(gt=0.0, le=1000.0, allow_inf_nan=False)] = 10.0
+    #: the steps (:class:`~splineviz.io.time_series.TimeSeries`) of a time-varying volume
+    series: TimeSeries | None = Field(default=None, exclude=True, repr=False)
+
+    @model_validator(mode="after")
+    def _step_in_series(self):
+        if self.series is not None and self.time_index >= len(self.series):
+            raise ValueError(f"time_index {self.time_index} is past the last of "
+                             f"{len(self.series)} steps")
+        return self
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        # checked before the assignment, so that a refused step leaves the node unchanged
+        if name == "time_index" and self.series is not None and \
+                isinstance(value, int) and value >= len(self.series):
+            raise ModelError(f"volume {self.name or self.id}: time_index {value} is past the "
+                             f"last of {len(self.series)} steps")
+        super().__setattr__(name, value)
+
+    @property
+    def times(self) -> tuple[float, ...]:
+        """The time of each step on the scene's time line (the series' times plus
+        ``time_offset``); one time for a volume that does not vary."""
+        if self.series is None:
+            return (self.time_offset,)
+        return tuple(t + self.time_offset for t in self.series.times)
+
+    @property
+    def time(self) -> float:
+        """The time of the step shown, on the scene's time line."""
+        return self.times[self.time_index] if self.series is not None else self.time_offset
+
+    @property
+    def time_unit(self) -> str:
+        """The unit of :attr:`times` (``""`` when the data do not say)."""
+        return self.series.unit if self.series is not None else ""
 
     @property
     def active(self) -> Volume:

@@ -8,7 +8,13 @@ change through :class:`psygnal.Signal`\\ s:
 
 * ``inserted(node)`` / ``removed(node)``: the list of objects changed;
 * ``selection(node or None)``: the current object of the panels;
-* ``changed()``: anything changed (unsaved-changes flag, autosave).
+* ``changed()``: anything changed (unsaved-changes flag, autosave);
+* ``time_changed(t)``: the scene's current time moved (:meth:`Scene.set_time`).
+
+Time-varying volumes (a :class:`~splineviz.io.time_series.TimeSeries` on their node) follow
+the scene's one current time (ParaView's animation time): each shows its last step at or
+before it, and since the step is the node's ``data``, its isosurfaces, colourings, clip
+planes and sections follow as after any change of data.
 
 Nothing here imports Qt or VTK; views subscribe.
 """
@@ -16,12 +22,14 @@ Nothing here imports Qt or VTK; views subscribe.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from functools import partial
 
 import numpy as np
 from psygnal import Signal
 
 from splineviz.core.raycast_reference import BACKGROUND
 from splineviz.core.volume import Volume
+from splineviz.io.time_series import TimeSeries
 from splineviz.model.nodes import (
     PALETTE,
     CameraNode,
@@ -79,6 +87,21 @@ def first_isovalue(volume) -> float:
     return isovalue_from_histogram(np.rint(np.expm1(log_counts)), edges)
 
 
+def _summarise(volume) -> None:
+    """What the panels show of a volume (its range and histogram), computed where it is
+    read: a time step's reading thread, not the GUI thread that shows it."""
+    from splineviz.model.summaries import cached_histogram
+
+    _ = volume.finite_range
+    cached_histogram(volume)
+
+
+def _prepare_steps(node: VolumeNode, *_args) -> None:
+    # the steps of a time-varying volume come with their summaries
+    if node.series is not None:
+        node.series.prepare = _summarise
+
+
 class Scene:
     """Objects of one scene, in insertion order (inputs before the objects that use them).
 
@@ -98,6 +121,7 @@ class Scene:
     removed = Signal(object)
     selection = Signal(object)
     changed = Signal()
+    time_changed = Signal(float)
 
     def __init__(self):
         self._nodes: dict[str, Node] = {}
@@ -111,6 +135,9 @@ class Scene:
         #: the model a volume's first isosurface starts with, when it names a registered
         #: one (the GUI's preferences set it); else :func:`default_model`
         self.preferred_model: str | None = None
+        self._time = 0.0
+        #: volume id -> its slot following time_index (to disconnect it on removal)
+        self._step_slots: dict = {}
         self.view.events.connect(self._node_changed)
         # looking around is not an edit: the camera is saved, but moving it leaves
         # ``modified`` alone (no "unsaved changes" prompt after an orbit)
@@ -270,6 +297,17 @@ class Scene:
             items.insert(index, (node.id, node))
             self._nodes = dict(items)
         node.events.connect(self._node_changed)
+        if isinstance(node, VolumeNode):
+            slot = partial(self._follow_step, node)
+            adopt = partial(_prepare_steps, node)
+            self._step_slots[node.id] = (slot, adopt)
+            node.events.time_index.connect(slot)
+            node.events.series.connect(adopt)
+            adopt()
+            if node.series is not None:
+                if node.data is None:
+                    slot(node.time_index)
+                self._time = node.time
         self.inserted.emit(node)
         self._node_changed()
         return node
@@ -295,6 +333,10 @@ class Scene:
                     mesh.points_id = None
         del self._nodes[node.id]
         node.events.disconnect(self._node_changed)
+        if isinstance(node, VolumeNode):
+            slot, adopt = self._step_slots.pop(node.id)
+            node.events.time_index.disconnect(slot)
+            node.events.series.disconnect(adopt)
         if self.selected is node:
             self.select(None)
         self.removed.emit(node)
@@ -355,6 +397,88 @@ class Scene:
         props.setdefault("name", f"isosurface {n + 1}" if n else "isosurface")
         return self.add(IsosurfaceNode(volume_id=volume.id, model=model,
                                        isovalue=float(isovalue), **props))
+
+    def add_time_series(self, series: TimeSeries, name: str = "", *, step: int = 0, path=None,
+                        read_options=None, **kwargs) -> VolumeNode:
+        """Add a time-varying volume showing ``step`` of ``series`` (and, unless
+        ``isosurface=False``, its first isosurface, from that step's samples); the scene's
+        time moves to that step's. ``path``: the file, folder or pattern the series was
+        opened from (:func:`~splineviz.io.time_series.open_time_series`), which sessions
+        keep; ``kwargs`` as for :meth:`add_volume`."""
+        step = series.check_index(step)
+        node = self.add_volume(series.step(step), name or series.name, path=path,
+                               read_options=read_options, **kwargs)
+        # a session reopens the series from its file; one without (an array's) is saved as
+        # the step shown
+        node.update(series=series, time_series=path is not None, time_index=step)
+        self._time = node.time
+        return node
+
+    # -- time ------------------------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """The scene's current time (in the unit of its time-varying volumes)."""
+        return self._time
+
+    @property
+    def time_varying(self) -> list[VolumeNode]:
+        """The volumes that follow the scene's time (those with a series of steps)."""
+        return [n for n in self.volumes if n.series is not None]
+
+    def time_steps(self) -> tuple[float, ...]:
+        """Every time at which some time-varying volume starts a step, increasing (empty
+        when none varies)."""
+        return tuple(sorted({t for n in self.time_varying for t in n.times}))
+
+    @property
+    def play_rate(self) -> float:
+        """Steps per second while the scene plays (kept by its time-varying volumes, so
+        sessions keep it; 10 when none varies)."""
+        return next((n.play_rate for n in self.time_varying), 10.0)
+
+    @play_rate.setter
+    def play_rate(self, rate: float) -> None:
+        for node in self.time_varying:
+            node.play_rate = float(rate)
+
+    def set_time(self, time: float) -> None:
+        """Move the scene to ``time``: each time-varying volume shows its last step at or
+        before it (its first before it starts). Reads the steps not yet read (a player
+        reads them ahead on a job thread first: :meth:`TimeSeries.read_ahead`)."""
+        time = float(time)
+        for node in self.time_varying:
+            node.time_index = node.series.index_at_or_before(time - node.time_offset)
+        self._time = time
+        self.time_changed.emit(time)
+
+    def set_step(self, index: int) -> None:
+        """Move the scene to the ``index``-th of :meth:`time_steps` (negative counts from
+        the end); a one-sentence error past either end."""
+        steps = self.time_steps()
+        if not steps:
+            raise ModelError("the scene holds no time-varying volume")
+        k = int(index) + len(steps) if int(index) < 0 else int(index)
+        if not 0 <= k < len(steps):
+            raise ModelError(f"the scene has {len(steps)} time step(s) (0 to "
+                             f"{len(steps) - 1}); step {index} is not one")
+        self.set_time(steps[k])
+
+    def step_index(self) -> int:
+        """The index in :meth:`time_steps` of the scene's current time (0 when none
+        varies)."""
+        steps = self.time_steps()
+        return max(0, int(np.searchsorted(steps, self._time, side="right")) - 1) if steps else 0
+
+    def _follow_step(self, node: VolumeNode, index: int) -> None:
+        # a volume's data is the step its time_index names: read when they differ (the
+        # step is the node's data, so everything that shows the volume redraws)
+        if node.series is None:
+            return
+        volume = node.series.step(index)
+        if volume is not node.data:
+            # the old step's smoothing goes first: listeners of ``data`` see it pending
+            node.update(smoothed=None, smoothed_sigma=0.0, data=volume)
 
     def _check_section(self, node: SectionNode) -> None:
         if not isinstance(self._nodes.get(node.isosurface_id), IsosurfaceNode):

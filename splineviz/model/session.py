@@ -28,6 +28,7 @@ from splineviz.io.session import (
     load_session,
     save_session,
 )
+from splineviz.io.time_series import TimeSeries
 from splineviz.model.nodes import (
     ClipPlaneNode,
     MeshNode,
@@ -212,7 +213,9 @@ def read_session_data(session: Session, *, allow_outside: bool = False) -> dict:
 
     data = {}
     for obj in session.objects:
-        if obj.type in ("VolumeFile", "Source"):
+        if obj.type == "VolumeFile" and obj.properties.time_series:
+            data[obj.id] = _open_series(obj.properties, allow_outside)
+        elif obj.type in ("VolumeFile", "Source"):
             data[obj.id] = session.load_volume(obj.id, allow_outside=allow_outside)
         elif obj.type == "PointsFile":
             data[obj.id] = session.load_points(obj.id)
@@ -222,6 +225,19 @@ def read_session_data(session: Session, *, allow_outside: bool = False) -> dict:
             normals = mesh.point_data.get("Normals") if hasattr(mesh, "point_data") else None
             data[obj.id] = (v, f, None if normals is None else np.asarray(normals))
     return data
+
+
+def _open_series(p, allow_outside: bool):
+    """The :class:`~splineviz.io.time_series.TimeSeries` of a time-varying VolumeFile's
+    properties ``p``, with the step the session shows read (the other steps are read when
+    shown; a job process hands the series, that step included, to the GUI)."""
+    from splineviz.io.time_series import open_time_series
+
+    options = {k: getattr(p, k) for k in READ_OPTIONS if getattr(p, k) is not None}
+    series = open_time_series(p.path, allow_outside=allow_outside, **options)
+    if p.time_index < len(series):
+        series.step(p.time_index)
+    return series
 
 
 def _plane_volume(session: Session, obj) -> str | None:
@@ -271,7 +287,9 @@ def node_of(session: Session, obj, data=None):
     kwargs = {k: values[name] for k, name in session_names(node_cls).items()}
     kwargs.update(_references(session, obj, node_cls))
     if obj.type == "VolumeFile":
-        kwargs.update(path=values["path"], data=data, read_options={
+        # a time-varying volume's data is its series: the scene reads the step it shows
+        series, data = (data, None) if isinstance(data, TimeSeries) else (None, data)
+        kwargs.update(path=values["path"], data=data, series=series, read_options={
             k: values[k] for k in READ_OPTIONS
             if values[k] != origin.model_fields[k].default})
     elif obj.type == "Source":

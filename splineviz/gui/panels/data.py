@@ -28,13 +28,15 @@ from splineviz.model import (
 
 #: node fields shown in the tree (a change of another field needs no update)
 _SHOWN = {"name", "visible", "enabled", "isovalue", "model", "sigma", "data", "origin",
-          "normal", "vertices"}
+          "normal", "vertices", "series", "time_index"}
 
 
 def describe(node: Node) -> str:
     """The "Info" column of a node."""
     if isinstance(node, VolumeNode):
         text = "x".join(map(str, node.data.shape)) if node.data is not None else ""
+        if node.series is not None:  # time-varying: which step of how many
+            text += f", step {node.time_index + 1}/{len(node.series)}"
         return text + (f", smoothed {node.sigma:g}" if node.sigma else "")
     if isinstance(node, IsosurfaceNode):
         return f"{node.model} @ {node.isovalue:.4g}"

@@ -45,20 +45,23 @@ class Smoother:
         if isinstance(node, VolumeNode):
             listener = self._listeners[node.id] = lambda _s, node=node: self.update(node)
             node.events.sigma.connect(listener)
+            node.events.data.connect(listener)  # a time-varying volume's new step
             self.update(node)
 
     def _removed(self, node) -> None:
         listener = self._listeners.pop(node.id, None)
         if listener is not None:
             node.events.sigma.disconnect(listener)
+            node.events.data.disconnect(listener)
 
     def update(self, node: VolumeNode) -> None:
         if not node.smoothing_pending or node.id not in self.scene:
             return
-        sigma = node.sigma
-        self.jobs.run(f"Smoothing {node.name} (sigma {sigma:g})", smooth_volume, node.data,
+        sigma, data = node.sigma, node.data
+        # a result for data the node no longer shows (an earlier time step) is dropped
+        self.jobs.run(f"Smoothing {node.name} (sigma {sigma:g})", smooth_volume, data,
                       sigma, device=self.device,
-                      on_done=lambda vol: node.set_smoothed(vol, sigma))
+                      on_done=lambda vol: node.data is data and node.set_smoothed(vol, sigma))
 
 
 def smooth_volume(volume, sigma: float, device=None):
