@@ -11,7 +11,8 @@ a thread of the kernel and returns an ``<iframe>`` of its page.
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -25,10 +26,21 @@ DEFAULT_SIZE = (640, 480)
 
 @dataclass(frozen=True)
 class Picture:
-    """An image a notebook shows: ``image`` is an ``(H, W, 3)`` or ``(H, W, 4)`` uint8 array,
-    rows top to bottom (as :func:`~splineviz.render.scene_view.render_scene` returns)."""
+    """An image a notebook shows.
+
+    Attributes
+    ----------
+    image : (H, W, 3) or (H, W, 4) uint8
+        Rows top to bottom (as :func:`~splineviz.render.scene_view.render_scene` returns).
+    scene : Scene or None
+        The scene it is a picture of.
+    camera : dict or None
+        The camera it was taken from (:meth:`CameraNode.pose` fields).
+    """
 
     image: np.ndarray
+    scene: Scene | None = field(default=None, repr=False, compare=False)
+    camera: dict | None = None
 
     @property
     def size(self) -> tuple[int, int]:
@@ -110,13 +122,16 @@ def show(scene: Scene, size=None, camera=None, *, interactive: bool = False, dev
         from splineviz.web.server import serve_in_thread
 
         return serve_in_thread(scene, size=size, port=port, device=device)
+    if not os.environ.get("DISPLAY"):
+        # no X server (a notebook on a server): VTK's default window would try X first and
+        # print a warning into the cell before falling back to EGL
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     from splineviz.render.scene_view import render_scene
 
-    if camera is None:
-        return Picture(render_scene(scene, size, device=device))
     saved = scene.camera.pose()
-    place_camera(scene, camera)
+    if camera is not None:
+        place_camera(scene, camera)
     try:
-        return Picture(render_scene(scene, size, device=device))
+        return Picture(render_scene(scene, size, device=device), scene, scene.camera.pose())
     finally:
         scene.camera.update(saved)
