@@ -21,12 +21,16 @@ import numpy as np
 from splineviz.core.colour_by import FIELDS
 from splineviz.core.errors import SplinevizError
 from splineviz.model import ClipPlaneNode, IsosurfaceNode, Scene
+from splineviz.render.scene import PREVIEW_LEVELS
 
 #: degrees of orbit per pixel of drag across the view's height (VTK's trackball camera
 #: turns 20 / height * MotionFactor 10 = 200 degrees a view height; this is its rate)
 DEGREES_PER_VIEW_HEIGHT = 200.0
 #: name of the clip plane the page turns on and off
 CLIP_NAME = "web clip plane"
+#: resolution factor of a preview the render thread casts itself (see RemoteView.preview):
+#: the refining worker's preview level of the window
+PREVIEW_SCALE = PREVIEW_LEVELS[4]
 
 
 class WebViewError(SplinevizError, ValueError):
@@ -180,9 +184,21 @@ class RemoteView:
     def preview(self) -> Shot:
         """The picture now: a preview where the view changed since the last exact frame."""
         view = self._ensure()
-        view.spline_scene.set_interacting(True)
+        scene = view.spline_scene
+        scene.set_interacting(True)
         self._plotter.render_window.Render()
-        return Shot(self._screenshot(), not view.spline_scene.needs_refine(), self.state())
+        # the window previews only with casters a worker has built, and at sizes they were
+        # built for (never blocking the GUI thread): a new view, a new model or data gave no
+        # frame above. This render thread may wait, so it casts those previews itself
+        now = scene.view_state()
+        missing = [layer for layer in scene.layers if layer.visible
+                   and not _shows(scene.shown_frame(layer), layer, now)]
+        if missing:
+            frames = [(layer, layer.compute(now, scale=PREVIEW_SCALE, preview=True))
+                      for layer in missing]
+            if scene.apply([(layer, rf) for layer, rf in frames if rf is not None]):
+                self._plotter.render_window.Render()
+        return Shot(self._screenshot(), not scene.needs_refine(), self.state())
 
     def exact(self) -> Shot:
         """The exact frame of the view now: :func:`~splineviz.render.scene_view.render_scene`
@@ -204,3 +220,8 @@ class RemoteView:
             self._view.close()
             self._plotter.close()
             self._view = self._plotter = None
+
+
+def _shows(rf, layer, view) -> bool:
+    """Whether the frame ``rf`` (or None) is of ``layer``'s state and of ``view``."""
+    return rf is not None and rf.state == layer.state and rf.view.key() == view.key()

@@ -12,6 +12,12 @@ from splineviz.web.view import RemoteView, WebViewError
 SIZE = (160, 120)
 
 
+def surface_share(image) -> float:
+    """Share of pixels of the warm surface colour (the background and outline are grey)."""
+    image = image.astype(int)
+    return float(((image[..., 0] - image[..., 2]) > 40).mean())
+
+
 @pytest.fixture
 def view():
     v = RemoteView(default_scene(), SIZE)
@@ -22,15 +28,23 @@ def view():
 def test_orbit_previews_then_exact_frame_is_render_scene(view):
     first = view.exact()
     assert first.exact and np.array_equal(first.image, render_scene(default_scene(), SIZE))
-    view.orbit(25, -10)
+    view.orbit(8, -3)
     preview = view.preview()
     assert not preview.exact
+    # a preview shows the surface (blocks of a reduced resolution), never the outline alone
+    assert surface_share(preview.image) > 0.3 * surface_share(first.image) > 0
     assert preview.state["camera"] != first.state["camera"]
     exact = view.exact()
     reference = default_scene()
     place_camera(reference, exact.state["camera"])
     assert np.array_equal(exact.image, render_scene(reference, SIZE))
     assert not np.array_equal(exact.image, first.image)
+
+
+def test_first_preview_and_a_new_model_show_the_surface(view):
+    assert surface_share(view.preview().image) > 0.02
+    view.set("model", "trilinear")
+    assert surface_share(view.preview().image) > 0.02
 
 
 def test_controls_change_the_scene(view):
