@@ -10,7 +10,6 @@ a thread of the kernel and returns an ``<iframe>`` of its page.
 
 from __future__ import annotations
 
-import io
 import os
 from dataclasses import dataclass, field
 
@@ -19,6 +18,7 @@ import numpy as np
 from splineviz.core.camera import Camera
 from splineviz.model.nodes import CameraNode
 from splineviz.model.scene import Scene
+from splineviz.web.png import png_bytes
 
 #: width, height of a notebook picture when none is asked for
 DEFAULT_SIZE = (640, 480)
@@ -62,16 +62,6 @@ class Picture:
 
     def __array__(self, dtype=None, copy=None):
         return self.image if dtype is None else self.image.astype(dtype)
-
-
-def png_bytes(image: np.ndarray, compress_level: int = 6) -> bytes:
-    """``(H, W, 3|4)`` uint8 image -> PNG bytes (Pillow)."""
-    from PIL import Image
-
-    buf = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(image)).save(buf, format="PNG",
-                                                      compress_level=compress_level)
-    return buf.getvalue()
 
 
 def place_camera(scene: Scene, camera) -> None:

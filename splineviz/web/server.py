@@ -25,6 +25,7 @@ from importlib import resources
 
 from splineviz.core.errors import SplinevizError
 from splineviz.model import Scene
+from splineviz.web.png import png_bytes
 from splineviz.web.view import RemoteView, Shot, WebViewError
 
 #: seconds without an action, and no button held, before the exact frame is made
@@ -211,8 +212,6 @@ class ViewServer:
         return errors
 
     async def _send(self, shot: Shot, t: float) -> None:
-        from splineviz.notebook import png_bytes
-
         # fast compression: the picture goes over the loopback, size hardly matters
         png = await self._run(png_bytes, shot.image, 1)
         self._seq += 1
