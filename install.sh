@@ -12,6 +12,8 @@ APT_PACKAGES=(python3-venv binutils xvfb xauth libgl1 libegl1 libegl-mesa0 libgl
               libxkbcommon-x11-0 libxcb-cursor0 libxcb-icccm4 libxcb-keysyms1 libxcb-image0
               libxcb-render-util0 libxcb-shape0 libxcb-xinerama0 libxcb-randr0 libdbus-1-3
               libfontconfig1 libusb-1.0-0 libgomp1 pocl-opencl-icd)
+# --dev: the web view's browser test drives Debian's headless Chromium through selenium
+[ "${1:-}" = "--dev" ] && APT_PACKAGES+=(chromium chromium-driver)
 
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then

@@ -12,6 +12,7 @@ find those entries without importing upwards (import-linter contracts forbid it)
 
 from importlib import import_module
 
+from splineviz.core import pictures as _pictures
 from splineviz.core import registry as _registry
 
 __version__ = "0.1.0"
@@ -25,6 +26,15 @@ def _load_extensions() -> None:
 
 
 _registry.set_loader(_load_extensions)
+
+
+def _show(scene, **options):
+    # imported by name on first use: ``import splineviz`` pulls in no VTK, and the model
+    # reaches the renderer through this hook, not by importing it
+    return import_module("splineviz.notebook").show(scene, **options)
+
+
+_pictures.set_show(_show)
 
 # public name -> "module:attribute"
 _LAZY = {

@@ -532,6 +532,21 @@ class Scene:
                                       volume_id=None if volume is None else volume.id,
                                       **props))
 
+    # -- pictures ------------------------------------------------------------------------
+
+    def show(self, size=None, camera=None, *, interactive: bool = False, **options):
+        """The scene's exact picture (a :class:`splineviz.notebook.Picture`, shown by a
+        notebook), or with ``interactive=True`` its view in the browser; see
+        :func:`splineviz.notebook.show`. The renderer is reached through the hook of
+        :mod:`splineviz.core.pictures` (this layer imports no VTK)."""
+        from splineviz.core.pictures import show
+
+        return show(self, size=size, camera=camera, interactive=interactive, **options)
+
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the scene as its exact picture (IPython's display protocol)."""
+        return self.show()._repr_png_()
+
     # -- camera --------------------------------------------------------------------------
 
     def frame(self, bounds=None, view: str | None = None) -> None:

@@ -1,0 +1,127 @@
+"""A scene in a notebook: its exact picture, or an interactive view in the browser.
+
+``scene.show()`` and the notebook display of a :class:`splineviz.model.Scene` (IPython's
+``_repr_png_``) come here through :mod:`splineviz.core.pictures`. The picture is
+:func:`splineviz.render.scene_view.render_scene` of the scene, off-screen (EGL/OSMesa: no X
+server, no GPU needed), so a notebook shows what ``splineviz render`` writes for the same
+scene. ``interactive=True`` serves the scene's view (:mod:`splineviz.web`) on 127.0.0.1 from
+a thread of the kernel and returns an ``<iframe>`` of its page.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from splineviz.core.camera import Camera
+from splineviz.model.nodes import CameraNode
+from splineviz.model.scene import Scene
+from splineviz.web.png import png_bytes
+
+#: width, height of a notebook picture when none is asked for
+DEFAULT_SIZE = (640, 480)
+
+
+@dataclass(frozen=True)
+class Picture:
+    """An image a notebook shows.
+
+    Attributes
+    ----------
+    image : (H, W, 3) or (H, W, 4) uint8
+        Rows top to bottom (as :func:`~splineviz.render.scene_view.render_scene` returns).
+    scene : Scene or None
+        The scene it is a picture of.
+    camera : dict or None
+        The camera it was taken from (:meth:`CameraNode.pose` fields).
+    """
+
+    image: np.ndarray
+    scene: Scene | None = field(default=None, repr=False, compare=False)
+    camera: dict | None = None
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in pixels."""
+        return int(self.image.shape[1]), int(self.image.shape[0])
+
+    def png(self) -> bytes:
+        """The image as PNG bytes (lossless: decoding gives ``image`` back exactly)."""
+        return png_bytes(self.image)
+
+    def _repr_png_(self) -> bytes:
+        return self.png()
+
+    def save(self, path) -> None:
+        """Write the image as a PNG file."""
+        from splineviz.io.meshes import write_screenshot
+
+        write_screenshot(path, self.image)
+
+    def __array__(self, dtype=None, copy=None):
+        return self.image if dtype is None else self.image.astype(dtype)
+
+
+def place_camera(scene: Scene, camera) -> None:
+    """Put ``scene``'s camera where ``camera`` is: a :class:`~splineviz.core.camera.Camera`,
+    a :class:`~splineviz.model.CameraNode`, or a mapping of its fields (``position``,
+    ``focal_point``, ``view_up``, ``view_angle``: what the web view reports)."""
+    if isinstance(camera, Camera | CameraNode):
+        camera = {k: getattr(camera, k) for k in ("position", "focal_point", "view_up",
+                                                  "view_angle")}
+    fields = {k: tuple(map(float, v)) if k != "view_angle" else float(v)
+              for k, v in dict(camera).items()
+              if k in ("position", "focal_point", "view_up", "view_angle")}
+    scene.camera.update(fields)
+
+
+def show(scene: Scene, size=None, camera=None, *, interactive: bool = False, device=None,
+         port: int = 0):
+    """Show ``scene``: its exact picture, or its interactive view in the browser.
+
+    Parameters
+    ----------
+    scene : splineviz.model.Scene
+    size : (width, height) or None
+        Pixels (default :data:`DEFAULT_SIZE`).
+    camera : Camera, CameraNode, mapping or None
+        Look from there for this picture only (the scene's camera is put back after). A
+        scene whose camera was never placed is framed first (isometric view of all data),
+        so a new scene never shows an empty picture of the origin.
+    interactive : bool
+        Serve the view on 127.0.0.1 (:class:`splineviz.web.server.ViewServer`) and return an
+        :class:`~splineviz.web.server.InteractiveView` (an ``<iframe>`` in a notebook).
+    device : str or None
+        OpenCL device preference of the ray casters.
+    port : int
+        The interactive view's port (0: a free one).
+
+    Returns
+    -------
+    Picture or splineviz.web.server.InteractiveView
+    """
+    from splineviz.core.camera import parse_size
+
+    size = DEFAULT_SIZE if size is None else parse_size(size)
+    if scene.camera.pose() == CameraNode(id="camera").pose() and scene.bounds() is not None:
+        scene.aspect = size[0] / size[1]
+        scene.frame(view="isometric")
+    if interactive:
+        from splineviz.web.server import serve_in_thread
+
+        return serve_in_thread(scene, size=size, port=port, device=device)
+    if not os.environ.get("DISPLAY"):
+        # no X server (a notebook on a server): VTK's default window would try X first and
+        # print a warning into the cell before falling back to EGL
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    from splineviz.render.scene_view import render_scene
+
+    saved = scene.camera.pose()
+    if camera is not None:
+        place_camera(scene, camera)
+    try:
+        return Picture(render_scene(scene, size, device=device), scene, scene.camera.pose())
+    finally:
+        scene.camera.update(saved)
