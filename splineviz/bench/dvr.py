@@ -32,11 +32,22 @@ MODELS = ("trilinear", "super-quadratic", "cubic-c1")
 VTK_MAPPERS = ("fixed-point", "gpu")
 #: the reference's step is this many times finer than the renderers'
 REF_FACTOR = 10
+#: inradius of the "inner" case: Marschner-Lobb's radial ripples reach the Nyquist limit of
+#: 41^3 samples near r = 1 (wavelength 2 samples at the box's faces, less in its corners),
+#: where no reconstruction can follow them; inside r <= 0.8 they are >= 2.5 samples long
+ML_INNER = 0.8
 #: the fixed transfer function on Marschner-Lobb's range [0, 1]: a cool-warm colour map and
 #: an opacity tent around the classic isovalue 0.5
 ML_TF = TransferFunction(
     [0.0, 0.23, 0.30, 0.75, 0.5, 0.87, 0.87, 0.87, 1.0, 0.71, 0.02, 0.15],
     [0.0, 0.0, 0.35, 0.0, 0.5, 0.6, 0.65, 0.0, 1.0, 0.0], "ml-tent")
+
+
+def octagon_planes(radius: float = ML_INNER) -> list:
+    """Eight clip planes keeping the octagonal prism about the z axis of inradius ``radius``.
+    """
+    return [((radius * np.cos(a), radius * np.sin(a), 0.0), (-np.cos(a), -np.sin(a), 0.0))
+            for a in np.arange(8) * np.pi / 4]
 
 
 def ml_value_gradient(points):
@@ -81,9 +92,10 @@ class VTKVolume:
     size : (width, height)
     step : sample distance in voxels of the smallest spacing
     shaded : bool
+    clip_planes : sequence of (origin, normal), each keeping the side its normal points to
     """
 
-    def __init__(self, volume, tf, mapper, size, step, shaded):
+    def __init__(self, volume, tf, mapper, size, step, shaded, clip_planes=()):
         if not os.environ.get("DISPLAY"):
             os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
         import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (the OpenGL backend)
@@ -127,6 +139,13 @@ class VTKVolume:
         m.SetAutoAdjustSampleDistances(0)
         m.SetSampleDistance(step * unit)
         m.SetInputData(_vtk_image(volume))
+        from vtkmodules.vtkCommonDataModel import vtkPlane
+
+        for origin, normal in clip_planes:
+            plane = vtkPlane()
+            plane.SetOrigin(*origin)
+            plane.SetNormal(*normal)
+            m.AddClippingPlane(plane)
         vol = vtkVolume()
         vol.SetMapper(m)
         vol.SetProperty(prop)
@@ -191,34 +210,43 @@ def quality(size=(512, 512), step: float = 0.5, device=None, out_dir=None, model
     vol = Volume.from_function(ml, (41, 41, 41), ml.domain)
     cam = default_camera(vol.bounds)
     rows = []
-    for shaded in (False, True):
-        label = "shaded" if shaded else "unshaded"
-        t = time.perf_counter()
-        refimg = reference_dvr(ml_value_gradient, vol.bounds, vol.spacing, cam, size, ML_TF,
-                               step / REF_FACTOR, shaded, exact_tf=True)
-        log(f"reference ({label}, step {step / REF_FACTOR:g} voxels): "
-            f"{time.perf_counter() - t:.1f} s")
-        want = refimg.color[..., :3] / 255.0
+    for region, planes in (("cube", []), ("inner", octagon_planes())):
+        for shaded in (False, True):
+            rows += _quality_case(vol, cam, size, step, device, out_dir, models, log, shaded,
+                                  region, planes)
+    return rows
+
+
+def _quality_case(vol, cam, size, step, device, out_dir, models, log, shaded, region,
+                  planes) -> list[dict]:
+    label = ("shaded" if shaded else "unshaded") + ("" if region == "cube" else f"-{region}")
+    rows = []
+    t = time.perf_counter()
+    refimg = reference_dvr(ml_value_gradient, vol.bounds, vol.spacing, cam, size, ML_TF,
+                           step / REF_FACTOR, shaded, clip_planes=planes, exact_tf=True)
+    log(f"reference ({label}, step {step / REF_FACTOR:g} voxels): "
+        f"{time.perf_counter() - t:.1f} s")
+    want = refimg.color[..., :3] / 255.0
+    if out_dir:
+        _save(Path(out_dir) / f"ml_{label}_reference.png", want)
+    for model in models:
+        vr = VolumeRenderer(vol, model, ML_TF, device=device, step=step, shaded=shaded)
+        got = vr.render(cam, size, clip_planes=planes).color[..., :3] / 255.0
+        rows.append({"case": label, "renderer": model, "rmse": rmse(got, want)})
         if out_dir:
-            _save(Path(out_dir) / f"ml_{label}_reference.png", want)
-        for model in models:
-            vr = VolumeRenderer(vol, model, ML_TF, device=device, step=step, shaded=shaded)
-            got = vr.render(cam, size).color[..., :3] / 255.0
-            rows.append({"case": label, "renderer": model, "rmse": rmse(got, want)})
-            if out_dir:
-                _save(Path(out_dir) / f"ml_{label}_{model}.png", got)
-        for mapper in VTK_MAPPERS:
-            try:
-                got = VTKVolume(vol, ML_TF, mapper, size, step, shaded).render(cam)
-            except Exception as exc:  # noqa: BLE001  (a peer that cannot run is reported)
-                rows.append({"case": label, "renderer": f"vtk-{mapper}", "rmse": None,
-                             "note": f"{type(exc).__name__}: {exc}"})
-                continue
-            note = "blank image" if got.max() == 0 else ""
-            rows.append({"case": label, "renderer": f"vtk-{mapper}", "rmse": rmse(got, want),
-                         "note": note})
-            if out_dir:
-                _save(Path(out_dir) / f"ml_{label}_vtk-{mapper}.png", got)
+            _save(Path(out_dir) / f"ml_{label}_{model}.png", got)
+    for mapper in VTK_MAPPERS:
+        try:
+            got = VTKVolume(vol, ML_TF, mapper, size, step, shaded, planes).render(cam)
+        except Exception as exc:  # noqa: BLE001  (a peer that cannot run is reported)
+            rows.append({"case": label, "renderer": f"vtk-{mapper}", "rmse": None,
+                         "note": f"{type(exc).__name__}: {exc}"})
+            continue
+        note = "blank image" if got.max() == 0 else ""
+        rows.append({"case": label, "renderer": f"vtk-{mapper}", "rmse": rmse(got, want),
+                     "note": note})
+        if out_dir:
+            _save(Path(out_dir) / f"ml_{label}_vtk-{mapper}.png", got)
     return rows
 
 
@@ -270,7 +298,7 @@ def run_dvr_bench(data_dir, size=(512, 512), step: float = 0.5, repeats: int = 3
     for r in q:
         val = "-" if r["rmse"] is None else f"{r['rmse']:.4f}"
         print(f"{r['case']:<10} {r['renderer']:<18} {val:>8}  {r.get('note', '')}")
-    for case in ("unshaded", "shaded"):
+    for case in dict.fromkeys(r["case"] for r in q):
         vtk = [r["rmse"] for r in q if r["case"] == case and r["renderer"].startswith("vtk")
                and r["rmse"] is not None and not r.get("note")]
         c1 = [r["rmse"] for r in q if r["case"] == case and r["renderer"] == "cubic-c1"]
