@@ -28,7 +28,12 @@ from splineviz.core import frame as volume_frame
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.raycast_reference import normalize_clip_planes
 from splineviz.core.splines.boundary import pad_linear
-from splineviz.core.transfer_function import TABLE_SIZE, UNIT_STEP, TransferFunction
+from splineviz.core.transfer_function import (
+    PREINT_SIZE,
+    TABLE_SIZE,
+    UNIT_STEP,
+    TransferFunction,
+)
 from splineviz.core.volume import Volume
 
 #: voxels per axis of an empty-space block (kernels/dvr.cl BLOCK)
@@ -97,6 +102,10 @@ class VolumeRenderer:
         Sample distance along the rays in voxels of the smallest spacing.
     shaded : bool
         Headlight Phong shading from the spline's exact gradient.
+    preintegrated : bool
+        Composite pre-integrated segments between consecutive samples
+        (:meth:`TransferFunction.preintegrated`) instead of point samples: thin opacity
+        peaks between two samples are not missed.
     **model_kwargs
         Options of the model.
 
@@ -107,13 +116,15 @@ class VolumeRenderer:
     """
 
     def __init__(self, volume, model: str, tf: TransferFunction, device: str | None = None,
-                 step: float = 0.5, shaded: bool = True, **model_kwargs):
+                 step: float = 0.5, shaded: bool = True, preintegrated: bool = False,
+                 **model_kwargs):
         if not isinstance(volume, Volume):
             volume = Volume(volume)
         self.caster = RayCaster(volume, model=model, device=device, **model_kwargs)
         self.model = model
         self.step = float(step)
         self.shaded = bool(shaded)
+        self.preintegrated = bool(preintegrated)
         fam = self.caster.family
         self._device = self.caster._device if fam is not None and fam.name in \
             DEVICE_FAMILIES else None
@@ -141,6 +152,7 @@ class VolumeRenderer:
         self.stats["skipped_blocks"] = int(np.count_nonzero(empty))
         self._empty = cla.to_device(q, np.ascontiguousarray(empty, dtype=np.uint8))
         self._table = cla.to_device(q, np.ascontiguousarray(tf.table(), np.float32))
+        self._pre = None
 
     def render(self, camera: Camera, size=(512, 512), clip_planes=(), stop=None,
                background=(0.0, 0.0, 0.0)) -> ref.DVRFrame:
@@ -170,7 +182,7 @@ class VolumeRenderer:
             spline = self.caster.spline
             frame = ref.reference_dvr(spline.value_gradient, vol.bounds, vol.spacing, camera,
                                       (w, h), self.tf, self.step, self.shaded, planes, stop,
-                                      background)
+                                      background, preintegrated=self.preintegrated)
         else:
             frame = self._render_cl(camera, w, h, planes, stop, background)
         self.stats["render_s"] = time.perf_counter() - t
@@ -179,6 +191,7 @@ class VolumeRenderer:
     def _defines(self) -> dict:
         rc = self.caster
         return {**rc._defines(), "TF_SIZE": TABLE_SIZE, "BLOCK": BLOCK,
+                "PREINT_SIZE": PREINT_SIZE,
                 "ERT_ALPHA": ref.ERT_ALPHA, "DEPTH_ALPHA": ref.DEPTH_ALPHA}
 
     def _render_cl(self, camera, w, h, planes, stop, background) -> ref.DVRFrame:
@@ -222,6 +235,10 @@ class VolumeRenderer:
         lo, hi = self.tf.range
         unit = float(spacing.min()) * UNIT_STEP
         dt = self.step * float(spacing.min())
+        if self.preintegrated and (self._pre is None or self._pre[0] != dt / unit):
+            table = self.tf.preintegrated(dt / unit)
+            self._pre = (dt / unit, cla.to_device(q, np.ascontiguousarray(table)))
+        pre = self._pre[1] if self.preintegrated else self._table
         rgba = cla.empty(q, (n, 4), np.float32)
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
@@ -233,6 +250,8 @@ class VolumeRenderer:
                np.int32(rc._strides[0]), np.int32(rc._strides[1]), *model_args,
                self._empty.data, np.int32(bx), np.int32(by), np.int32(bz),
                self._table.data, np.float32(lo), np.float32((TABLE_SIZE - 1) / (hi - lo)),
+               np.int32(self.preintegrated), pre.data,
+               np.float32((PREINT_SIZE - 1) / (hi - lo)),
                np.float32(dt), np.float32(dt / unit), np.int32(self.shaded),
                f3(eye_u), f3(dop), f3(right * tan_half * w / h), f3(up * tan_half),
                f3(1.0 / spacing), cla.to_device(q, pl).data, np.int32(len(planes)),

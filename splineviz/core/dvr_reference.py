@@ -64,18 +64,29 @@ class DVRFrame:
     color: np.ndarray
 
 
-def shade(rgb, grad, directions):
-    """Headlight Phong of sample colours: (N, 3), gradients (N, 3), unit rays (N, 3)."""
+def _cos(grad, directions):
+    """|n . d| of the normalised gradients (N, 3) and unit rays (N, 3); 1 where the gradient
+    vanishes."""
     gl = np.linalg.norm(grad, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        cs = np.where(gl > 0, np.abs(np.einsum("nk,nk->n", grad, directions)) / gl, 1.0)
-    return np.clip(rgb * (AMBIENT + DIFFUSE * cs)[:, None] + (SPECULAR * cs**SHININESS)[:, None],
-                   0.0, 1.0)
+        return np.where(gl > 0, np.abs(np.einsum("nk,nk->n", grad, directions)) / gl, 1.0)
+
+
+def shade(rgb, grad, directions, weight=None):
+    """Headlight Phong of colours (N, 3) with gradients (N, 3) along unit rays (N, 3).
+
+    ``weight`` (N,): the colours are premultiplied by it (a pre-integrated segment's
+    opacity): the specular term is scaled by it and the result bounded by it."""
+    cs = _cos(grad, directions)
+    w = np.ones(len(rgb)) if weight is None else np.asarray(weight, np.float64)
+    out = rgb * (AMBIENT + DIFFUSE * cs)[:, None] + (SPECULAR * cs**SHININESS * w)[:, None]
+    return np.clip(out, 0.0, w[:, None])
 
 
 def reference_dvr(value_gradient, bounds, spacing, camera: Camera, size, tf: TransferFunction,
                   step: float = 0.5, shaded: bool = True, clip_planes=(), stop=None,
-                  background=(0.0, 0.0, 0.0), exact_tf: bool = False) -> DVRFrame:
+                  background=(0.0, 0.0, 0.0), exact_tf: bool = False,
+                  preintegrated: bool = False) -> DVRFrame:
     """Volume-render a field by the rules of the module.
 
     Parameters
@@ -102,6 +113,11 @@ def reference_dvr(value_gradient, bounds, spacing, camera: Camera, size, tf: Tra
     exact_tf : bool
         Map values through the transfer function's points instead of its table (the
         analytic reference image).
+    preintegrated : bool
+        Composite the segment from the previous sample (``t - dt``, clamped into the box)
+        to each sample from :meth:`TransferFunction.preintegrated`; shading scales its
+        colour as a sample's and adds the specular term times its opacity, at most its
+        opacity.
 
     Returns
     -------
@@ -133,9 +149,19 @@ def reference_dvr(value_gradient, bounds, spacing, camera: Camera, size, tf: Tra
         t = t0[live] + (k + 0.5) * dt
         pts = np.clip(origin + t[:, None] * d[live], lo, hi)
         v, g = value_gradient(pts)
-        c = lookup(v)
-        rgb = shade(c[:, :3], g, d[live]) if shaded else c[:, :3]
-        a = 1.0 - np.power(1.0 - np.clip(c[:, 3], 0.0, 1.0), alpha_exp)
+        if preintegrated:
+            prev = np.clip(origin + (t - dt)[:, None] * d[live], lo, hi)
+            c = tf.preintegrated_lookup(value_gradient(prev)[0], v, alpha_exp)
+            a = c[:, 3]
+            rgb = c[:, :3]
+            if shaded:
+                rgb = shade(rgb, g, d[live], weight=a)
+            # straight colour: the compositing below multiplies by the opacity again
+            rgb = rgb / np.where(a > 0, a, 1.0)[:, None]
+        else:
+            c = lookup(v)
+            rgb = shade(c[:, :3], g, d[live]) if shaded else c[:, :3]
+            a = 1.0 - np.power(1.0 - np.clip(c[:, 3], 0.0, 1.0), alpha_exp)
         wgt = (1.0 - alpha[live]) * a
         acc[live] += wgt[:, None] * rgb
         alpha[live] += wgt

@@ -33,14 +33,31 @@ def tf():
 def _reference(rc, vr, cam, tf, **kw):
     vol = rc.volume
     return reference_dvr(rc.spline.value_gradient, vol.bounds, vol.spacing, cam, SIZE, tf,
-                         vr.step, vr.shaded, **kw)
+                         vr.step, vr.shaded, preintegrated=vr.preintegrated, **kw)
+
+
+@needs_cl
+def test_preintegration_sees_a_thin_peak_between_samples(volume):
+    """An opacity spike narrower than the value change per step: point samples step over it
+    on many rays; pre-integrated segments count it (up to the linear value change they
+    assume within a segment)."""
+    thin = TransferFunction([0, 1, 1, 1, 1, 1, 1, 1], [0, 0, 0.48, 0, 0.5, 1, 0.52, 0, 1, 0])
+    cam = default_camera(volume.bounds)
+    coarse = {p: VolumeRenderer(volume, "cubic-c1", thin, device="cpu", step=2.0,
+                                preintegrated=p).render(cam, SIZE) for p in (False, True)}
+    fine = VolumeRenderer(volume, "cubic-c1", thin, device="cpu", step=0.05,
+                          preintegrated=True).render(cam, SIZE)
+    err = {p: np.abs(f.rgba[..., 3] - fine.rgba[..., 3]).mean() for p, f in coarse.items()}
+    assert err[True] < 0.8 * err[False]  # measured: 0.025 against 0.036
 
 
 @needs_cl
 @pytest.mark.parametrize("model", ["trilinear", "cubic-c1", "super-quadratic"])
 @pytest.mark.parametrize("shaded", [False, True])
-def test_kernel_matches_reference(volume, tf, model, shaded):
-    vr = VolumeRenderer(volume, model, tf, device="cpu", step=0.5, shaded=shaded)
+@pytest.mark.parametrize("preintegrated", [False, True])
+def test_kernel_matches_reference(volume, tf, model, shaded, preintegrated):
+    vr = VolumeRenderer(volume, model, tf, device="cpu", step=0.5, shaded=shaded,
+                        preintegrated=preintegrated)
     assert vr.stats["path"] == "opencl"
     assert vr.stats["skipped_blocks"] > 0
     cam = default_camera(volume.bounds)

@@ -9,7 +9,9 @@
 // pixel's stop parameter (an embedded isosurface hit or an opaque mesh); samples at
 // t0 + (k + 1/2) dt; RGBA from the transfer-function table (TF_SIZE entries over [tf_lo,
 // tf_lo + (TF_SIZE - 1) / tf_scale], linear between entries), opacity corrected for the step
-// (1 - (1 - a)^(dt / unit)), optional headlight Phong on the normalised spline gradient;
+// (1 - (1 - a)^(dt / unit)), or, pre-integrated, the segment from the previous sample to
+// this one from a PREINT_SIZE^2 table (front value x back value; thin features between two
+// samples count); optional headlight Phong on the normalised spline gradient;
 // front-to-back compositing until the opacity reaches ERT_ALPHA; the stop colour composited
 // behind. Blocks of BLOCK^3 voxels whose value range maps to zero opacity (flags from the host,
 // rebuilt when the transfer function changes) are leapt over along the sample lattice, so the
@@ -59,6 +61,27 @@ inline float type6_value(__global const DATA_T *pdata, offset_t base,
 }
 #endif
 
+// v, g: the model's value and index-space gradient at the index-space point u (in the box)
+#ifdef MODEL_TRILINEAR
+#define MODEL_EVAL(u, v, g) do { \
+        const int3 cell_ = clamp(convert_int3_rtn(u), (int3)(0), \
+                                 (int3)(NX - 2, NY - 2, NZ - 2)); \
+        const Trilinear f_ = trilinear_coeffs(data, cell_, SY, SZ); \
+        const float3 q_ = (u) - convert_float3(cell_); \
+        (v) = tri_value(&f_, q_); \
+        (g) = tri_gradient(&f_, q_); \
+    } while (0)
+#else
+#define MODEL_EVAL(u, v, g) do { \
+        const int3 cube_ = clamp(convert_int3_rte(u), (int3)(0), \
+                                 (int3)(NX - 1, NY - 1, NZ - 1)); \
+        const offset_t base_ = (((offset_t)cube_.x + 1) * SY + (cube_.y + 1)) * SZ \
+                               + (cube_.z + 1); \
+        (v) = type6_value(data, base_, stencil, tet_weights, bary, red, \
+                          (u) - convert_float3(cube_), &(g)); \
+    } while (0)
+#endif
+
 __kernel void dvr(__global const DATA_T *data,   // device samples of the ray caster
                   int NX, int NY, int NZ,        // samples (box [0, n-1] in index space)
                   int SY, int SZ,                // strides of `data`
@@ -69,6 +92,8 @@ __kernel void dvr(__global const DATA_T *data,   // device samples of the ray ca
                   __global const uchar *empty,   // per block: 1 = transparent everywhere
                   int BX, int BYB, int BZB,      // blocks per axis
                   __global const float4 *tf, float tf_lo, float tf_scale,
+                  int preint,                    // 1: pre-integrated segments (`pre`)
+                  __global const float4 *pre, float pre_scale,
                   float dt, float alpha_exp,     // world step; dt / unit length
                   int shade,
                   float3 eye_u, float3 dop, float3 right_s, float3 up_s, float3 inv_spacing,
@@ -119,54 +144,82 @@ __kernel void dvr(__global const DATA_T *data,   // device samples of the ray ca
     const float dz = dot(dw, dop);
     if (t0 < t1) {
         const int n = (int)ceil((t1 - t0) / dt - 0.5f);
-        const float3 vmax = hiB;
+        float v_prev = 0.0f;
+        bool have_prev = false, leapt = false;
         for (int k = 0; k < n; ++k) {
             const float t = t0 + ((float)k + 0.5f) * dt;
-            const float3 u = clamp(eye_u + t * d, (float3)(0.0f), vmax);
+            const float3 u = clamp(eye_u + t * d, (float3)(0.0f), hiB);
             const int3 blk = min(convert_int3_rtn(u) / BLOCK, (int3)(BX - 1, BYB - 1, BZB - 1));
-            if (empty[(blk.x * BYB + blk.y) * BZB + blk.z]) {
-                // leap to the last sample inside the block (the loop steps past it)
+            int kk = k;  // the last sample inside an empty block holding this one
+            if (!leapt && empty[(blk.x * BYB + blk.y) * BZB + blk.z]) {
                 const int3 lo = blk * BLOCK, hi = lo + BLOCK;
                 const float3 te = exit_params(eye_u, d, inv_d, lo, hi);
                 const float t_exit = fmin(te.x, fmin(te.y, te.z));
-                const int kk = (int)floor((t_exit - t0) / dt - 0.5f);
-                k = max(k, min(kk, n - 1));
-                continue;
+                kk = max(k, min((int)floor((t_exit - t0) / dt - 0.5f), n - 1));
+                if (!preint) {
+                    k = kk;  // the loop steps past it
+                    continue;
+                }
             }
+            leapt = false;
             float3 g;
             float v;
-#ifdef MODEL_TRILINEAR
-            const int3 cell = clamp(convert_int3_rtn(u), (int3)(0),
-                                    (int3)(NX - 2, NY - 2, NZ - 2));
-            const Trilinear f = trilinear_coeffs(data, cell, SY, SZ);
-            const float3 q = u - convert_float3(cell);
-            v = tri_value(&f, q);
-            g = tri_gradient(&f, q);
-#else
-            const int3 cube = clamp(convert_int3_rte(u), (int3)(0),
-                                    (int3)(NX - 1, NY - 1, NZ - 1));
-            const offset_t base = (((offset_t)cube.x + 1) * SY + (cube.y + 1)) * SZ
-                                  + (cube.z + 1);
-            v = type6_value(data, base, stencil, tet_weights, bary, red,
-                            u - convert_float3(cube), &g);
-#endif
-            const float fx = clamp((v - tf_lo) * tf_scale, 0.0f, (float)(TF_SIZE - 1));
-            const int i = min((int)fx, TF_SIZE - 2);
-            const float fr = fx - (float)i;
-            const float4 c = tf[i] * (1.0f - fr) + tf[i + 1] * fr;
-            if (c.w <= 0.0f) continue;
-            const float a = 1.0f - pow(1.0f - fmin(c.w, 1.0f), alpha_exp);
-            float3 rgb = c.xyz;
-            if (shade) {
-                const float3 gw = g * inv_spacing;
-                const float gl = length(gw);
-                const float cs = gl > 0.0f ? fabs(dot(gw, dw)) / gl : 1.0f;
-                rgb = clamp(rgb * (AMBIENT + DIFFUSE * cs) + SPECULAR * pow(cs, SHININESS),
-                            0.0f, 1.0f);
+            MODEL_EVAL(u, v, g);
+            float3 rgb;
+            float a;
+            if (preint) {
+                // the segment from the previous sample (evaluated again after a leap)
+                if (!have_prev) {
+                    float3 g_prev;
+                    const float3 up = clamp(eye_u + (t - dt) * d, (float3)(0.0f), hiB);
+                    MODEL_EVAL(up, v_prev, g_prev);
+                }
+                const float fi = clamp((v_prev - tf_lo) * pre_scale, 0.0f,
+                                       (float)(PREINT_SIZE - 1));
+                const float fj = clamp((v - tf_lo) * pre_scale, 0.0f, (float)(PREINT_SIZE - 1));
+                const int i = min((int)fi, PREINT_SIZE - 2), j = min((int)fj, PREINT_SIZE - 2);
+                const float wi = fi - (float)i, wj = fj - (float)j;
+                __global const float4 *r0 = pre + i * PREINT_SIZE, *r1 = r0 + PREINT_SIZE;
+                const float4 c = (r0[j] * (1.0f - wj) + r0[j + 1] * wj) * (1.0f - wi)
+                                 + (r1[j] * (1.0f - wj) + r1[j + 1] * wj) * wi;
+                v_prev = v;
+                have_prev = true;
+                if (kk > k + 1) {
+                    // the samples up to kk lie in a block the transfer function leaves
+                    // transparent: leap to kk, whose segment is taken from kk - 1
+                    k = kk - 1;
+                    have_prev = false;
+                    leapt = true;
+                }
+                if (c.w <= 0.0f) continue;
+                a = c.w;
+                rgb = c.xyz;  // premultiplied by the segment's opacity
+                if (shade) {
+                    const float3 gw = g * inv_spacing;
+                    const float gl = length(gw);
+                    const float cs = gl > 0.0f ? fabs(dot(gw, dw)) / gl : 1.0f;
+                    rgb = fmin(rgb * (AMBIENT + DIFFUSE * cs) + SPECULAR * pow(cs, SHININESS) * a,
+                               a);
+                }
+            } else {
+                const float fx = clamp((v - tf_lo) * tf_scale, 0.0f, (float)(TF_SIZE - 1));
+                const int i = min((int)fx, TF_SIZE - 2);
+                const float fr = fx - (float)i;
+                const float4 c = tf[i] * (1.0f - fr) + tf[i + 1] * fr;
+                if (c.w <= 0.0f) continue;
+                a = 1.0f - pow(1.0f - fmin(c.w, 1.0f), alpha_exp);
+                rgb = c.xyz;
+                if (shade) {
+                    const float3 gw = g * inv_spacing;
+                    const float gl = length(gw);
+                    const float cs = gl > 0.0f ? fabs(dot(gw, dw)) / gl : 1.0f;
+                    rgb = clamp(rgb * (AMBIENT + DIFFUSE * cs) + SPECULAR * pow(cs, SHININESS),
+                                0.0f, 1.0f);
+                }
+                rgb *= a;
             }
-            const float w = (1.0f - A) * a;
-            acc += w * rgb;
-            A += w;
+            acc += (1.0f - A) * rgb;
+            A += (1.0f - A) * a;
             if (!has_depth && A >= DEPTH_ALPHA) {
                 depth = clamp(depth_a - depth_b / (t * dz), 0.0f, 1.0f);
                 has_depth = true;
