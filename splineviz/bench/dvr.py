@@ -8,7 +8,8 @@ against it, for each spline model and for ``vtkFixedPointVolumeRayCastMapper`` a
 ``vtkGPUVolumeRayCastMapper`` (same transfer function, camera, sample distance and opacity
 unit distance; offscreen through EGL). Speed: bonsai 256^3 at the same frame size, trilinear
 and cubic-c1 against the faster VTK mapper (median of ``repeats`` frames after a first one).
-Images are written to ``out_dir`` for looking at.
+Each model is also rendered with pre-integrated segments (``+pre``). Images are written to
+``out_dir`` for looking at.
 """
 
 from __future__ import annotations
@@ -230,11 +231,14 @@ def _quality_case(vol, cam, size, step, device, out_dir, models, log, shaded, re
     if out_dir:
         _save(Path(out_dir) / f"ml_{label}_reference.png", want)
     for model in models:
-        vr = VolumeRenderer(vol, model, ML_TF, device=device, step=step, shaded=shaded)
-        got = vr.render(cam, size, clip_planes=planes).color[..., :3] / 255.0
-        rows.append({"case": label, "renderer": model, "rmse": rmse(got, want)})
-        if out_dir:
-            _save(Path(out_dir) / f"ml_{label}_{model}.png", got)
+        for pre in (False, True):
+            vr = VolumeRenderer(vol, model, ML_TF, device=device, step=step, shaded=shaded,
+                                preintegrated=pre)
+            got = vr.render(cam, size, clip_planes=planes).color[..., :3] / 255.0
+            name = model + ("+pre" if pre else "")
+            rows.append({"case": label, "renderer": name, "rmse": rmse(got, want)})
+            if out_dir:
+                _save(Path(out_dir) / f"ml_{label}_{name}.png", got)
     for mapper in VTK_MAPPERS:
         try:
             got = VTKVolume(vol, ML_TF, mapper, size, step, shaded, planes).render(cam)
@@ -263,12 +267,14 @@ def speed(path, size=(512, 512), step: float = 0.5, repeats: int = 3, device=Non
     tf = preset("ct-bone", (float(data.min()), float(data.max())))
     cam = default_camera(vol.bounds)
     rows = []
-    for model in ("trilinear", "cubic-c1"):
-        vr = VolumeRenderer(vol, model, tf, device=device, step=step, shaded=True)
+    for model, pre in (("trilinear", False), ("cubic-c1", False), ("cubic-c1", True)):
+        vr = VolumeRenderer(vol, model, tf, device=device, step=step, shaded=True,
+                            preintegrated=pre)
         frame, first, median = _timed(lambda vr=vr: vr.render(cam, size), repeats)
-        rows.append({"renderer": model, "first_s": first, "frame_s": median})
+        name = model + ("+pre" if pre else "")
+        rows.append({"renderer": name, "first_s": first, "frame_s": median})
         if out_dir:
-            _save(Path(out_dir) / f"bonsai_{model}.png", frame.color[..., :3] / 255.0)
+            _save(Path(out_dir) / f"bonsai_{name}.png", frame.color[..., :3] / 255.0)
     for mapper in VTK_MAPPERS:
         try:
             vv = VTKVolume(vol, tf, mapper, size, step, True)

@@ -34,4 +34,4 @@ def test_bench_dvr_quality_small(monkeypatch):
     rows = quality(size=(96, 96), device="cpu")
     print("\n".join(str(r) for r in rows))
     ours = [r for r in rows if not r["renderer"].startswith("vtk")]
-    assert len(ours) == 12 and all(0 < r["rmse"] < 0.2 for r in ours)
+    assert len(ours) == 24 and all(0 < r["rmse"] < 0.2 for r in ours)
