@@ -26,11 +26,13 @@
 // Value and index-space gradient of the type-6 spline at p (relative to the centre of the cube
 // whose stencil starts at base): the tet of the cube holding p is the one whose smallest
 // barycentric coordinate is largest (points on shared faces pick either; the spline is
-// continuous there).
+// continuous there). The tet's B-coefficients are kept in acc between calls while the samples
+// stay in the same tet of the same cube (*last_base, *last_tet): consecutive samples along a
+// ray mostly do.
 inline float type6_value(__global const DATA_T *pdata, offset_t base,
                          __constant const int *stencil, __global const float8 *tet_weights,
                          __constant const float4 *bary, __constant const int *red, float3 p,
-                         float3 *grad)
+                         float3 *grad, offset_t *last_base, int *last_tet, float8 *acc)
 {
     int best = 0;
     float best_min = -INFINITY;
@@ -45,12 +47,15 @@ inline float type6_value(__global const DATA_T *pdata, offset_t base,
         const float m = min_acc(min_acc(l.x, l.y), min_acc(l.z, l.w));
         if (m > best_min) { best_min = m; best = t; lam = l; }
     }
-    float8 acc[NCHUNK];
-    for (int h = 0; h < NCHUNK; ++h) acc[h] = (float8)(0.0f);
-    __global const float8 *wt = tet_weights + best * 27 * NCHUNK;
-    for (int q = 0; q < 27; ++q) {
-        const float v = pdata[base + stencil[q]];
-        for (int h = 0; h < NCHUNK; ++h) acc[h] += wt[q * NCHUNK + h] * v;
+    if (base != *last_base || best != *last_tet) {
+        for (int h = 0; h < NCHUNK; ++h) acc[h] = (float8)(0.0f);
+        __global const float8 *wt = tet_weights + best * 27 * NCHUNK;
+        for (int q = 0; q < 27; ++q) {
+            const float v = pdata[base + stencil[q]];
+            for (int h = 0; h < NCHUNK; ++h) acc[h] += wt[q * NCHUNK + h] * v;
+        }
+        *last_base = base;
+        *last_tet = best;
     }
     const float *c = (const float *)acc;
     const float4 e = linear_part(c, red, lam);
@@ -62,14 +67,18 @@ inline float type6_value(__global const DATA_T *pdata, offset_t base,
 #endif
 
 // v, g: the model's value and index-space gradient at the index-space point u (in the box)
+// (the piece of the last sample is kept: eval_cell / eval_f, eval_base / eval_tet / eval_acc)
 #ifdef MODEL_TRILINEAR
 #define MODEL_EVAL(u, v, g) do { \
         const int3 cell_ = clamp(convert_int3_rtn(u), (int3)(0), \
                                  (int3)(NX - 2, NY - 2, NZ - 2)); \
-        const Trilinear f_ = trilinear_coeffs(data, cell_, SY, SZ); \
+        if (cell_.x != eval_cell.x || cell_.y != eval_cell.y || cell_.z != eval_cell.z) { \
+            eval_f = trilinear_coeffs(data, cell_, SY, SZ); \
+            eval_cell = cell_; \
+        } \
         const float3 q_ = (u) - convert_float3(cell_); \
-        (v) = tri_value(&f_, q_); \
-        (g) = tri_gradient(&f_, q_); \
+        (v) = tri_value(&eval_f, q_); \
+        (g) = tri_gradient(&eval_f, q_); \
     } while (0)
 #else
 #define MODEL_EVAL(u, v, g) do { \
@@ -78,7 +87,8 @@ inline float type6_value(__global const DATA_T *pdata, offset_t base,
         const offset_t base_ = (((offset_t)cube_.x + 1) * SY + (cube_.y + 1)) * SZ \
                                + (cube_.z + 1); \
         (v) = type6_value(data, base_, stencil, tet_weights, bary, red, \
-                          (u) - convert_float3(cube_), &(g)); \
+                          (u) - convert_float3(cube_), &(g), &eval_base, &eval_tet, \
+                          eval_acc); \
     } while (0)
 #endif
 
@@ -142,6 +152,14 @@ __kernel void dvr(__global const DATA_T *data,   // device samples of the ray ca
     float depth = 1.0f;
     bool has_depth = false;
     const float dz = dot(dw, dop);
+#ifdef MODEL_TRILINEAR
+    int3 eval_cell = (int3)(-1);
+    Trilinear eval_f;
+#else
+    offset_t eval_base = -1;
+    int eval_tet = -1;
+    float8 eval_acc[NCHUNK];
+#endif
     if (t0 < t1) {
         const int n = (int)ceil((t1 - t0) / dt - 0.5f);
         float v_prev = 0.0f;
