@@ -275,6 +275,13 @@ def speed(path, size=(512, 512), step: float = 0.5, repeats: int = 3, device=Non
         rows.append({"renderer": name, "first_s": first, "frame_s": median})
         if out_dir:
             _save(Path(out_dir) / f"bonsai_{name}.png", frame.color[..., :3] / 255.0)
+    # a preview while moving: a quarter of the frame's side, the trilinear model
+    w, h = size
+    preview = (max(w // 4, 1), max(h // 4, 1))
+    vr = VolumeRenderer(vol, "trilinear", tf, device=device, step=step, shaded=True)
+    _, first, median = _timed(lambda: vr.render(cam, preview), repeats)
+    rows.append({"renderer": f"trilinear preview {preview[0]}x{preview[1]}", "first_s": first,
+                 "frame_s": median, "note": "preview"})
     for mapper in VTK_MAPPERS:
         try:
             vv = VTKVolume(vol, tf, mapper, size, step, True)
@@ -324,7 +331,7 @@ def run_dvr_bench(data_dir, size=(512, 512), step: float = 0.5, repeats: int = 3
                and r["frame_s"] is not None and not r.get("note")]
         if vtk:
             for r in s:
-                if not r["renderer"].startswith("vtk"):
+                if not r["renderer"].startswith("vtk") and not r.get("note"):
                     print(f"{r['renderer']} / fastest VTK = {r['frame_s'] / min(vtk):.2f}x")
     else:
         print(f"\n{bonsai} not found: speed part skipped")
