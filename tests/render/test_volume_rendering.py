@@ -90,3 +90,28 @@ def test_bad_transfer_function_is_refused():
     _, node = _scene()
     with pytest.raises(sv.SplinevizError, match="neither a transfer function preset"):
         node.transfer_function = "bone"
+
+
+def test_cli_volume_rendering(tmp_path, capsys):
+    from splineviz.cli import main
+    from splineviz.core.transfer_function import preset, write_paraview_json
+
+    np.save(tmp_path / "ml.npy", sv.Volume.from_function(ml, (17, 17, 17), ml.domain).data)
+    write_paraview_json(preset("cryo-em", (0, 1)), tmp_path / "tf.json")
+    pictures = []
+    for spec in ("mri", str(tmp_path / "tf.json")):
+        out = tmp_path / "vr.png"
+        rc = main(["render", str(tmp_path / "ml.npy"), "--volume-rendering", spec,
+                   "--size", "48x36", "--device", "cpu", "-o", str(out)])
+        assert rc == 0
+        from PIL import Image
+
+        pictures.append(np.asarray(Image.open(out)))
+    assert not np.array_equal(*pictures)
+    capsys.readouterr()
+    for spec, msg in (("bone", "bad --volume-rendering"), (str(tmp_path / "no.json"),
+                                                           "cannot read the transfer")):
+        rc = main(["render", str(tmp_path / "ml.npy"), "--volume-rendering", spec, "-o",
+                   str(tmp_path / "x.png")])
+        err = capsys.readouterr().err
+        assert rc == 2 and msg in err and len(err.strip().splitlines()) == 1
