@@ -3,7 +3,7 @@ baselines run in the same run (VTK flying edges and trilinear ray casting for ``
 flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 dask workers for
 ``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
 the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render of each step
-for ``time``)."""
+for ``time``; VTK's volume mappers and an analytic reference for ``dvr``)."""
 
 from __future__ import annotations
 
@@ -41,6 +41,11 @@ def _run(args) -> int:
         models = tuple(args.models.split(",")) if args.models else MODELS
         run_time_bench(n=args.n or 256, steps=args.steps, models=models, size=(w, h),
                        preview=(pw, ph), device=args.device, timeout=args.timeout or 900.0)
+    elif args.which == "dvr":
+        from splineviz.bench.dvr import run_dvr_bench
+
+        run_dvr_bench(data, size=(w, h), step=args.step, repeats=args.repeats,
+                      device=args.device, out_dir=args.out)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -58,7 +63,8 @@ def _run(args) -> int:
 def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
-    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time"],
+    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time",
+                                     "dvr"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
@@ -89,4 +95,7 @@ def register(subparsers) -> None:
                    help="gui: volume file in the data folder's volumes/ (default: the embedded "
                         "default data)")
     p.add_argument("--iso", type=finite_float, default=None, help="gui: isovalue of --volume")
+    p.add_argument("--step", type=finite_float, default=0.5,
+                   help="dvr: sample distance along the rays in voxels")
+    p.add_argument("--out", default=None, help="dvr: folder for the pictures")
     p.set_defaults(func=_run)

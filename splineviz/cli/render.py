@@ -125,6 +125,24 @@ def _frame_names(pattern: str, times) -> list[str]:
     return names
 
 
+def _volume_rendering(scene, args) -> None:
+    """Volume-render every volume with the transfer function of ``--volume-rendering``; the
+    isosurfaces stay (embedded) only when ``--iso`` asks for one."""
+    from splineviz.model.nodes import ModelError
+    from splineviz.render.volume_rendering import transfer_function_of
+
+    for vol in scene.volumes:
+        try:
+            vol.update(volume_rendering=True, transfer_function=args.volume_rendering,
+                       **({"rendering_model": args.model} if args.model else {}))
+        except ModelError as exc:
+            raise RenderArgumentError(f"bad --volume-rendering: {exc}") from None
+        transfer_function_of(vol)  # a file that cannot be read fails here, in one sentence
+    if args.iso is None:
+        for iso in scene.isosurfaces:
+            iso.visible = False
+
+
 def run(args) -> int:
     from splineviz.core.splines import model_spec
     from splineviz.model.opening import scene_from_path
@@ -157,6 +175,8 @@ def run(args) -> int:
             raise RenderArgumentError(f"bad --camera: {exc}") from None
         scene.camera.update(position=cam.position, focal_point=cam.focal_point,
                             view_up=cam.view_up, view_angle=cam.view_angle)
+    if args.volume_rendering is not None:
+        _volume_rendering(scene, args)
     for text in args.clip or ():
         p = _floats(text, (6,), "--clip")
         scene.add_clip_plane(p[:3], p[3:])
@@ -244,4 +264,8 @@ def register(subparsers) -> None:
     p.add_argument("--measures", default=None, metavar="CSV",
                    help="also write the area and enclosed volume of the isosurface (from the "
                    "spline surface; at every step with --all-times) to a CSV file")
+    p.add_argument("--volume-rendering", default=None, metavar="PRESET|TF.json",
+                   help="direct volume rendering with a transfer function preset (ct-bone, "
+                   "ct-soft-tissue, ct-lungs, mri, cryo-em) or a ParaView JSON colour-map "
+                   "preset; the isosurface is drawn in it only when --iso is given")
     p.set_defaults(func=run)

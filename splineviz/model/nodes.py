@@ -68,6 +68,19 @@ ModelName = Annotated[str, AfterValidator(_model_name)]
 Normal = Annotated[Vec3, AfterValidator(nonzero_normal)]
 
 
+def _transfer_function_name(spec: str) -> str:
+    from splineviz.core.transfer_function import PRESETS, TransferFunctionError
+
+    if spec not in PRESETS and not spec.lower().endswith(".json"):
+        raise TransferFunctionError(f"{spec!r} is neither a transfer function preset "
+                                    f"({', '.join(PRESETS)}) nor a ParaView .json file")
+    return spec
+
+
+#: a transfer function preset name or a ParaView JSON preset file
+TransferFunctionName = Annotated[str, AfterValidator(_transfer_function_name)]
+
+
 def reference(*types: str, alias: str | None = None) -> Any:
     """A field holding the id of another node (None: none). Without ``alias`` it is one of
     the object's session ``inputs``, filled from an input of one of the session object
@@ -205,6 +218,14 @@ class VolumeNode(Node):
     sigma: Annotated[float, Field(ge=0.0, le=MAX_SIGMA, allow_inf_nan=False)] = 0.0
     show_outline: bool = True
     visible: bool = True
+    #: direct volume rendering of the samples (splineviz.render.volume_rendering)
+    volume_rendering: bool = False
+    #: its transfer function: a preset of splineviz.core.transfer_function (placed on the
+    #: data range) or a ParaView JSON colour-map preset file
+    transfer_function: TransferFunctionName = "ct-bone"
+    #: the spline model it samples, and whether it is shaded from the spline's gradient
+    rendering_model: ModelName = "cubic-c1"
+    rendering_shade: bool = True
     #: in-memory samples, or a lazily read chunked volume (rendered in bricks)
     data: Volume | ChunkedVolume | None = Field(default=None, exclude=True, repr=False)
     smoothed: Volume | None = Field(default=None, exclude=True, repr=False)

@@ -531,6 +531,7 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
     import pyvista as pv
 
     from splineviz.render.scene import SceneError
+    from splineviz.render.volume_rendering import composite_volume_rendering
 
     w, h = int(size[0]), int(size[1])
     if w < 1 or h < 1 or w > 16384 or h > 16384:
@@ -557,9 +558,10 @@ def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
             for _ in range(len(views)):
                 for _pl, view in views:
                     view.render_exact()
-            for pl, _view in views:
-                images.append(pl.screenshot(None, transparent_background=transparent_background,
-                                            return_img=True))
+            for pl, view in views:
+                shot = pl.screenshot(None, transparent_background=transparent_background,
+                                     return_img=True)
+                images.append(composite_volume_rendering(view, pl, shot, device))
         finally:
             for pl, view in views:
                 view.close()
