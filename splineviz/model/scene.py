@@ -108,6 +108,9 @@ class Scene:
         self.modified = False
         #: width / height of the view that shows the scene (set by views; used to frame)
         self.aspect = 1.0
+        #: the scene's :class:`~splineviz.model.animation.Animation` (None: none); saved
+        #: with the session
+        self.animation = None
         self.view.events.connect(self._node_changed)
         # looking around is not an edit: the camera is saved, but moving it leaves
         # ``modified`` alone (no "unsaved changes" prompt after an orbit)
