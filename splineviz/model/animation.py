@@ -301,6 +301,23 @@ class Animation(_Model):
         for node, fields in updates.values():
             node.update(fields)
 
+    def state_of(self, scene) -> dict:
+        """The current values of the node fields the tracks set (for :meth:`restore`)."""
+        state: dict[str, dict] = {}
+        for track in self.tracks:
+            node = _target(scene, track.target)
+            prop = ANIMATED[track.property]
+            fields = prop.write(node, prop.read(node))
+            state.setdefault(track.target, {}).update(
+                {k: getattr(node, k) for k in fields})
+        return state
+
+    def restore(self, scene, state: dict) -> None:
+        """Put back the values :meth:`state_of` took (nodes removed since are skipped)."""
+        for target, fields in state.items():
+            if target == "camera" or target in scene:
+                _target(scene, target).update(fields)
+
     def track(self, target: str, prop: str) -> Track | None:
         """The track of ``prop`` of ``target`` (None: none)."""
         return next((t for t in self.tracks if t.target == target and t.property == prop),
