@@ -1,9 +1,10 @@
 """The ``splineviz`` command line.
 
 ``splineviz [FILE|SESSION]`` opens the app (:mod:`splineviz.gui`); the sub-commands
-(``render``, ``remesh``, ``info``, ``bench``) are the front-ends in this package, one module
-each, listed in :data:`SUBCOMMANDS`: each entry names a function ``register(subparsers)`` that
-adds its parser and sets ``func`` (called with the parsed arguments, returns an exit code).
+(``render``, ``movie``, ``remesh``, ``info``, ``bench``) are the front-ends in this package,
+one module each, listed in :data:`SUBCOMMANDS`: each entry names a function
+``register(subparsers)`` that adds its parser and sets ``func`` (called with the parsed
+arguments, returns an exit code).
 User errors (:class:`SplinevizError`, ``OSError``, malformed arguments) are printed as one
 line on stderr with exit code 2; no traceback. Documented acceptances
 (:class:`SplinevizWarning`) are printed as one ``splineviz: warning:`` line each; warnings of
@@ -40,6 +41,7 @@ SUBCOMMANDS: dict[str, str] = {
     "render": "splineviz.cli.render:register",
     "bench": "splineviz.cli.bench:register",
     "remesh": "splineviz.cli.remesh:register",
+    "movie": "splineviz.cli.movie:register",
 }
 
 

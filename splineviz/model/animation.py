@@ -471,3 +471,26 @@ def clip_sweep(scene, axis: str = "x", frames: int = 120, volume=None, plane=Non
 
 #: preset name -> function(scene, frames=..., **options) -> Animation
 PRESETS = {"orbit": orbit, "isovalue sweep": isovalue_sweep, "clip sweep": clip_sweep}
+
+
+def preset_animation(scene, *, orbit_degrees: float | None = None, iso_sweep=None,
+                     clip_axis: str | None = None, frames: int = 120,
+                     fps: float = 30.0) -> Animation | None:
+    """The combination of the presets asked for (None: none asked): a turntable of
+    ``orbit_degrees``, an isovalue sweep ``(start, stop)`` of the first isosurface and a
+    clip sweep along ``clip_axis``, all over ``frames`` frames (what ``splineviz movie``'s
+    flags and ``sv.movie``'s keywords make)."""
+    parts = []
+    if orbit_degrees is not None:
+        parts.append(orbit(scene, orbit_degrees, frames=frames, fps=fps))
+    if iso_sweep is not None:
+        start, stop = iso_sweep
+        parts.append(isovalue_sweep(scene, start, stop, frames=frames, fps=fps))
+    if clip_axis is not None:
+        parts.append(clip_sweep(scene, clip_axis, frames=frames, fps=fps))
+    if not parts:
+        return None
+    out = parts[0]
+    for part in parts[1:]:
+        out = out + part
+    return out

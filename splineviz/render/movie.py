@@ -394,3 +394,39 @@ def export_session(session, data: dict, path, *, job=None, **options) -> MovieSt
         return job.progress(done / total, f"frame {done} of {total}, {left:.0f} s left")
 
     return export_movie(scene, scene.animation, path, progress=progress, **options)
+
+
+def movie(scene, path, animation=None, *, orbit: float | None = None,
+          iso_sweep=None, clip_sweep: str | None = None, frames: int | None = None,
+          fps: float | None = None, size=(1280, 720), **options) -> MovieStats:
+    """``sv.movie``: write a movie of ``scene`` to ``path``.
+
+    The frames come from ``animation``, else from the presets asked for (``orbit``:
+    degrees of a turntable; ``iso_sweep``: ``(start, stop)`` isovalues of the first
+    isosurface; ``clip_sweep``: an axis of
+    :data:`~splineviz.model.animation.SWEEP_AXES`, combined when several are given), else
+    from the scene's own animation, else a 360-degree orbit. ``frames`` and ``fps``
+    default to the animation's (120 and 30 for presets). The other keywords are
+    :func:`export_movie`'s.
+
+    Examples
+    --------
+    >>> import splineviz as sv                                        # doctest: +SKIP
+    >>> sv.movie(scene, "turn.mp4", orbit=360, frames=120, size=(1920, 1080))  # doctest: +SKIP
+    """
+    from splineviz.model.animation import preset_animation
+
+    if animation is not None:
+        if frames is not None and frames != animation.frames:
+            raise MovieError(f"the animation has {animation.frames} frames, not {frames}; "
+                             "leave frames out or make the animation with it")
+    else:
+        animation = preset_animation(scene, orbit_degrees=orbit, iso_sweep=iso_sweep,
+                                     clip_axis=clip_sweep, frames=frames or 120,
+                                     fps=fps or 30.0)
+    if animation is None:
+        animation = scene.animation
+        if animation is None or (frames is not None and frames != animation.frames):
+            animation = preset_animation(scene, orbit_degrees=360.0, frames=frames or 120,
+                                         fps=fps or 30.0)
+    return export_movie(scene, animation, path, size=size, fps=fps, **options)

@@ -6,10 +6,8 @@ import threading
 import imageio
 import numpy as np
 import pytest
+from movie_helpers import blob_scene, decoded_frames, psnr
 
-import splineviz as sv
-from splineviz.core.testfunctions import blob
-from splineviz.model import Scene
 from splineviz.model.animation import clip_sweep, isovalue_sweep, orbit
 from splineviz.render.movie import (
     MovieCancelled,
@@ -23,48 +21,7 @@ SIZE = (192, 144)
 
 
 def _scene(grid=False):
-    scene = Scene()
-    scene.add_volume(sv.Volume.from_function(blob, (17, 17, 17), blob.domain), name="blob",
-                     isovalue=blob.isovalue)
-    scene.aspect = SIZE[0] / SIZE[1]
-    scene.frame(view="isometric")
-    # the camera nearer: the surface fills the frame (what a movie shows)
-    cam = scene.camera
-    f, p = np.array(cam.focal_point), np.array(cam.position)
-    cam.position = tuple(f + 0.6 * (p - f))
-    scene.volumes[0].show_outline = grid
-    scene.view.show_scale = grid
-    return scene
-
-
-#: decoding with swscale's accurate rounding: its default fast YUV -> RGB path is off by up
-#: to 2 levels in flat areas, a loss of the decoder, not of the encoder
-ACCURATE = ["-sws_flags", "accurate_rnd+full_chroma_int"]
-
-
-def _frames(path, meta=None):
-    """The decoded RGB frames of a video by imageio's ffmpeg, and its header."""
-    import subprocess
-
-    import imageio_ffmpeg
-
-    header = imageio_ffmpeg.read_frames(str(path))
-    try:
-        info = next(header)
-    finally:
-        header.close()  # ffmpeg still runs: closing stops it and its pipes
-    w, h = info["size"]
-    raw = subprocess.run([imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-i", str(path),
-                          "-f", "rawvideo", "-pix_fmt", "rgb24", *ACCURATE, "-"],
-                         capture_output=True, check=True).stdout
-    if meta is not None:
-        meta.update(info)
-    return list(np.frombuffer(raw, np.uint8).reshape(-1, h, w, 3))
-
-
-def _psnr(a, b):
-    mse = np.mean((a[..., :3].astype(float) - b[..., :3].astype(float)) ** 2)
-    return 10 * np.log10(255.0 ** 2 / mse)
+    return blob_scene(SIZE, grid)
 
 
 def test_renderer_frames_are_render_scene_stills_after_camera_moves():
@@ -92,7 +49,7 @@ def test_orbit_mp4_frames_match_stills(tmp_path):
     assert stats.frames == 6 and len(stats.render_s) == 6 and len(stats.encode_s) == 6
     assert not partial_path(tmp_path / "orbit.mp4").exists()
     meta = {}
-    frames = _frames(tmp_path / "orbit.mp4", meta)
+    frames = decoded_frames(tmp_path / "orbit.mp4", meta)
     assert meta["fps"] == 12 and meta["codec"] == "h264"
     assert meta["pix_fmt"].startswith("yuv420p")
     assert len(frames) == 6 and frames[0].shape == (SIZE[1], SIZE[0], 3)
@@ -100,11 +57,11 @@ def test_orbit_mp4_frames_match_stills(tmp_path):
     for k in (0, 3):
         anim.apply(scene, k)
         stills[k] = render_scene(scene, SIZE)
-        assert _psnr(frames[k], stills[k]) >= 40.0
+        assert psnr(frames[k], stills[k]) >= 40.0
     # the camera moved: the middle frame is another picture, and the stills tell them apart
     moved = np.abs(frames[0].astype(int) - frames[3]).max(axis=2) > 40
     assert moved.mean() > 0.05
-    assert _psnr(frames[3], stills[0]) < 30.0
+    assert psnr(frames[3], stills[0]) < 30.0
 
 
 def test_isovalue_sweep_frames_are_stills_at_the_interpolated_isovalue(tmp_path):
@@ -115,12 +72,12 @@ def test_isovalue_sweep_frames_are_stills_at_the_interpolated_isovalue(tmp_path)
     names = sorted(tmp_path.glob("sweep_*.png"))
     assert [p.name for p in names] == [f"sweep_{k:02d}.png" for k in range(5)]
     export_movie(scene, anim, tmp_path / "sweep.mp4", size=SIZE)
-    video = _frames(tmp_path / "sweep.mp4")
+    video = decoded_frames(tmp_path / "sweep.mp4")
     for k, value in ((1, 0.4), (4, 0.7)):
         iso.isovalue = value
         still = render_scene(scene, SIZE)
         np.testing.assert_array_equal(imageio.v3.imread(names[k])[..., :3], still)
-        assert _psnr(video[k], still) >= 40.0
+        assert psnr(video[k], still) >= 40.0
 
 
 def test_clip_sweep_moves_a_plane_through_the_volume(tmp_path):
