@@ -374,17 +374,32 @@ def export_movie(scene, animation, path, *, size=(1280, 720), fps: float | None 
     return stats
 
 
+def staging_folder(path) -> Path:
+    """The folder an export in another process writes into (``.<name>.partial`` beside
+    ``path``): its files move onto their names when the export is complete, and whoever
+    stops that process removes the folder, whatever was in it."""
+    p = Path(os.fspath(path)).expanduser()
+    return p.with_name(f".{p.name}.partial")
+
+
 def export_session(session, data: dict, path, *, job=None, **options) -> MovieStats:
-    """:func:`export_movie` of a session's scene and animation (what a worker process
-    runs: ``session`` and ``data`` as :func:`splineviz.model.session.apply_session`
-    takes them). ``job.progress(fraction, message)`` hears of each frame, with the time
-    left; its False cancels."""
+    """:func:`export_movie` of a session's scene and animation, written in
+    :func:`staging_folder` and moved onto ``path`` when complete (what a worker process
+    runs: ``session`` and ``data`` as :func:`splineviz.model.session.apply_session` takes
+    them). ``job.progress(fraction, message)`` hears of each frame, with the time left;
+    its False cancels."""
+    import shutil
+
     from splineviz.model.scene import Scene
     from splineviz.model.session import apply_session
 
     scene = apply_session(Scene(), session, data)
     if scene.animation is None:
         raise MovieError("the session has no animation to export")
+    path = Path(os.fspath(path)).expanduser()
+    staging = staging_folder(path)
+    shutil.rmtree(staging, ignore_errors=True)
+    staging.mkdir()
     start = time.perf_counter()
 
     def progress(done, total):
@@ -393,7 +408,15 @@ def export_session(session, data: dict, path, *, job=None, **options) -> MovieSt
         left = (time.perf_counter() - start) / done * (total - done)
         return job.progress(done / total, f"frame {done} of {total}, {left:.0f} s left")
 
-    return export_movie(scene, scene.animation, path, progress=progress, **options)
+    try:
+        stats = export_movie(scene, scene.animation, staging / path.name, progress=progress,
+                             **options)
+        for f in sorted(staging.iterdir()):
+            os.replace(f, path.parent / f.name)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    stats.path = path.parent / stats.path.name
+    return stats
 
 
 def movie(scene, path, animation=None, *, orbit: float | None = None,
