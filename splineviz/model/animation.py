@@ -318,6 +318,13 @@ class Animation(_Model):
             if target == "camera" or target in scene:
                 _target(scene, target).update(fields)
 
+    def without(self, target: str) -> Animation:
+        """This animation without the tracks of ``target`` (itself when it has none)."""
+        tracks = [t for t in self.tracks if t.target != target]
+        if len(tracks) == len(self.tracks):
+            return self
+        return self.model_copy(update={"tracks": tracks})
+
     def track(self, target: str, prop: str) -> Track | None:
         """The track of ``prop`` of ``target`` (None: none)."""
         return next((t for t in self.tracks if t.target == target and t.property == prop),

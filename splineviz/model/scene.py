@@ -279,6 +279,8 @@ class Scene:
                 if mesh.points_id == node.id:
                     mesh.points_id = None
         del self._nodes[node.id]
+        if self.animation is not None:  # its tracks of the object go with it
+            self.animation = self.animation.without(node.id)
         node.events.disconnect(self._node_changed)
         if self.selected is node:
             self.select(None)
@@ -286,10 +288,11 @@ class Scene:
         self._node_changed()
 
     def clear(self) -> None:
-        """Remove every object (camera and view settings stay)."""
+        """Remove every object and the animation (camera and view settings stay)."""
         for node in reversed(list(self._nodes.values())):
             if node.id in self._nodes:
                 self.remove(node)
+        self.animation = None
         self.modified = False
 
     def select(self, node: Node | str | None) -> None:

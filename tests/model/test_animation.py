@@ -156,3 +156,37 @@ def test_session_animation_naming_a_missing_object_changes_nothing(tmp_path):
     with pytest.raises(SessionError, match="ghost"):
         load_scene(path, scene=target)
     assert len(target.isosurfaces) == 1
+
+
+def test_opacity_colour_range_and_normal_tracks():
+    scene, vol = _scene()
+    iso = scene.isosurfaces[0]
+    plane = scene.add_clip_plane(normal=(1.0, 0.0, 0.0))
+    anim = Animation.make(frames=3, tracks=[
+        {"target": iso.id, "property": "opacity",
+         "keys": [{"frame": 0, "value": [1.0]}, {"frame": 2, "value": [0.2]}]},
+        {"target": iso.id, "property": "color_range",
+         "keys": [{"frame": 0, "value": [0.0, 1.0]}, {"frame": 2, "value": [0.4, 0.6]}]},
+        {"target": plane.id, "property": "normal",
+         "keys": [{"frame": 0, "value": [1, 0, 0]}, {"frame": 2, "value": [0, 1, 0]}]}])
+    saved = anim.state_of(scene)
+    anim.apply(scene, 1)
+    assert iso.opacity == pytest.approx(0.6)
+    assert (iso.color_range, iso.color_min, iso.color_max) == ("manual", pytest.approx(0.2),
+                                                               pytest.approx(0.8))
+    assert np.allclose(plane.normal, (np.sqrt(0.5), np.sqrt(0.5), 0.0))
+    anim.restore(scene, saved)
+    assert iso.opacity == 1.0 and iso.color_range == "auto" and plane.normal == (1.0, 0.0, 0.0)
+    with pytest.raises(AnimationError, match="cannot animate"):
+        Animation.make(tracks=[{"target": plane.id, "property": "isovalue",
+                                "keys": [{"frame": 0, "value": [1]}]}]).apply(scene, 0)
+
+
+def test_removing_an_object_removes_its_tracks():
+    scene, vol = _scene()
+    iso = scene.isosurfaces[0]
+    scene.animation = orbit(scene, 90, frames=4) + isovalue_sweep(scene, 0.2, 0.8, frames=4)
+    scene.remove(iso)
+    assert [t.target for t in scene.animation.tracks] == ["camera"]
+    scene.clear()
+    assert scene.animation is None
