@@ -11,7 +11,7 @@ from __future__ import annotations
 from PySide6.QtGui import QAction, QIcon, QKeySequence
 from PySide6.QtWidgets import QToolBar
 
-from splineviz.gui import animation_dock, dialogs, open_dialogs
+from splineviz.gui import dialogs, open_dialogs
 from splineviz.gui.undo import undo_stack
 
 #: (view name, menu text, shortcut, icon name) of the standard views
@@ -112,7 +112,7 @@ def build_actions(window) -> dict[str, QAction]:
             tip="Mesh the selected isosurface with the advancing front on the spline: "
                 "well-shaped, curvature-adapted triangles on the exact surface (slower)")
     acts["export animation"] = _action(
-        window, "Export &animation...", lambda: animation_dock.export_animation(window), menu=m,
+        window, "Export &animation...", lambda: window.animation_panel.export(), menu=m,
         tip="Render the Animation panel's animation into MP4, GIF or PNGs (in the background)")
     m.addSeparator()
     # explicit: without a desktop environment Qt maps StandardKey.Quit to no key at all

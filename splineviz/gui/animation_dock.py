@@ -241,6 +241,10 @@ class AnimationPanel(QWidget):
         if new is not None:
             self.set_animation(new)
 
+    def export(self):
+        """File > Export animation... (:func:`export_animation`)."""
+        return export_animation(self.window)
+
     def clear(self) -> None:
         self.play(False)
         self.set_animation(None)

@@ -104,13 +104,13 @@ class Scene:
         self.camera = CameraNode(id="camera")
         self.view = ViewNode(id="view", background=BACKGROUND)
         self.selected: Node | None = None
+        #: the scene's :class:`~splineviz.model.animation.Animation` (None: none); saved
+        #: with the session
+        self.animation = None
         #: True after any change since :meth:`mark_saved`
         self.modified = False
         #: width / height of the view that shows the scene (set by views; used to frame)
         self.aspect = 1.0
-        #: the scene's :class:`~splineviz.model.animation.Animation` (None: none); saved
-        #: with the session
-        self.animation = None
         self.view.events.connect(self._node_changed)
         # looking around is not an edit: the camera is saved, but moving it leaves
         # ``modified`` alone (no "unsaved changes" prompt after an orbit)
