@@ -218,7 +218,12 @@ class AnimationPanel(QWidget):
             anim = isovalue_sweep(self.scene, self.iso_from.value(), self.iso_to.value(),
                                   frames=n, isosurface=self._isosurface(), fps=fps)
         else:
-            anim = clip_sweep(self.scene, self.axis.currentText(), frames=n, fps=fps)
+            # the plane of the sweep there is moves again (Make twice adds no second plane)
+            old = self.animation
+            plane = next((t.target for t in (old.tracks if old is not None else ())
+                          if t.property == "origin" and t.target in self.scene), None)
+            anim = clip_sweep(self.scene, self.axis.currentText(), frames=n, fps=fps,
+                              plane=plane)
         if self.combine.isChecked() and self.animation is not None:
             anim = self.animation + anim
         self.set_animation(anim)
