@@ -2,10 +2,10 @@
 
 The scene is built as ``splineviz render`` builds it (:func:`splineviz.cli.render.run`'s
 steps: the app's opening, outline and axes off, the camera of ``--camera`` or the default
-one for a volume, the session's for a session); the frames come from the presets asked for
-(``--orbit``, ``--iso-sweep``, ``--clip-sweep``, combined), else from the session's
-animation, else a full orbit; :func:`splineviz.render.movie.export_movie` renders each
-frame exactly and encodes it beside the rendering.
+one for a volume, the session's for a session); :func:`splineviz.render.movie.movie` (what
+``sv.movie`` is) takes the frames from the presets asked for (``--orbit``, ``--iso-sweep``,
+``--clip-sweep``, combined), else from the session's animation, else a full orbit, renders
+each exactly and encodes it beside the rendering.
 """
 
 from __future__ import annotations
@@ -40,9 +40,8 @@ def _positive_int(text: str) -> int:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from splineviz.model.animation import preset_animation
     from splineviz.model.opening import scene_from_path
-    from splineviz.render.movie import export_movie
+    from splineviz.render.movie import movie
 
     size = parse_size(args.size)
     scene = scene_from_path(args.file, isovalue=args.iso, model=args.model,
@@ -61,31 +60,23 @@ def run(args) -> int:
             raise RenderArgumentError(f"bad --camera: {exc}") from None
         scene.camera.update(position=cam.position, focal_point=cam.focal_point,
                             view_up=cam.view_up, view_angle=cam.view_angle)
-    frames = args.frames or (scene.animation.frames if scene.animation and not (
-        args.orbit is not None or args.iso_sweep or args.clip_sweep) else 120)
-    fps = args.fps
-    animation = preset_animation(scene, orbit_degrees=args.orbit, iso_sweep=args.iso_sweep,
-                                 clip_axis=args.clip_sweep, frames=frames, fps=fps or 30.0)
-    if animation is None:
-        animation = scene.animation
-        if animation is None or (args.frames and args.frames != animation.frames):
-            animation = preset_animation(scene, orbit_degrees=360.0, frames=frames,
-                                         fps=fps or 30.0)
-    bar = tqdm(total=animation.frames, unit="frame", desc=args.output, file=sys.stderr,
-               leave=False, disable=not sys.stderr.isatty())
+    bar = tqdm(total=0, unit="frame", desc=args.output, file=sys.stderr, leave=False,
+               disable=not sys.stderr.isatty())
 
     def progress(done, total):
+        bar.total = total
         bar.n = done
         bar.refresh()
 
     try:
-        stats = export_movie(scene, animation, args.output, size=size, fps=fps,
-                             quality=args.quality, transparent_background=args.transparent,
-                             device=args.device, progress=progress)
+        stats = movie(scene, args.output, orbit=args.orbit, iso_sweep=args.iso_sweep,
+                      clip_sweep=args.clip_sweep, frames=args.frames, fps=args.fps, size=size,
+                      quality=args.quality, transparent_background=args.transparent,
+                      device=args.device, progress=progress)
     finally:
         bar.close()
-    print(f"{stats.path}: {stats.frames} frames, {size[0]}x{size[1]}, "
-          f"{fps or animation.fps:g} fps, {stats.seconds_per_frame:.2f} s a frame")
+    print(f"{stats.path}: {stats.frames} frames, {size[0]}x{size[1]}, {stats.fps:g} fps, "
+          f"{stats.seconds_per_frame:.2f} s a frame")
     return 0
 
 

@@ -208,6 +208,7 @@ class MovieStats:
     rendering and encoding (the writer's, overlapping the rendering) and in all."""
 
     path: Path
+    fps: float = 0.0
     frames: int = 0
     render_s: list = field(default_factory=list)
     encode_s: list = field(default_factory=list)
@@ -347,7 +348,7 @@ def export_movie(scene, animation, path, *, size=(1280, 720), fps: float | None 
     _check(path, fmt, name, size, fps, quality, transparent_background)
     animation.check(scene)
     saved = animation.state_of(scene)
-    stats = MovieStats(path if name != "png" else png_pattern(path))
+    stats = MovieStats(path if name != "png" else png_pattern(path), fps=fps)
     t_start = time.perf_counter()
     sink = fmt.writer(path, size, fps, quality)
     writer = _Writer(sink, stats)

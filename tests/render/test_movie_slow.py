@@ -79,4 +79,7 @@ def test_120_frame_1080p_orbit_of_a_session(shared_data, tmp_path):
           f"{peak_short / 1024:.0f} MiB (20 frames), {peak_long / 1024:.0f} MiB (120)")
     assert moved.mean() > 0.05
     assert per_frame <= 1.2 * still_s
-    assert peak_long <= 1.1 * peak_short
+    # six times the frames: the peak moves with the views' classification caches and the
+    # allocator (measured 1277 and 1443 MiB), while keeping the frames would add 6 MiB
+    # each (+600 MiB for the 100 more)
+    assert peak_long <= 1.25 * peak_short
