@@ -67,6 +67,8 @@ _LAZY = {
     "Projector": "splineviz.pointcloud.projection:Projector",
     "remesh": "splineviz.pointcloud.remesh:remesh",
     "mesh_quality": "splineviz.pointcloud.quality:mesh_quality",
+    "movie": "splineviz.render.movie:movie",
+    "Animation": "splineviz.model.animation:Animation",
 }
 
 __all__ = sorted(_LAZY) + ["__version__"]

@@ -62,3 +62,8 @@ def test_python_dash_m_splineviz_is_the_command():
     out = subprocess.run([sys.executable, "-m", "splineviz", "--version"], capture_output=True,
                          text=True, timeout=120)
     assert out.returncode == 0 and out.stdout.startswith("splineviz ")
+
+
+def test_bench_parser_knows_the_movie_benchmark():
+    a = _build_parser().parse_args(["bench", "movie", "--sizes", "720p,4K", "--frames", "3"])
+    assert (a.which, a.sizes, a.frames) == ("movie", "720p,4K", 3)

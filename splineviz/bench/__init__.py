@@ -8,6 +8,8 @@ baselines measured in the same run (``splineviz bench NAME``, :mod:`splineviz.cl
 * :mod:`~splineviz.bench.bricks`: out-of-core ray casting on 1 against 2 dask workers;
 * :mod:`~splineviz.bench.remesh`: the advancing-front mesher against Open3D Poisson, ball
   pivoting and Poisson + pymeshlab remeshing (and CGAL's jet smoothing for the projection);
+* :mod:`~splineviz.bench.movie`: a movie frame (rendered, encoded beside it) against one
+  still picture, at 720p, 1080p and 4K;
 * :mod:`~splineviz.bench.gui`: the GUI thread's longest stall per user action against the
   100 ms budget (:mod:`~splineviz.bench.driving` plays the user's input);
 * :mod:`~splineviz.bench.evaluate`, :mod:`~splineviz.bench.curvature`,

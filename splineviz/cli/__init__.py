@@ -1,9 +1,10 @@
 """The ``splineviz`` command line.
 
 ``splineviz [FILE|SESSION]`` opens the app (:mod:`splineviz.gui`); the sub-commands
-(``render``, ``remesh``, ``info``, ``bench``...) are the front-ends in this package, one module
-each, listed in :data:`SUBCOMMANDS`: each entry names a function ``register(subparsers)`` that
-adds its parser and sets ``func`` (called with the parsed arguments, returns an exit code).
+(``render``, ``movie``, ``serve``, ``remesh``, ``info``, ``bench``...) are the front-ends in
+this package, one module each, listed in :data:`SUBCOMMANDS`: each entry names a function
+``register(subparsers)`` that adds its parser and sets ``func`` (called with the parsed
+arguments, returns an exit code).
 User errors (:class:`SplinevizError`, ``OSError``, malformed arguments) are printed as one
 line on stderr with exit code 2; no traceback. Documented acceptances
 (:class:`SplinevizWarning`) are printed as one ``splineviz: warning:`` line each; warnings of
@@ -41,6 +42,7 @@ SUBCOMMANDS: dict[str, str] = {
     "bench": "splineviz.cli.bench:register",
     "remesh": "splineviz.cli.remesh:register",
     "serve": "splineviz.cli.serve:register",
+    "movie": "splineviz.cli.movie:register",
 }
 
 

@@ -3,7 +3,8 @@ baselines run in the same run (VTK flying edges and trilinear ray casting for ``
 flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 dask workers for
 ``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
 the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render of each step
-for ``time``; VTK's volume mappers and an analytic reference for ``dvr``)."""
+for ``time``; VTK's volume mappers and an analytic reference for ``dvr``; one still
+``render_scene`` picture and the renderer and encoder alone for ``movie``)."""
 
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ def _run(args) -> int:
         from splineviz.bench.isovalue import MODELS, run_isovalue_bench
 
         pw, ph = (int(v) for v in args.preview.lower().split("x"))
-        sizes = tuple(int(n) for n in args.sizes.split(","))
+        sizes = tuple(int(n) for n in (args.sizes or "256,512").split(","))
         models = tuple(args.models.split(",")) if args.models else MODELS
         run_isovalue_bench(data, sizes=sizes, models=models, size=(w, h), preview=(pw, ph),
                            device=args.device, timeout=args.timeout or 600.0)
@@ -46,6 +47,17 @@ def _run(args) -> int:
 
         run_dvr_bench(data, size=(w, h), step=args.step, repeats=args.repeats,
                       device=args.device, out_dir=args.out)
+    elif args.which == "movie":
+        from splineviz.bench.movie import SIZES, run_movie_bench
+
+        labels = [v.strip() for v in args.sizes.split(",")] if args.sizes else None
+        sizes = [s for s in SIZES if labels is None or s[0] in labels]
+        if labels is not None and len(sizes) != len(labels):
+            from splineviz.cli import UsageError
+
+            raise UsageError(f"bench movie: --sizes takes {','.join(s[0] for s in SIZES)}, "
+                             f"got {args.sizes!r}")
+        run_movie_bench(data, sizes=sizes, frames=args.frames, device=args.device)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -64,15 +76,18 @@ def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
     p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time",
-                                     "dvr"],
+                                     "dvr", "movie"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
                         "gui: ../shared/data)")
     p.add_argument("--size", default="512x512", help="raycast, isovalue: image size WxH")
     p.add_argument("--preview", default="128x128", help="isovalue: preview frame size WxH")
-    p.add_argument("--sizes", default="256,512",
-                   help="isovalue: volume sizes n (bonsai resampled to n^3), comma-separated")
+    p.add_argument("--sizes", default=None,
+                   help="isovalue: volume sizes n (bonsai resampled to n^3), comma-separated "
+                        "(256,512); "
+                        "movie: frame sizes among 720p,1080p,4K (default all)")
+    p.add_argument("--frames", type=int, default=4, help="movie: frames per size")
     p.add_argument("--models", default=None,
                    help="isovalue: comma-separated spline models (default: all four)")
     p.add_argument("--repeats", type=int, default=3,

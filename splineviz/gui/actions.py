@@ -112,6 +112,9 @@ def build_actions(window) -> dict[str, QAction]:
             lambda: dialogs.export_mesh(window, method="front"), menu=m,
             tip="Mesh the selected isosurface with the advancing front on the spline: "
                 "well-shaped, curvature-adapted triangles on the exact surface (slower)")
+    acts["export animation"] = _action(
+        window, "Export &animation...", lambda: window.animation_panel.export(), menu=m,
+        tip="Render the Animation panel's animation into MP4, GIF or PNGs (in the background)")
     m.addSeparator()
     # explicit: without a desktop environment Qt maps StandardKey.Quit to no key at all
     _action(window, "&Quit", window.close, menu=m, shortcut="Ctrl+Q")

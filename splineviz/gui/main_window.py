@@ -19,7 +19,7 @@ from PySide6.QtGui import QAction
 from PySide6.QtWidgets import QApplication, QDockWidget, QMainWindow, QMessageBox
 
 from splineviz.core.errors import SplinevizError
-from splineviz.gui import opening, window_state
+from splineviz.gui import animation_dock, opening, window_state
 from splineviz.gui.actions import build_actions, icon
 from splineviz.gui.commands import Commands
 from splineviz.gui.jobs import JobRunner, error_message, start_process_server
@@ -102,6 +102,7 @@ class MainWindow(QMainWindow):
         self.smoother = Smoother(self.scene, self.jobs, device)
         self.plane_widgets = PlaneWidgets(self.scene, self.plotter, self.view.request_render)
         self._build_panels()
+        animation_dock.install(self)
         self.actions_by_name = build_actions(self)
         self.time_toolbar = TimeToolbar(self)
         self.addToolBar(Qt.ToolBarArea.BottomToolBarArea, self.time_toolbar)

@@ -15,7 +15,8 @@ Document layout (schema :data:`SCHEMA_VERSION`)::
          "properties": {"origin": [128, 128, 128], "normal": [1, 0, 0]}}
       ],
       "views": [{"id": "view1", "camera": {...}, "background": [...], "lights": [...],
-                 "layout": {...}}]
+                 "layout": {...}}],
+      "animation": {"frames": 120, "tracks": [...]}   # only when the scene has one
     }
 
 A clip plane cuts the isosurfaces of the volumes it takes as input, the isosurfaces it
@@ -179,8 +180,10 @@ class CameraBase(_Model):
 
 #: object type -> model of its properties (filled by :func:`register_object_type`)
 PROPERTIES: dict[str, type[BaseModel]] = {}
-#: the model of a view's camera (set by :func:`register_camera_model`)
+#: the model of a view's camera (set by :func:`register_camera_model`) and of the
+#: document's animation (set by :func:`register_animation_model`)
 _CAMERA: dict[str, type[CameraBase]] = {}
+_ANIMATION: dict[str, type[BaseModel]] = {}
 
 
 def register_object_type(name: str, properties: type[BaseModel]) -> None:
@@ -193,8 +196,14 @@ def register_camera_model(model: type[CameraBase]) -> None:
     _CAMERA["camera"] = model
 
 
+def register_animation_model(model: type[BaseModel]) -> None:
+    """Declare the model of a session's ``animation`` entry (the scene model's
+    :class:`~splineviz.model.animation.Animation`)."""
+    _ANIMATION["animation"] = model
+
+
 def _declared() -> None:
-    if not PROPERTIES or not _CAMERA:
+    if not PROPERTIES or not _CAMERA or not _ANIMATION:
         # the scene nodes declare the properties (see the comment above the origins); a
         # document read before anything imported the scene model needs them all the same,
         # and the extension hook that ``splineviz`` installs declares them (io never
@@ -329,6 +338,18 @@ class Session(_Model):
     objects: Annotated[list[PipelineObject], Field(max_length=MAX_OBJECTS)] = []
     views: Annotated[list[View], Field(max_length=MAX_VIEWS)] = Field(
         default_factory=lambda: [View()])
+    #: the scene's animation (keyframed tracks, see :mod:`splineviz.model.animation`);
+    #: written only when there is one, so documents without one are those of schema 4
+    animation: Any = None
+
+    @field_validator("animation", mode="before")
+    @classmethod
+    def _animation(cls, v):
+        if v is None:
+            return None
+        _declared()
+        model = _ANIMATION["animation"]
+        return v if isinstance(v, model) else model.model_validate(v)
 
     def object(self, obj_id: str):
         """The pipeline object with id ``obj_id``."""
@@ -486,6 +507,8 @@ class Session(_Model):
         doc = {"format": FORMAT, "schema_version": SCHEMA_VERSION,
                "app_version": _app_version(),  # the version that wrote this document
                "objects": objects, "views": views}
+        if self.animation is not None:
+            doc["animation"] = self.animation.model_dump(mode="json", exclude_defaults=True)
         return doc
 
 

@@ -128,6 +128,9 @@ class Scene:
         self.camera = CameraNode(id="camera")
         self.view = ViewNode(id="view", background=BACKGROUND)
         self.selected: Node | None = None
+        #: the scene's :class:`~splineviz.model.animation.Animation` (None: none); saved
+        #: with the session
+        self.animation = None
         #: True after any change since :meth:`mark_saved`
         self.modified = False
         #: width / height of the view that shows the scene (set by views; used to frame)
@@ -332,6 +335,8 @@ class Scene:
                 if mesh.points_id == node.id:
                     mesh.points_id = None
         del self._nodes[node.id]
+        if self.animation is not None:  # its tracks of the object go with it
+            self.animation = self.animation.without(node.id)
         node.events.disconnect(self._node_changed)
         if isinstance(node, VolumeNode):
             slot, adopt = self._step_slots.pop(node.id)
@@ -343,10 +348,11 @@ class Scene:
         self._node_changed()
 
     def clear(self) -> None:
-        """Remove every object (camera and view settings stay)."""
+        """Remove every object and the animation (camera and view settings stay)."""
         for node in reversed(list(self._nodes.values())):
             if node.id in self._nodes:
                 self.remove(node)
+        self.animation = None
         self.modified = False
 
     def select(self, node: Node | str | None) -> None:

@@ -23,9 +23,11 @@ from splineviz.io.session import (
     PointsFileOrigin,
     SourceOrigin,
     VolumeFileOrigin,
+    register_animation_model,
     register_camera_model,
     register_object_type,
 )
+from splineviz.model.animation import Animation
 from splineviz.model.nodes import (
     CameraNode,
     ClipPlaneNode,
@@ -115,3 +117,6 @@ for _name, (_node, _origin) in list(OBJECT_NODES.items()):
 #: the model of a view's camera in a session: the camera node's properties
 CameraState = properties_model("Camera", CameraNode, CameraBase, model_name="CameraState")
 register_camera_model(CameraState)
+
+#: the model of a session's animation: the scene model's own
+register_animation_model(Animation)

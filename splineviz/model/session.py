@@ -30,6 +30,7 @@ from splineviz.io.session import (
 )
 from splineviz.io.time_series import TimeSeries
 from splineviz.model.nodes import (
+    CameraNode,
     ClipPlaneNode,
     MeshNode,
     PointsNode,
@@ -124,6 +125,8 @@ def to_session(scene: Scene, written: dict | None = None) -> Session:
         s.add(type_name, {**props, **node_properties(node)},
               inputs=[i for i in inputs if i is not None and i in scene],
               name=node.name, id=node.id)
+    if scene.animation is not None:
+        s.animation = scene.animation
     view = s.views[0]
     view.camera = scene.camera.pose()
     for k in ViewNode.properties():
@@ -309,6 +312,7 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
 
     data = read_session_data(session) if data is None else data
     load_extensions()  # plugin models named by isosurfaces
+    _check_animation(session)
     scene.clear()
     for obj in session.objects:
         if obj.type == "Isosurface":
@@ -317,12 +321,34 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
     view = session.views[0]
     _apply_split(scene, session)
     scene.camera.update(view.camera.model_dump())
+    scene.animation = session.animation
     scene.view.update({k: getattr(view, k) for k in ViewNode.properties()})
     if any(v.lights != View.model_fields["lights"].default for v in session.views):
         _log.warning("session: the view's lights are not rendered (the view has one "
                      "headlight); they are kept only in the session file")
     scene.mark_saved()
     return scene
+
+
+def _check_animation(session: Session) -> None:
+    """The objects the session's animation animates are in it, of a kind that has the
+    property (checked before the scene changes)."""
+    from splineviz.model.animation import ANIMATED
+
+    if session.animation is None:
+        return
+    kinds = {o.id: OBJECT_NODES[o.type][0] for o in session.objects}
+    for track in session.animation.tracks:
+        if track.target == "camera":
+            node_cls = CameraNode
+        elif track.target in kinds:
+            node_cls = kinds[track.target]
+        else:
+            raise SessionError(f"the animation animates {track.target!r}, which is not an "
+                               "object of the session")
+        if not issubclass(node_cls, ANIMATED[track.property].nodes):
+            raise SessionError(f"the animation's {track.property} track cannot animate "
+                               f"{track.target!r}")
 
 
 def _apply_split(scene: Scene, session: Session) -> None:

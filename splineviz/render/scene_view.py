@@ -235,6 +235,15 @@ class SceneView:
         self._grid_enabled = True
         self._update_grid()
 
+    def rebuild_grid(self) -> None:
+        """Make the axes grid anew: its labels are laid out as in a new view (a grid kept
+        across camera moves places them from its earlier layouts)."""
+        if self._grid is None:
+            return
+        self.plotter.remove_actor(self._grid, reset_camera=False, render=False)
+        self._grid = None
+        self._update_grid()
+
     def _update_grid(self) -> None:
         """An axes grid with world-unit labels around all data (the scale of the scene).
 
@@ -517,56 +526,115 @@ def smooth_pending(scene: Scene, device=None) -> None:
             vol.set_smoothed(gaussian_smooth(vol.data, vol.sigma, device=device), vol.sigma)
 
 
+class OffscreenRenderer:
+    """Exact pictures of ``scene`` at ``size``, one per :meth:`render`, from off-screen
+    plotters kept between calls (a movie renders its frames through one): each picture is
+    the one :func:`render_scene` makes of the scene as it is at the call. A split scene
+    (:attr:`splineviz.model.ViewNode.split`) is drawn as its two views side by side, each
+    half as wide, as the window shows it. Use as a context manager, or :meth:`close`.
+
+    Parameters
+    ----------
+    scene : splineviz.model.Scene
+    size : (int, int)
+        Width and height in pixels.
+    transparent_background : bool
+        RGBA pictures whose background is transparent.
+    device : str or None
+        OpenCL device preference of the ray casters.
+    """
+
+    def __init__(self, scene: Scene, size=(1024, 768), *,
+                 transparent_background: bool = False, device=None):
+        import pyvista as pv
+
+        from splineviz.io._vtk import quiet_vtk_logger
+        from splineviz.render.scene import SceneError
+
+        w, h = int(size[0]), int(size[1])
+        if w < 1 or h < 1 or w > 16384 or h > 16384:
+            raise SceneError(f"a picture must be 1..16384 pixels per side, got {w}x{h}")
+        self.scene = scene
+        self.size = (w, h)
+        self.device = device
+        self.transparent_background = transparent_background
+        self._quiet = quiet_vtk_logger
+        self._split = bool(scene.view.split)
+        smooth_pending(scene, device)
+        if self._split:
+            parts = (("left", w // 2), ("right", w - w // 2))
+            if w < 2:
+                raise SceneError("a picture of a split view needs 2 or more pixels across, "
+                                 f"got {w}")
+        else:
+            parts = ((None, w),)
+        self._views: list = []
+        self._rendered = False
+        with quiet_vtk_logger():
+            try:
+                for side, width in parts:
+                    pl = pv.Plotter(off_screen=True, window_size=(width, h))
+                    self._views.append((pl, SceneView(scene, pl, progressive=False,
+                                                      device=device, side=side)))
+            except BaseException:
+                self.close()
+                raise
+
+    def render(self) -> np.ndarray:
+        """The exact picture of the scene now: ``(H, W, 3)`` uint8, or ``(H, W, 4)`` with
+        a transparent background."""
+        from splineviz.render.scene import SceneError
+        from splineviz.render.volume_rendering import composite_volume_rendering
+
+        if bool(self.scene.view.split) != self._split:
+            raise SceneError("the scene was split or joined since this renderer was made")
+        smooth_pending(self.scene, self.device)
+        images = []
+        if self._rendered:
+            for _pl, view in self._views:
+                view.rebuild_grid()
+        self._rendered = True
+        with self._quiet():
+            # twice for a split: the right half may widen a colour range both halves share
+            # (the second pass casts nothing, the frames are current)
+            for _ in range(len(self._views)):
+                for _pl, view in self._views:
+                    view.render_exact()
+            for pl, view in self._views:
+                shot = pl.screenshot(None, transparent_background=self.transparent_background,
+                                     return_img=True)
+                images.append(composite_volume_rendering(view, pl, shot, self.device))
+        return images[0] if len(images) == 1 else np.concatenate(images, axis=1)
+
+    def close(self) -> None:
+        """Release the plotters and stop following the scene."""
+        views, self._views = self._views, []
+        for pl, view in views:
+            view.close()
+            pl.close()
+
+    def __enter__(self) -> OffscreenRenderer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
 def render_scene(scene: Scene, size=(1024, 768), filename=None, *,
                  transparent_background: bool = False, device=None) -> np.ndarray:
     """Render ``scene`` off-screen at ``size`` with exact frames; optionally write a PNG.
 
     A split scene (:attr:`splineviz.model.ViewNode.split`) is drawn as its two views side by
-    side, each half as wide, as the window shows it.
+    side, each half as wide, as the window shows it (see :class:`OffscreenRenderer`, which
+    keeps its plotters for many pictures).
 
     Returns
     -------
     (H, W, 3) or (H, W, 4) uint8 image
     """
-    import pyvista as pv
-
-    from splineviz.render.scene import SceneError
-    from splineviz.render.volume_rendering import composite_volume_rendering
-
-    w, h = int(size[0]), int(size[1])
-    if w < 1 or h < 1 or w > 16384 or h > 16384:
-        raise SceneError(f"a picture must be 1..16384 pixels per side, got {w}x{h}")
-    from splineviz.io._vtk import quiet_vtk_logger
-
-    smooth_pending(scene, device)
-    if scene.view.split:
-        parts = (("left", w // 2), ("right", w - w // 2))
-        if w < 2:
-            raise SceneError(f"a picture of a split view needs 2 or more pixels across, got {w}")
-    else:
-        parts = ((None, w),)
-    images = []
-    views = []
-    with quiet_vtk_logger():
-        try:
-            for side, width in parts:
-                pl = pv.Plotter(off_screen=True, window_size=(width, h))
-                views.append((pl, SceneView(scene, pl, progressive=False, device=device,
-                                            side=side)))
-            # twice for a split: the right half may widen a colour range both halves share
-            # (the second pass casts nothing, the frames are current)
-            for _ in range(len(views)):
-                for _pl, view in views:
-                    view.render_exact()
-            for pl, view in views:
-                shot = pl.screenshot(None, transparent_background=transparent_background,
-                                     return_img=True)
-                images.append(composite_volume_rendering(view, pl, shot, device))
-        finally:
-            for pl, view in views:
-                view.close()
-                pl.close()
-    img = images[0] if len(images) == 1 else np.concatenate(images, axis=1)
+    with OffscreenRenderer(scene, size, transparent_background=transparent_background,
+                           device=device) as renderer:
+        img = renderer.render()
     if filename is not None:
         from splineviz.io.meshes import write_screenshot
 
