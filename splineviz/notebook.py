@@ -178,8 +178,13 @@ def show(scene: Scene, size=None, camera=None, *, interactive: bool = False, dev
         # print a warning into the cell before falling back to EGL
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     if widget:
-        from splineviz.widget import SceneWidget
-
+        try:
+            from splineviz.widget import SceneWidget
+        except ModuleNotFoundError as exc:
+            if exc.name != "ipywidgets":
+                raise
+            raise PictureError("scene.widget() needs ipywidgets: pip install "
+                               "'splineviz[notebook]'") from None
         return SceneWidget(scene, size=size, device=device)
     from splineviz.render.scene_view import render_scene
 

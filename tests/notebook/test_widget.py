@@ -54,3 +54,14 @@ def test_widget_controls_change_the_scene_and_its_exact_picture():
         assert np.array_equal(_image(widget), render_scene(scene, SIZE))
     finally:
         widget.close()
+
+
+def test_widget_without_ipywidgets_is_one_clear_error(monkeypatch):
+    import sys
+
+    from splineviz.core.pictures import PictureError
+
+    monkeypatch.setitem(sys.modules, "ipywidgets", None)
+    monkeypatch.delitem(sys.modules, "splineviz.widget", raising=False)
+    with pytest.raises(PictureError, match="needs ipywidgets"):
+        default_scene().widget()
