@@ -10,6 +10,7 @@ entries, first declares the session object types from the scene nodes
 find those entries without importing upwards (import-linter contracts forbid it).
 """
 
+import sys
 from importlib import import_module
 
 from splineviz.core import pictures as _pictures
@@ -35,6 +36,18 @@ def _show(scene, **options):
 
 
 _pictures.set_show(_show)
+
+
+def _register_notebook_formatters() -> None:
+    # in a running IPython kernel, meshes (pyvista.PolyData) display as their pictures too;
+    # the formatters are registered by type name, so this imports neither VTK nor IPython
+    ipython = sys.modules.get("IPython")
+    shell = None if ipython is None else getattr(ipython, "get_ipython", lambda: None)()
+    if shell is not None and hasattr(shell, "display_formatter"):
+        _pictures.register_formatters(shell.display_formatter)
+
+
+_register_notebook_formatters()
 
 # public name -> "module:attribute"
 _LAZY = {

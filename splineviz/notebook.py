@@ -5,7 +5,11 @@
 :func:`splineviz.render.scene_view.render_scene` of the scene, off-screen (EGL/OSMesa: no X
 server, no GPU needed), so a notebook shows what ``splineviz render`` writes for the same
 scene. ``interactive=True`` serves the scene's view (:mod:`splineviz.web`) on 127.0.0.1 from
-a thread of the kernel and returns an ``<iframe>`` of its page.
+a thread of the kernel and returns an ``<iframe>`` of its page; ``widget=True`` returns an
+ipywidgets view of it (:class:`splineviz.widget.SceneWidget`).
+
+A volume, point cloud or mesh the API returns is shown as the picture of a new scene holding
+just that object (:func:`as_scene`): a volume with its default isosurface, framed isometric.
 """
 
 from __future__ import annotations
@@ -16,6 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from splineviz.core.camera import Camera
+from splineviz.core.pictures import PictureError
+from splineviz.core.points import PointCloud
+from splineviz.core.volume import Volume
 from splineviz.model.nodes import CameraNode
 from splineviz.model.scene import Scene
 from splineviz.web.png import png_bytes
@@ -77,13 +84,64 @@ def place_camera(scene: Scene, camera) -> None:
     scene.camera.update(fields)
 
 
+def as_scene(obj) -> Scene:
+    """``obj`` itself if it is a scene, else a new scene holding just ``obj``.
+
+    Parameters
+    ----------
+    obj : Scene, Volume, PointCloud, pyvista.PolyData or (vertices (V, 3), faces (F, 3))
+        A volume comes with its first isosurface (the default isovalue and model of
+        :meth:`Scene.add_volume`); a mesh without triangles is shown as its points.
+
+    Returns
+    -------
+    Scene
+    """
+    if isinstance(obj, Scene):
+        return obj
+    scene = Scene()
+    if isinstance(obj, Volume):
+        scene.add_volume(obj, "volume")
+    elif isinstance(obj, PointCloud):
+        scene.add_points(obj, "points")
+    else:
+        vertices, faces, normals = _triangles(obj)
+        if len(faces):
+            scene.add_mesh(vertices, faces, "mesh", normals=normals)
+        else:
+            scene.add_points(PointCloud(vertices), "points")
+    return scene
+
+
+def _triangles(mesh):
+    """``vertices (V, 3)``, ``faces (F, 3)``, point normals ``(V, 3)`` or None of a mesh."""
+    import pyvista as pv
+
+    from splineviz.io.errors import InvalidDataError
+    from splineviz.io.meshes import as_polydata
+
+    if not isinstance(mesh, pv.PolyData) and not isinstance(mesh, tuple | list):
+        raise PictureError(f"cannot show a {type(mesh).__name__}: show a Scene, Volume, "
+                           "PointCloud or mesh")
+    try:
+        poly = as_polydata(mesh)
+    except InvalidDataError as exc:
+        raise PictureError(str(exc)) from None
+    if poly.n_cells and not poly.is_all_triangles:
+        poly = poly.triangulate()
+    faces = poly.faces.reshape(-1, 4)[:, 1:] if poly.faces.size else np.zeros((0, 3), int)
+    name = poly.point_data.active_normals_name
+    normals = None if name is None else np.asarray(poly.point_data[name], dtype=np.float64)
+    return np.asarray(poly.points, dtype=np.float64), faces, normals
+
+
 def show(scene: Scene, size=None, camera=None, *, interactive: bool = False, device=None,
-         port: int = 0):
+         port: int = 0, widget: bool = False):
     """Show ``scene``: its exact picture, or its interactive view in the browser.
 
     Parameters
     ----------
-    scene : splineviz.model.Scene
+    scene : splineviz.model.Scene, or an object :func:`as_scene` takes
     size : (width, height) or None
         Pixels (default :data:`DEFAULT_SIZE`).
     camera : Camera, CameraNode, mapping or None
@@ -97,13 +155,16 @@ def show(scene: Scene, size=None, camera=None, *, interactive: bool = False, dev
         OpenCL device preference of the ray casters.
     port : int
         The interactive view's port (0: a free one).
+    widget : bool
+        Return an ipywidgets view of the scene (:class:`splineviz.widget.SceneWidget`).
 
     Returns
     -------
-    Picture or splineviz.web.server.InteractiveView
+    Picture, splineviz.web.server.InteractiveView or splineviz.widget.SceneWidget
     """
     from splineviz.core.camera import parse_size
 
+    scene = as_scene(scene)
     size = DEFAULT_SIZE if size is None else parse_size(size)
     if scene.camera.pose() == CameraNode(id="camera").pose() and scene.bounds() is not None:
         scene.aspect = size[0] / size[1]
@@ -116,6 +177,15 @@ def show(scene: Scene, size=None, camera=None, *, interactive: bool = False, dev
         # no X server (a notebook on a server): VTK's default window would try X first and
         # print a warning into the cell before falling back to EGL
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    if widget:
+        try:
+            from splineviz.widget import SceneWidget
+        except ModuleNotFoundError as exc:
+            if exc.name != "ipywidgets":
+                raise
+            raise PictureError("scene.widget() needs ipywidgets: pip install "
+                               "'splineviz[notebook]'") from None
+        return SceneWidget(scene, size=size, device=device)
     from splineviz.render.scene_view import render_scene
 
     saved = scene.camera.pose()

@@ -59,3 +59,14 @@ class PointCloud:
         """Length of the bounding-box diagonal."""
         (x0, x1), (y0, y1), (z0, z1) = self.bounds
         return float(np.linalg.norm([x1 - x0, y1 - y0, z1 - z0]))
+
+    def show(self, size=None, camera=None, **options):
+        """The picture of a new scene holding just these points, framed isometric (see
+        :func:`splineviz.notebook.show`)."""
+        from splineviz.core.pictures import show
+
+        return show(self, size=size, camera=camera, **options)
+
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the cloud as :meth:`show`'s picture."""
+        return self.show().png()

@@ -212,6 +212,17 @@ class Volume:
                         for (lo, hi), n in zip(bounds, shape, strict=True))
         return cls(func(x, y, z), spacing=spacing, origin=tuple(lo for lo, _ in bounds))
 
+    def show(self, size=None, camera=None, **options):
+        """The picture of a new scene holding just this volume and its default isosurface,
+        framed isometric (see :func:`splineviz.notebook.show`)."""
+        from splineviz.core.pictures import show
+
+        return show(self, size=size, camera=camera, **options)
+
+    def _repr_png_(self) -> bytes:
+        """A notebook shows the volume as :meth:`show`'s picture."""
+        return self.show().png()
+
 
 #: largest deviation of ``direction.T @ direction`` from the identity a rotation may have
 #: (headers store directions in float32)

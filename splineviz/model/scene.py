@@ -553,6 +553,15 @@ class Scene:
         """A notebook shows the scene as its exact picture (IPython's display protocol)."""
         return self.show()._repr_png_()
 
+    def widget(self, size=None, **options):
+        """An ipywidgets view of the scene in a notebook: its exact picture with an isovalue
+        slider, model, clip plane and colour-by controls and orbit buttons
+        (:class:`splineviz.widget.SceneWidget`, reached through the hook of
+        :mod:`splineviz.core.pictures`)."""
+        from splineviz.core.pictures import show
+
+        return show(self, size=size, widget=True, **options)
+
     # -- camera --------------------------------------------------------------------------
 
     def frame(self, bounds=None, view: str | None = None) -> None:
