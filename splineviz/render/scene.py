@@ -9,7 +9,11 @@
    range, window size, clip planes, layer state) and, if it differs, ray casts a new one,
 3. orders the quads after all other props, opaque layers first and translucent ones back to
    front, so a translucent surface blends over the meshes already drawn and is hidden where a
-   mesh is nearer (its fragments fail the depth test).
+   mesh is nearer (its fragments fail the depth test),
+4. previews the volume renderings (:class:`~splineviz.render.volume_layer.VolumeLayer`) it
+   can cast within the budget; after the scene's pass (``EndEvent``) it reads the window
+   depth their rays end at, and their images are drawn over the picture by an overlay
+   renderer (window layer 1), as ``render_scene`` composites them.
 
 Modes: ``progressive=False`` (scripts, screenshots) casts exact frames synchronously at full
 size. ``progressive=True`` (the GUI) casts a reduced-resolution preview synchronously, sized
