@@ -34,6 +34,7 @@ from splineviz.gui.panels import (
     RemeshPanel,
     Smoother,
     SmoothingPanel,
+    VolumeRenderingPanel,
 )
 from splineviz.gui.quantities_dock import QuantitiesPanel
 from splineviz.gui.split import LinkedViews
@@ -143,6 +144,7 @@ class MainWindow(QMainWindow):
         self.iso_panel = IsosurfacePanel(self.scene, self.jobs)
         self.clip_panel = ClippingPanel(self.scene)
         self.smooth_panel = SmoothingPanel(self.scene)
+        self.volume_panel = VolumeRenderingPanel(self.scene, error=self.show_error)
         self.remesh_panel = RemeshPanel(self.scene, self.jobs)
         self.analysis_panel = AnalysisPanel(self.scene)
         self.quantities_panel = QuantitiesPanel(self.scene, self.jobs)
@@ -153,6 +155,7 @@ class MainWindow(QMainWindow):
             "Isosurface": self._dock("Isosurface", self.iso_panel, left),
             "Clipping": self._dock("Clipping", self.clip_panel, right),
             "Smoothing": self._dock("Smoothing", self.smooth_panel, right),
+            "Volume rendering": self._dock("Volume rendering", self.volume_panel, right),
             "Remeshing": self._dock("Remeshing", self.remesh_panel, right),
             "Analysis": self._dock("Analysis", self.analysis_panel, right),
             "Quantities": self._dock("Quantities", self.quantities_panel, right),
@@ -160,7 +163,8 @@ class MainWindow(QMainWindow):
         }
         # the right column as tabs: narrower, so the 3-D view keeps its room
         self.tabifyDockWidget(self.docks["Clipping"], self.docks["Smoothing"])
-        self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Remeshing"])
+        self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Volume rendering"])
+        self.tabifyDockWidget(self.docks["Volume rendering"], self.docks["Remeshing"])
         self.tabifyDockWidget(self.docks["Remeshing"], self.docks["Analysis"])
         self.tabifyDockWidget(self.docks["Analysis"], self.docks["Quantities"])
         self.docks["Clipping"].raise_()

@@ -418,7 +418,8 @@ class View3D(QObject):
         if self._closed or self.spline_scene is None or self._refine_job is None \
                 or serial != self._refine_serial:
             return
-        if layer not in self.spline_scene.layers:
+        if layer not in self.spline_scene.layers and layer not in \
+                self.spline_scene.volume_layers:
             # removed (another file opened) while the signal was queued
             return
         shown = self.spline_scene.shown_frame(layer)

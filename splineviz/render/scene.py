@@ -9,7 +9,11 @@
    range, window size, clip planes, layer state) and, if it differs, ray casts a new one,
 3. orders the quads after all other props, opaque layers first and translucent ones back to
    front, so a translucent surface blends over the meshes already drawn and is hidden where a
-   mesh is nearer (its fragments fail the depth test).
+   mesh is nearer (its fragments fail the depth test),
+4. previews the volume renderings (:class:`~splineviz.render.volume_layer.VolumeLayer`) it
+   can cast within the budget; after the scene's pass (``EndEvent``) it reads the window
+   depth their rays end at, and their images are drawn over the picture by an overlay
+   renderer (window layer 1), as ``render_scene`` composites them.
 
 Modes: ``progressive=False`` (scripts, screenshots) casts exact frames synchronously at full
 size. ``progressive=True`` (the GUI) casts a reduced-resolution preview synchronously, sized
@@ -35,6 +39,7 @@ from splineviz.render.colormaps import colorize, lut
 from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
 from splineviz.render.quad import FrameQuad, frame_colors, frame_textures
+from splineviz.render.volume_layer import VolumeFrame, VolumeLayer, depth_signature
 
 #: seconds a synchronous preview may take in the GUI thread, from the cast to its uploaded
 #: textures (keeps the window responsive while dragging)
@@ -87,6 +92,19 @@ class _LayerView:
     color_range: tuple | None = None
 
 
+@dataclass
+class _VolumeView:
+    """The overlay image of a :class:`VolumeLayer` and its preview bookkeeping (the fields
+    :meth:`SplineScene._preview_scale` reads)."""
+
+    actor: object
+    image: object
+    shown: VolumeFrame | None = None
+    preview_scale: float | None = None
+    preview_sizes: set = field(default_factory=set)
+    preview_seconds: float | None = None
+
+
 def view_state_of(renderer, size, clip_planes=()) -> ViewState:
     """The :class:`ViewState` of a VTK renderer's active camera at ``size`` (width, height)."""
     cam = renderer.GetActiveCamera()
@@ -135,7 +153,16 @@ class SplineScene:
         #: called with no argument when the picture changed outside a render (a linked
         #: view changed a shared colour range); the owner renders soon after
         self.request_render = None
+        #: volume renderings (:class:`VolumeLayer`), drawn over the picture in an overlay
+        #: renderer (created with the first)
+        self.volume_layers: list[VolumeLayer] = []
+        self._vviews: dict[int, _VolumeView] = {}
+        self._overlay = None
+        #: (view key, (H, W) window depth, signature) of the last render, read while a
+        #: volume layer is visible
+        self._depth = None
         self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
+        self._end_observer = self.renderer.AddObserver("EndEvent", self._after_render)
 
     # -- objects -------------------------------------------------------------------------
 
@@ -168,11 +195,44 @@ class SplineScene:
         self.renderer.RemoveActor(lv.quad.actor)
         self.renderer.RemoveActor(lv.scalar_bar)
 
+    def add_volume_layer(self, layer: VolumeLayer) -> None:
+        """Show ``layer``'s volume rendering over the picture."""
+        import vtk
+
+        if self._overlay is None:
+            self._overlay = vtk.vtkRenderer()
+            self._overlay.SetLayer(1)
+            self._overlay.InteractiveOff()
+            rw = self.plotter.render_window
+            rw.SetNumberOfLayers(max(2, rw.GetNumberOfLayers()))
+            rw.AddRenderer(self._overlay)
+        image = vtk.vtkImageData()
+        mapper = vtk.vtkImageMapper()
+        mapper.SetInputData(image)
+        mapper.SetColorWindow(255.0)
+        mapper.SetColorLevel(127.5)
+        actor = vtk.vtkActor2D()
+        actor.SetMapper(mapper)
+        actor.VisibilityOff()
+        self._overlay.AddActor(actor)
+        self.volume_layers.append(layer)
+        self._vviews[id(layer)] = _VolumeView(actor, image)
+
+    def remove_volume_layer(self, layer: VolumeLayer) -> None:
+        vv = self._vviews.pop(id(layer), None)
+        if vv is None:
+            raise SceneError(f"volume rendering {layer.name!r} is not in this scene")
+        self.volume_layers.remove(layer)
+        self._overlay.RemoveActor(vv.actor)
+
     def quad(self, layer: IsosurfaceLayer) -> FrameQuad:
         return self._views[id(layer)].quad
 
     def shown_frame(self, layer: IsosurfaceLayer) -> RenderedFrame | None:
-        """The frame the layer's quad shows now (None before the first render)."""
+        """The frame the layer's quad (or a volume layer's overlay) shows now (None before
+        the first render)."""
+        if isinstance(layer, VolumeLayer):
+            return self._vviews[id(layer)].shown
         return self._views[id(layer)].shown
 
     def add_mesh(self, name: str, dataset, kind: str = "mesh", **options) -> PropRecord:
@@ -379,6 +439,9 @@ class SplineScene:
                     lv.preview_seconds = spent if size in lv.preview_sizes else None
                     lv.preview_sizes.add(size)
                 stale.append(layer)
+        for layer in self.volume_layers:
+            if self._volume_preview(layer, view):
+                stale.append(layer)
         self._resized = False
         self._order_quads()
         self._fit_scalar_bars()
@@ -386,6 +449,88 @@ class SplineScene:
         self.frame_times.append(self.last_frame_s)
         del self.frame_times[:-50]
         if stale and self.request_refine is not None and not self._interacting:
+            self.request_refine()
+
+    def _volume_current(self, layer: VolumeLayer, view: ViewState, final: bool) -> bool:
+        """Whether the volume layer shows a frame of ``view``, its state and the depth of
+        the last render (and, with ``final``, an exact one)."""
+        vf = self._vviews[id(layer)].shown
+        return (vf is not None and vf.view.key() == view.key() and vf.state == layer.state
+                and self._depth is not None and vf.depth_sig == self._depth[2]
+                and (vf.final or not final))
+
+    def _volume_preview(self, layer: VolumeLayer, view: ViewState) -> bool:
+        """Before a render: hide, keep or preview the volume layer; True when its exact
+        frame is due. The preview's rays end at the last render's depth (the same view
+        unless the camera moves; then it is a frame behind), and it is cast only at a size
+        cast before (a new size compiles the kernel: the refine worker casts it first)."""
+        vv = self._vviews[id(layer)]
+        if not layer.visible:
+            vv.actor.VisibilityOff()
+            return False
+        if self._volume_current(layer, view, final=True):
+            return False
+        if not self.progressive or self._force_exact:
+            return False  # cast after the scene is drawn (_after_render)
+        shown = vv.shown
+        current = shown is not None and self._volume_current(layer, view, final=False)
+        if not current and self._depth is not None \
+                and tuple(self._depth[1].shape) == (view.size[1], view.size[0]):
+            scale, _ = self._preview_scale(layer, vv, view)
+            if layer.is_warm(view, scale):
+                t0 = time.perf_counter()
+                vf = layer.compute(view, self._depth[1], self._depth[2], scale=scale,
+                                   preview=True, blocking=False)
+                if vf is not None:
+                    vv.preview_scale = scale
+                    self._show_volume(layer, vf)
+                    vv.preview_seconds = time.perf_counter() - t0
+            else:
+                vv.preview_seconds = None
+        return True
+
+    def _show_volume(self, layer: VolumeLayer, vf: VolumeFrame) -> None:
+        """Put the frame's image in the layer's overlay, at the window size of its view."""
+        from vtkmodules.util.numpy_support import numpy_to_vtk
+
+        vv = self._vviews.get(id(layer))
+        if vv is None:
+            return
+        img = vf.image
+        w, h = vf.view.size
+        if img.shape[:2] != (h, w):
+            rows = np.minimum((np.arange(h) + 0.5) * img.shape[0] / h, img.shape[0] - 1)
+            cols = np.minimum((np.arange(w) + 0.5) * img.shape[1] / w, img.shape[1] - 1)
+            img = img[rows.astype(int)[:, None], cols.astype(int)[None, :]]
+        arr = numpy_to_vtk(np.ascontiguousarray(img).reshape(-1, 4), deep=True)
+        arr.SetNumberOfComponents(4)
+        vv.image.SetDimensions(w, h, 1)
+        vv.image.GetPointData().SetScalars(arr)
+        vv.image.Modified()
+        vv.shown = vf
+        vv.actor.SetVisibility(bool(layer.visible))
+
+    def _after_render(self, *_args) -> None:
+        """After the scene's pass (before the overlay's): read the window depth the volume
+        layers end their rays at; cast their exact frames now (synchronous mode) or ask for
+        them when the depth changed under an exact frame (a new mesh, an exact isosurface)."""
+        visible = [layer for layer in self.volume_layers if layer.visible]
+        if not visible:
+            self._depth = None
+            return
+        from splineviz.render.volume_rendering import window_depth
+
+        w, h = self.window_size()
+        depth = window_depth(self.plotter, w, h)
+        view = self.view_state()
+        self._depth = (view.key(), depth, depth_signature(depth))
+        due = [layer for layer in visible if not self._volume_current(layer, view, True)]
+        if not due:
+            return
+        if not self.progressive or self._force_exact:
+            for layer in due:
+                self._show_volume(layer, layer.compute(view, depth, self._depth[2]))
+        elif self.request_refine is not None and not self._interacting:
             self.request_refine()
 
     def _fit_scalar_bars(self) -> None:
@@ -437,7 +582,8 @@ class SplineScene:
             lv = self._views[id(layer)]
             if layer.visible and not (self._is_current(layer, lv, view) and lv.shown.final):
                 return True
-        return False
+        return any(layer.visible and not self._volume_current(layer, view, final=True)
+                   for layer in self.volume_layers)
 
     def refine(self, view: ViewState | None = None, cancelled=None, job=None, partial=None):
         """Exact frames of all visible layers that show a preview (thread safe).
@@ -513,6 +659,21 @@ class SplineScene:
                     partial(layer, rf)
             if rf is not None and rf.final:
                 out.append((layer, rf))
+        depth = self._depth
+        for layer in list(self.volume_layers):
+            if given_up() or depth is None or depth[0] != view.key():
+                break
+            vv = self._vviews.get(id(layer))
+            if vv is None or not layer.visible or self._volume_current(layer, view, True):
+                continue
+            if partial is not None and (vv.shown is None or vv.shown.state != layer.state
+                                        or vv.shown.view.key() != view.key()):
+                vf = layer.compute(view, depth[1], depth[2], scale=PREVIEW_LEVELS[4],
+                                   preview=True)
+                if given_up():
+                    break
+                partial(layer, vf)
+            out.append((layer, layer.compute(view, depth[1], depth[2])))
         return out
 
     def apply(self, results) -> bool:
@@ -520,6 +681,12 @@ class SplineScene:
         view = self.view_state()
         used = False
         for layer, rf in results:
+            if isinstance(layer, VolumeLayer):
+                if layer in self.volume_layers and rf.view.key() == view.key() \
+                        and rf.state == layer.state:
+                    self._show_volume(layer, rf)
+                    used = True
+                continue
             if layer in self.layers and rf.view.key() == view.key() and rf.state == layer.state:
                 self._show(layer, rf)
                 used = True
@@ -536,8 +703,14 @@ class SplineScene:
 
     def close(self) -> None:
         self.renderer.RemoveObserver(self._observer)
+        self.renderer.RemoveObserver(self._end_observer)
         for layer in list(self.layers):
             self.remove_layer(layer)
+        for layer in list(self.volume_layers):
+            self.remove_volume_layer(layer)
+        if self._overlay is not None:
+            self.plotter.render_window.RemoveRenderer(self._overlay)
+            self._overlay = None
         if self.range_link is not None:
             self.range_link.forget(self)
 
@@ -638,6 +811,8 @@ def offscreen_screenshot(scene: SplineScene, filename=None, size=None,
                 copy.add_mesh(rec.name, rec.dataset, kind=rec.kind, **rec.options)
         for layer in scene.layers:
             copy.add_layer(layer)
+        for layer in scene.volume_layers:
+            copy.add_volume_layer(layer)
         copy.set_clip_planes(scene.clip_planes)
         pl.renderer.GetActiveCamera().DeepCopy(scene.renderer.GetActiveCamera())
         pl.camera_set = True  # else pyvista resets the camera on the first render

@@ -20,6 +20,7 @@ import weakref
 import numpy as np
 
 from splineviz.core.frame import to_world
+from splineviz.core.volume import Volume
 from splineviz.model import (
     ClipPlaneNode,
     IsosurfaceNode,
@@ -33,6 +34,7 @@ from splineviz.model import (
 from splineviz.render.colour_ranges import ColourRangeLink
 from splineviz.render.isosurface import IsosurfaceLayer
 from splineviz.render.scene import SplineScene
+from splineviz.render.volume_layer import VolumeLayer
 
 #: colour of volume outlines and of the axes grid labels
 OUTLINE_COLOR = (0.6, 0.6, 0.65)
@@ -76,8 +78,15 @@ class SceneView:
     """
 
     def __init__(self, scene: Scene, plotter, progressive: bool = False, device=None,
-                 side: str | None = None, grid: bool = True):
+                 side: str | None = None, grid: bool = True,
+                 live_volume_rendering: bool | None = None):
         self.scene = scene
+        #: volume renderings as layers of the view (:class:`VolumeLayer`); off, they are
+        #: composited over the finished picture (render_scene)
+        self.live_volume_rendering = progressive if live_volume_rendering is None \
+            else bool(live_volume_rendering)
+        #: volume node id -> its volume rendering layer (while on)
+        self.volume_layers: dict[str, VolumeLayer] = {}
         self.plotter = plotter
         self.device = device
         self.side = side
@@ -182,6 +191,8 @@ class SceneView:
             layer = self.layers.get(iso.id)  # None while the view replays the scene
             if layer is not None:
                 layer.set_clip_planes(self._volume_planes(iso.volume_id))
+        for vid, vlayer in self.volume_layers.items():
+            vlayer.set_clip_planes(self._volume_planes(vid))
 
     # -- camera and view -----------------------------------------------------------------
 
@@ -352,17 +363,57 @@ class OutlineView(NodeView):
         self._visibility()
         sv._update_grid()
 
+        self.volume_rendering()
+
     def _visibility(self) -> None:
         sv, node = self.owner, self.node
         name = sv._props.get(node.id)
         if name in sv.spline_scene.props:
             sv.spline_scene.set_prop_visible(name, node.visible and node.show_outline)
 
+    def volume_rendering(self) -> None:
+        """Add, update or remove the volume's :class:`VolumeLayer` (live views only)."""
+        sv, node = self.owner, self.node
+        layer = sv.volume_layers.get(node.id)
+        on = (sv.live_volume_rendering and node.volume_rendering and node.data is not None
+              and isinstance(node.active, Volume))
+        if not on:
+            if layer is not None:
+                self._remove_layer()
+            return
+        if layer is None:
+            layer = VolumeLayer(node.active, node.name, node.transfer_function,
+                                node.rendering_model, node.rendering_shade, device=sv.device)
+            sv.volume_layers[node.id] = layer
+            sv.spline_scene.add_volume_layer(layer)
+        elif layer.volume is not node.active:
+            layer.set_volume(node.active)
+        layer.configure(node.transfer_function, node.rendering_model, node.rendering_shade)
+        layer.set_clip_planes(sv._volume_planes(node.id))
+        layer.visible = bool(node.visible and sv.scene.shows(node, sv.side))
+
     def changed(self, what: str) -> None:
         if what == "data":
             self.draw()
         elif what in ("visible", "show_outline"):
             self._visibility()
+        if what in ("visible", "smoothed", "sigma", "volume_rendering", "transfer_function",
+                    "rendering_model", "rendering_shade", "shown_in"):
+            self.volume_rendering()
+
+    def sides_changed(self) -> None:
+        self.volume_rendering()
+
+    def _remove_layer(self) -> None:
+        sv = self.owner
+        layer = sv.volume_layers.pop(self.node.id, None)
+        if layer is not None:
+            sv.spline_scene.remove_volume_layer(layer)
+            layer.close()
+
+    def remove(self) -> None:
+        self._remove_layer()
+        super().remove()
 
 
 class IsosurfaceView(NodeView):

@@ -8,6 +8,7 @@ from splineviz.gui.panels.isosurface import IsosurfacePanel
 from splineviz.gui.panels.log import LogPanel
 from splineviz.gui.panels.remesh import RemeshPanel
 from splineviz.gui.panels.smoothing import Smoother, SmoothingPanel
+from splineviz.gui.panels.volume_rendering import VolumeRenderingPanel
 
 __all__ = ["AnalysisPanel", "ClippingPanel", "DataPanel", "IsosurfacePanel", "LogPanel",
-           "PlaneWidgets", "RemeshPanel", "Smoother", "SmoothingPanel"]
+           "PlaneWidgets", "RemeshPanel", "Smoother", "SmoothingPanel", "VolumeRenderingPanel"]

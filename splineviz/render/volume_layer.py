@@ -1,0 +1,204 @@
+"""A volume's direct volume rendering as a layer of the live view (:class:`SplineScene`).
+
+A :class:`VolumeLayer` makes frames of one volume node's volume rendering for a
+:class:`~splineviz.render.isosurface.ViewState`, the way
+:func:`splineviz.render.volume_rendering.composite_volume_rendering` does for exact pictures
+(so that the window and an export agree): the rays end at the window depth of the scene
+drawn without the volume rendering (isosurface quads, meshes, outlines), nothing is
+composited behind them, and the accumulated colour and opacity are drawn over the picture
+(``C + (1 - A) scene``). The scene shows a frame as an RGBA image in an overlay renderer
+(window layer 1, so that the depth buffer read at the end of the main renderer's pass is
+the scene's alone).
+
+Previews (reduced resolution, the trilinear model) are cast in the GUI thread within the
+preview budget; exact frames (full resolution, the node's model) by the refine worker.
+Both read the window depth of the last render, so a frame is exact only for the depth it
+was cast against (:attr:`VolumeFrame.depth_sig`).
+"""
+
+from __future__ import annotations
+
+import threading
+import zlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from splineviz.render.isosurface import ViewState
+
+#: the model of previews (the cheapest sampling; bench dvr measures it)
+PREVIEW_MODEL = "trilinear"
+
+
+@dataclass
+class VolumeFrame:
+    """A volume rendering frame ready to show.
+
+    Attributes
+    ----------
+    image : (H, W, 4) uint8
+        Straight (not premultiplied) colour and opacity, row 0 at the *bottom* (VTK's order),
+        at the frame's own size (``scale`` times the view's).
+    view : ViewState
+    state : tuple
+        :attr:`VolumeLayer.state` when it was cast.
+    scale : float
+    final : bool
+        Full resolution with the node's model.
+    depth_sig : int
+        Signature of the window depth the rays ended at (:func:`depth_signature`).
+    path : str
+        ``"preview"`` or ``"exact"``.
+    """
+
+    image: np.ndarray
+    view: ViewState
+    state: tuple
+    scale: float
+    final: bool
+    depth_sig: int
+    path: str
+
+
+def depth_signature(depth: np.ndarray) -> int:
+    """A checksum of a (H, W) float32 window depth (equal depths, equal signatures)."""
+    return zlib.crc32(np.ascontiguousarray(depth, np.float32).data)
+
+
+def resample_nearest(depth: np.ndarray, w: int, h: int) -> np.ndarray:
+    """``depth`` (H0, W0) sampled at the centres of a (h, w) grid over the same window."""
+    h0, w0 = depth.shape
+    rows = np.minimum(((np.arange(h) + 0.5) * h0 / h).astype(int), h0 - 1)
+    cols = np.minimum(((np.arange(w) + 0.5) * w0 / w).astype(int), w0 - 1)
+    return depth[rows[:, None], cols[None, :]]
+
+
+def straight_image(rgba: np.ndarray) -> np.ndarray:
+    """(H, W, 4) premultiplied float colour and opacity -> straight uint8, rows flipped to
+    VTK's bottom-up order."""
+    a = rgba[..., 3:4]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rgb = np.where(a > 0.0, rgba[..., :3] / np.maximum(a, 1e-12), 0.0)
+    out = np.empty(rgba.shape[:2] + (4,), np.uint8)
+    out[..., :3] = np.rint(np.clip(rgb, 0.0, 1.0) * 255.0)
+    out[..., 3] = np.rint(np.clip(rgba[..., 3], 0.0, 1.0) * 255.0)
+    return out[::-1]
+
+
+class VolumeLayer:
+    """The volume rendering of one volume (see module docstring).
+
+    Parameters
+    ----------
+    volume : Volume
+    name : str
+    transfer_function : str
+        A preset name or a ParaView JSON file (:func:`~splineviz.core.transfer_function.resolve`).
+    model : str
+    shaded : bool
+    device : str or None
+    """
+
+    def __init__(self, volume, name: str = "volume", transfer_function: str = "ct-bone",
+                 model: str = "cubic-c1", shaded: bool = True, device=None):
+        self.volume = volume
+        self.name = name
+        self.transfer_function = transfer_function
+        self.model = model
+        self.shaded = bool(shaded)
+        self.device = device
+        self.visible = True
+        self.clip_planes: tuple = ()
+        self._lock = threading.Lock()
+        self._renderers: dict[str, object] = {}
+        self._tf = None
+        self._range = None
+        #: casts so far of each (model, size): the device compiles the kernel anew for a new
+        #: frame size, which the GUI thread must not wait for
+        self.warm_sizes: set = set()
+
+    @property
+    def state(self) -> tuple:
+        """What a frame depends on besides the view and the depth."""
+        return (id(self.volume), self.model, self.transfer_function, self.shaded,
+                self.clip_planes)
+
+    def set_volume(self, volume) -> None:
+        with self._lock:
+            self.volume = volume
+            self._renderers.clear()
+            self._tf = None
+            self._range = None
+
+    def configure(self, transfer_function: str, model: str, shaded: bool) -> None:
+        with self._lock:
+            if transfer_function != self.transfer_function:
+                self._tf = None
+            if bool(shaded) != self.shaded:
+                self._renderers.clear()
+            self.transfer_function = transfer_function
+            self.model = model
+            self.shaded = bool(shaded)
+
+    def set_clip_planes(self, planes) -> None:
+        self.clip_planes = tuple(tuple(map(tuple, p)) for p in planes)
+
+    def _renderer(self, model: str):
+        from splineviz.compute.dvr import VolumeRenderer
+        from splineviz.core.transfer_function import resolve
+
+        if self._tf is None:
+            if self._range is None:
+                data = self.volume.data
+                self._range = (float(np.min(data)), float(np.max(data)))
+            self._tf = resolve(self.transfer_function, self._range)
+            for vr in self._renderers.values():
+                vr.set_transfer_function(self._tf)
+        vr = self._renderers.get(model)
+        if vr is None:
+            vr = VolumeRenderer(self.volume, model, self._tf, device=self.device,
+                                shaded=self.shaded)
+            self._renderers[model] = vr
+        return vr
+
+    def is_warm(self, view: ViewState, scale: float) -> bool:
+        """Whether a preview of this size was cast before by the current preview renderer
+        (no kernel compilation, no per-volume set-up in the caller's thread)."""
+        return (PREVIEW_MODEL in self._renderers
+                and (PREVIEW_MODEL, _scaled(view.size, scale)) in self.warm_sizes)
+
+    def compute(self, view: ViewState, depth: np.ndarray, depth_sig: int, scale: float = 1.0,
+                preview: bool = False, blocking: bool = True) -> VolumeFrame | None:
+        """A frame of ``view`` whose rays end at ``depth`` ((H, W) window depth of the
+        scene at the view's size, row 0 at the top); None when ``blocking`` is False and
+        another thread is casting."""
+        from splineviz.compute.dvr import depth_stop
+
+        if not self._lock.acquire(blocking=blocking):
+            return None
+        try:
+            state = self.state
+            model = PREVIEW_MODEL if preview else self.model
+            w, h = _scaled(view.size, scale)
+            d = depth if (w, h) == tuple(view.size)[:2] else resample_nearest(depth, w, h)
+            camera = view.camera
+            stop = depth_stop(d, np.zeros((h, w, 3), np.uint8), camera,
+                              camera.clipping_range)
+            stop[1][..., 3] = 0.0  # the scene's colour is composited below, by blending
+            frame = self._renderer(model).render(camera, (w, h),
+                                                 clip_planes=list(view.clip_planes)
+                                                 + list(self.clip_planes), stop=stop)
+            self.warm_sizes.add((model, (w, h)))
+        finally:
+            self._lock.release()
+        final = not preview and (w, h) == tuple(view.size)[:2]
+        return VolumeFrame(straight_image(frame.rgba), view, state, float(scale), final,
+                           int(depth_sig), "preview" if preview else "exact")
+
+    def close(self) -> None:
+        with self._lock:
+            self._renderers.clear()
+
+
+def _scaled(size, scale: float) -> tuple[int, int]:
+    return max(int(round(size[0] * scale)), 1), max(int(round(size[1] * scale)), 1)
