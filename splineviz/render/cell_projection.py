@@ -222,14 +222,71 @@ class CellProjectionLayer:
         self._uniforms.SetUniformf("surfaceOpacity", float(opacity))
 
 
+class OffscreenCellProjection:
+    """An off-screen window drawing one cell-projection layer, for many frames.
+
+    Parameters
+    ----------
+    layer : CellProjectionLayer
+    size : (width, height) or "WxH"
+    """
+
+    def __init__(self, layer: CellProjectionLayer, size):
+        self.layer = layer
+        self.size = parse_size(size)
+        self._ren = vtk.vtkRenderer()
+        self._ren.SetBackground(*BACKGROUND)
+        self._ren.AddActor(layer.actor)
+        self._win = vtk.vtkRenderWindow()
+        self._win.SetOffScreenRendering(True)
+        self._win.SetSize(*self.size)
+        self._win.SetMultiSamples(0)
+        self._win.AddRenderer(self._ren)
+
+    def render(self, camera: Camera):
+        """One frame from ``camera`` (its clipping range, or the one fitted to the data box,
+        as the ray casters use).
+
+        Returns
+        -------
+        color : (H, W, 3) uint8, row 0 at the top
+        depth : (H, W) float32 OpenGL window depth, 1 where nothing was drawn
+        """
+        w, h = self.size
+        cam = self._ren.GetActiveCamera()
+        cam.SetPosition(*camera.position)
+        cam.SetFocalPoint(*camera.focal_point)
+        cam.SetViewUp(*camera.view_up)
+        cam.SetViewAngle(camera.view_angle)
+        cam.SetClippingRange(*camera.fit_clipping_range(self.layer.spline.bounds))
+        self._win.Render()
+        rgba = vtk.vtkUnsignedCharArray()
+        self._win.GetRGBACharPixelData(0, 0, w - 1, h - 1, 0, rgba, 0)
+        color = numpy_support.vtk_to_numpy(rgba).reshape(h, w, 4)[::-1, :, :3].copy()
+        zbuf = vtk.vtkFloatArray()
+        self._win.GetZbufferData(0, 0, w - 1, h - 1, zbuf)
+        depth = numpy_support.vtk_to_numpy(zbuf).reshape(h, w)[::-1].astype(np.float32)
+        return color, depth
+
+    def close(self) -> None:
+        """Release the window's OpenGL resources."""
+        self._win.Finalize()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
 def render_cell_projection(spline, camera: Camera, size, isovalue: float):
-    """Render one isosurface off screen by cell projection.
+    """Render one isosurface off screen by cell projection (:class:`OffscreenCellProjection`
+    for one frame).
 
     Parameters
     ----------
     spline : Type6Spline
-    camera : Camera (its clipping range, or the one fitted to the data box, is used, as the
-        ray casters do)
+    camera : Camera
     size : (width, height) or "WxH"
     isovalue : float
 
@@ -238,30 +295,5 @@ def render_cell_projection(spline, camera: Camera, size, isovalue: float):
     color : (H, W, 3) uint8, row 0 at the top
     depth : (H, W) float32 OpenGL window depth, 1 where nothing was drawn
     """
-    w, h = parse_size(size)
-    layer = CellProjectionLayer(spline, isovalue)
-    ren = vtk.vtkRenderer()
-    ren.SetBackground(*BACKGROUND)
-    ren.AddActor(layer.actor)
-    win = vtk.vtkRenderWindow()
-    win.SetOffScreenRendering(True)
-    win.SetSize(w, h)
-    win.SetMultiSamples(0)
-    win.AddRenderer(ren)
-    cam = ren.GetActiveCamera()
-    cam.SetPosition(*camera.position)
-    cam.SetFocalPoint(*camera.focal_point)
-    cam.SetViewUp(*camera.view_up)
-    cam.SetViewAngle(camera.view_angle)
-    cam.SetClippingRange(*camera.fit_clipping_range(spline.bounds))
-    try:
-        win.Render()
-        rgba = vtk.vtkUnsignedCharArray()
-        win.GetRGBACharPixelData(0, 0, w - 1, h - 1, 0, rgba, 0)
-        color = numpy_support.vtk_to_numpy(rgba).reshape(h, w, 4)[::-1, :, :3].copy()
-        zbuf = vtk.vtkFloatArray()
-        win.GetZbufferData(0, 0, w - 1, h - 1, zbuf)
-        depth = numpy_support.vtk_to_numpy(zbuf).reshape(h, w)[::-1].astype(np.float32)
-    finally:
-        win.Finalize()
-    return color, depth
+    with OffscreenCellProjection(CellProjectionLayer(spline, isovalue), size) as view:
+        return view.render(camera)
