@@ -18,6 +18,14 @@ uniform mat4 MCDCMatrix;
 uniform mat4 MCVCMatrix;
 uniform vec3 boxMin;
 uniform vec3 boxMax;
+// clip planes (n, -dot(origin, n)) keeping dot(n, x) + w >= 0, as the ray casters
+uniform int clipCount;
+uniform vec4 clipPlane0;
+uniform vec4 clipPlane1;
+uniform vec4 clipPlane2;
+uniform vec4 clipPlane3;
+uniform vec4 clipPlane4;
+uniform vec4 clipPlane5;
 uniform vec3 frontColor;
 uniform vec3 backColor;
 uniform float surfaceOpacity;
@@ -37,6 +45,17 @@ float bern(float b[DEGREE + 1], float s)
 #else
   return u * u * b[0] + 2.0 * u * s * b[1] + s * s * b[2];
 #endif
+}
+
+// cut the ray o + t d, t in [t0, t1], to the kept side of a plane; false when nothing is left
+bool clipBy(vec4 plane, vec3 o, vec3 d, inout float t0, inout float t1)
+{
+  float a0 = dot(plane.xyz, o) + plane.w;
+  float b = dot(plane.xyz, d);
+  if (b > 0.0) { t0 = max(t0, -a0 / b); }
+  else if (b < 0.0) { t1 = min(t1, -a0 / b); }
+  else if (a0 < 0.0) { return false; }
+  return true;
 }
 
 // first root in [lo, hi] of a polynomial monotone there, by bisection (-1 when none)
@@ -88,7 +107,14 @@ void main()
       t1 = min(t1, max(ta, tb));
     } else if (o[a] < boxMin[a] || o[a] > boxMax[a]) { discard; }
   }
-  if (!(t0 <= t1)) { discard; }
+  bool kept = true;
+  if (clipCount > 0) { kept = kept && clipBy(clipPlane0, o, d, t0, t1); }
+  if (clipCount > 1) { kept = kept && clipBy(clipPlane1, o, d, t0, t1); }
+  if (clipCount > 2) { kept = kept && clipBy(clipPlane2, o, d, t0, t1); }
+  if (clipCount > 3) { kept = kept && clipBy(clipPlane3, o, d, t0, t1); }
+  if (clipCount > 4) { kept = kept && clipBy(clipPlane4, o, d, t0, t1); }
+  if (clipCount > 5) { kept = kept && clipBy(clipPlane5, o, d, t0, t1); }
+  if (!kept || !(t0 <= t1)) { discard; }
   vec4 p0 = lo + t0 * dl;
   vec4 p1 = lo + t1 * dl;
   float b[DEGREE + 1];

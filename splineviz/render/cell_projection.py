@@ -39,10 +39,13 @@ from splineviz.core import bform
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.material import BACK_COLOR, DEFAULT_MATERIAL, FRONT_COLOR, MATERIALS, Material
 from splineviz.core.partitions import type6
-from splineviz.core.raycast_reference import BACKGROUND
+from splineviz.core.raycast_reference import BACKGROUND, ClipPlaneError, normalize_clip_planes
 from splineviz.core.relevant_tets import RelevantTets, relevant_tets
 
 _HERE = Path(__file__).parent
+
+#: clip planes the fragment program takes (uniforms clipPlane0..)
+MAX_CLIP_PLANES = 6
 
 
 def _vec4_count(degree: int) -> int:
@@ -196,6 +199,7 @@ class CellProjectionLayer:
             self._mapper.MapDataArrayToVertexAttribute(name, name, assoc, -1)
         self.set_material()
         self.set_appearance(FRONT_COLOR, 1.0, BACK_COLOR)
+        self.set_clip_planes(())
         self.tets: RelevantTets | None = None
         self.set_isovalue(isovalue)
 
@@ -206,6 +210,22 @@ class CellProjectionLayer:
         vol = self.spline.volume
         self._mapper.SetInputData(tets_polydata(self.tets, vol.origin, vol.spacing,
                                                 self.isovalue))
+
+    def set_clip_planes(self, planes) -> None:
+        """Cut the surface exactly at up to :data:`MAX_CLIP_PLANES` planes, each an (origin,
+        normal) pair keeping the side its normal points to (as the ray casters)."""
+        arr = normalize_clip_planes(planes)
+        if len(arr) > MAX_CLIP_PLANES:
+            raise ClipPlaneError(f"cell projection takes at most {MAX_CLIP_PLANES} clip planes, "
+                                 f"got {len(arr)}")
+        self._uniforms.SetUniformi("clipCount", len(arr))
+        for i in range(MAX_CLIP_PLANES):
+            if i < len(arr):
+                o, n = arr[i]
+                plane = (*(float(v) for v in n), -float(np.dot(o, n)))
+            else:
+                plane = (0.0, 0.0, 0.0, 0.0)
+            self._uniforms.SetUniform4f(f"clipPlane{i}", plane)
 
     def set_material(self, material: Material = MATERIALS[DEFAULT_MATERIAL]) -> None:
         """Phong constants of the headlight model."""
@@ -279,7 +299,7 @@ class OffscreenCellProjection:
         self.close()
 
 
-def render_cell_projection(spline, camera: Camera, size, isovalue: float):
+def render_cell_projection(spline, camera: Camera, size, isovalue: float, clip_planes=()):
     """Render one isosurface off screen by cell projection (:class:`OffscreenCellProjection`
     for one frame).
 
@@ -289,11 +309,14 @@ def render_cell_projection(spline, camera: Camera, size, isovalue: float):
     camera : Camera
     size : (width, height) or "WxH"
     isovalue : float
+    clip_planes : sequence of (origin, normal), see :meth:`CellProjectionLayer.set_clip_planes`
 
     Returns
     -------
     color : (H, W, 3) uint8, row 0 at the top
     depth : (H, W) float32 OpenGL window depth, 1 where nothing was drawn
     """
-    with OffscreenCellProjection(CellProjectionLayer(spline, isovalue), size) as view:
+    layer = CellProjectionLayer(spline, isovalue)
+    layer.set_clip_planes(clip_planes)
+    with OffscreenCellProjection(layer, size) as view:
         return view.render(camera)

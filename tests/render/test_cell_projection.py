@@ -67,17 +67,17 @@ def test_relevant_tets_need_a_type6_model():
         relevant_tets(build_spline(_sphere(6), "trilinear"), 2.0)
 
 
-def _agreement(vol, model, iso, camera):
+def _agreement(vol, model, iso, camera, planes=(), min_both=500):
     from splineviz.render.cell_projection import render_cell_projection
 
     spline = build_spline(vol, model)
-    color, depth = render_cell_projection(spline, camera, SIZE, iso)
+    color, depth = render_cell_projection(spline, camera, SIZE, iso, clip_planes=planes)
     rc = RayCaster(vol, model=model)
     rc.set_isovalue(iso)
-    ref = rc.render(camera, SIZE)
+    ref = rc.render(camera, SIZE, clip_planes=planes)
     hit = depth < 1.0
     both = hit & ref.hit
-    assert both.sum() > 500, both.sum()  # the view must show the surface
+    assert both.sum() > min_both, both.sum()  # the view must show the surface
     assert np.mean(hit == ref.hit) >= 0.995
     ddepth = np.abs(depth[both] - ref.depth[both])
     assert ddepth.max() <= 1e-5, np.percentile(ddepth, [50, 99, 100])
@@ -110,3 +110,31 @@ def test_camera_inside_the_data_box():
     c = b.mean(axis=1)
     cam = Camera(c + (0.5, -0.3, 0.2), c + (3.0, 4.0, 1.0), view_up=(0, 0, 1), view_angle=60)
     _agreement(vol, "cubic-c1", 4.3, cam)
+
+
+@needs_gl
+@pytest.mark.parametrize("model", MODELS)
+def test_clip_planes_cut_as_in_the_ray_caster(model):
+    # two planes through the sphere: the cut shows the inside (back faces) as the caster does
+    vol = _sphere()
+    c = np.asarray(vol.bounds).mean(axis=1)
+    planes = [(c + (1, 0, 0), (-1.0, 1.0, -0.3)), (c + (0, 0, -3.0), (0.0, 0.2, 1.0))]
+    _agreement(vol, model, 4.3, cameras(vol)[0], planes, min_both=300)
+
+
+@needs_gl
+def test_bench_renderers_reports_both_renderers(capsys):
+    from splineviz.bench.renderers import run_renderers_bench
+
+    rows = run_renderers_bench(sizes=(8,), size=(32, 32), repeats=1)
+    assert rows[0]["tets"] > 0 and rows[0]["cell_projection_s"] > 0 < rows[0]["raycast_s"]
+    assert "note:" in capsys.readouterr().out
+
+
+def test_too_many_clip_planes_is_one_error():
+    from splineviz.core.raycast_reference import ClipPlaneError
+    from splineviz.render.cell_projection import MAX_CLIP_PLANES, CellProjectionLayer
+
+    layer = CellProjectionLayer(build_spline(_sphere(6), "super-quadratic"), 2.0)
+    with pytest.raises(ClipPlaneError, match="at most"):
+        layer.set_clip_planes([((0, 0, 0), (1, 0, 0))] * (MAX_CLIP_PLANES + 1))
