@@ -257,6 +257,8 @@ class OffscreenCellProjection:
         self._ren = vtk.vtkRenderer()
         self._ren.SetBackground(*BACKGROUND)
         self._ren.AddActor(layer.actor)
+        #: the vtkRenderer, to add other props (they composite by depth with the surface)
+        self.renderer = self._ren
         self._win = vtk.vtkRenderWindow()
         self._win.SetOffScreenRendering(True)
         self._win.SetSize(*self.size)

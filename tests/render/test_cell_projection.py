@@ -138,3 +138,53 @@ def test_too_many_clip_planes_is_one_error():
     layer = CellProjectionLayer(build_spline(_sphere(6), "super-quadratic"), 2.0)
     with pytest.raises(ClipPlaneError, match="at most"):
         layer.set_clip_planes([((0, 0, 0), (1, 0, 0))] * (MAX_CLIP_PLANES + 1))
+
+
+@needs_gl
+def test_a_mesh_through_the_surface_composites_by_depth():
+    # an unlit green square through the sphere's centre: each pixel shows whichever of the
+    # square and the ray caster's hit is nearer
+    from splineviz.render.cell_projection import CellProjectionLayer, OffscreenCellProjection
+
+    vol = _sphere()
+    cam = cameras(vol)[0]
+    c = np.asarray(vol.bounds).mean(axis=1)
+    normal = np.array([0.3, 1.0, 0.2]) / np.linalg.norm([0.3, 1.0, 0.2])
+    u = np.cross(normal, (0, 0, 1.0))
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    half = 8.0
+    plane = vtk.vtkPlaneSource()
+    plane.SetOrigin(*(c - half * u - half * v))
+    plane.SetPoint1(*(c + half * u - half * v))
+    plane.SetPoint2(*(c - half * u + half * v))
+    mapper = vtk.vtkPolyDataMapper()
+    mapper.SetInputConnection(plane.GetOutputPort())
+    actor = vtk.vtkActor()
+    actor.SetMapper(mapper)
+    prop = actor.GetProperty()
+    prop.SetColor(0.0, 1.0, 0.0)
+    prop.SetAmbient(1.0)
+    prop.SetDiffuse(0.0)
+    prop.SetSpecular(0.0)
+    layer = CellProjectionLayer(build_spline(vol, "cubic-c1"), 4.3)
+    with OffscreenCellProjection(layer, SIZE) as view:
+        view.renderer.AddActor(actor)
+        color, _ = view.render(cam)
+    rc = RayCaster(vol, model="cubic-c1")
+    rc.set_isovalue(4.3)
+    ref = rc.render(cam, SIZE)
+    # where each pixel's ray meets the square, and that point's window depth
+    eye, dirs = cam.rays(SIZE)
+    t = ((c - eye) @ normal) / (dirs @ normal)
+    pts = eye + t[..., None] * dirs
+    on_square = (np.abs((pts - c) @ u) < half) & (np.abs((pts - c) @ v) < half) & (t > 0)
+    square_depth = cam.window_depth(pts, cam.fit_clipping_range(vol.bounds))
+    surface_first = ref.hit & (~on_square | (ref.depth < square_depth))
+    green = np.all(color == (0, 255, 0), axis=-1)
+    expect_green = on_square & ~surface_first
+    assert expect_green.sum() > 300 and surface_first.sum() > 300
+    assert np.mean(green == expect_green) >= 0.995
+    shown = surface_first & ~green
+    dcol = np.abs(color[shown].astype(int) - ref.color[shown][:, :3].astype(int)).max(axis=1)
+    assert np.mean(dcol <= 2) >= 0.995
