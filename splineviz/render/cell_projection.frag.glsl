@@ -77,8 +77,8 @@ void main()
 {
   float c[NCOEF];
 //CELLPROJ::CoefUnpack
-  // The ray through the pixel centre, as the ray casters: interpolated positions stray
-  // from it by ~1e-6 of their magnitude, which moved grazing hits by 1e-5 in depth. The
+  // The ray through the pixel centre from the camera, as the ray casters cast it (the
+  // interpolated position is only near that ray, to float rounding of the rasteriser). The
   // viewport is recovered from the interpolated NDC and rounded to whole pixels.
   vec2 ndcI = clipVS.xy / clipVS.w;
   vec2 size = round(2.0 / vec2(dFdx(ndcI.x), dFdy(ndcI.y)));
