@@ -4,7 +4,8 @@ flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 das
 ``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
 the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render of each step
 for ``time``; VTK's volume mappers and an analytic reference for ``dvr``; one still
-``render_scene`` picture and the renderer and encoder alone for ``movie``)."""
+``render_scene`` picture and the renderer and encoder alone for ``movie``; cell projection
+against the ray caster over surface sizes for ``renderers``)."""
 
 from __future__ import annotations
 
@@ -58,6 +59,13 @@ def _run(args) -> int:
             raise UsageError(f"bench movie: --sizes takes {','.join(s[0] for s in SIZES)}, "
                              f"got {args.sizes!r}")
         run_movie_bench(data, sizes=sizes, frames=args.frames, device=args.device)
+    elif args.which == "renderers":
+        from splineviz.bench.renderers import SIZES, run_renderers_bench
+
+        sizes = tuple(int(n) for n in args.sizes.split(",")) if args.sizes else SIZES
+        model = args.models.split(",")[0] if args.models else "cubic-c1"
+        run_renderers_bench(sizes=sizes, model=model, size=(w, h), repeats=args.repeats,
+                            device=args.device)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -76,7 +84,7 @@ def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
     p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time",
-                                     "dvr", "movie"],
+                                     "dvr", "movie", "renderers"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
@@ -86,7 +94,8 @@ def register(subparsers) -> None:
     p.add_argument("--sizes", default=None,
                    help="isovalue: volume sizes n (bonsai resampled to n^3), comma-separated "
                         "(256,512); "
-                        "movie: frame sizes among 720p,1080p,4K (default all)")
+                        "movie: frame sizes among 720p,1080p,4K (default all); "
+                        "renderers: sphere volume sizes n (16,32,64,128)")
     p.add_argument("--frames", type=int, default=4, help="movie: frames per size")
     p.add_argument("--models", default=None,
                    help="isovalue: comma-separated spline models (default: all four)")

@@ -1,0 +1,324 @@
+"""Hybrid cell projection / ray casting of type-6 spline isosurfaces in VTK's OpenGL pipeline
+(thesis §6.1).
+
+The relevant tetrahedra (:mod:`splineviz.core.relevant_tets`) are drawn as triangles, each tet
+with its own four points; the rasteriser finds the pixels each tet covers and a fragment
+program intersects that pixel's ray with the tet's B-form patch
+(``cell_projection.frag.glsl``): the ray is cut to the tet and the data box, the patch
+restricted to the segment is a univariate Bernstein polynomial whose coefficients are
+blossoms of the segment's ends, its first root is found, the hit is shaded (headlight Phong,
+as the ray casters) and ``gl_FragDepth`` is written, so the surface composites exactly with
+every other prop of the scene.
+
+Per-tet data travel as vertex attributes, not textures: float textures reached shaders
+quantised to 8 bits on Mesa/llvmpipe (ENVIRONMENT.md), vertex attributes keep float32. Each
+vertex carries its barycentric coordinates (``lam``, interpolated), the tet's barycentric
+gradients in world units (``gradx/y/z``: the columns of ``M_T`` scaled by the spacing) and the
+B-coefficients (``coef0..``, flat). Only the outward faces facing the eye are drawn (back-face
+culling): a ray enters a convex tet through exactly one front face.
+
+Deviation from the thesis: one draw of all relevant tets with their geometry per tet, not
+one instanced draw per generic orientation (Fig. 6.6); VTK's poly data mapper has no
+instancing hook. The fragment work is the thesis'.
+
+Conventions: world coordinates ``origin + index * spacing``; the depth is OpenGL window depth
+of VTK's projection, as :meth:`splineviz.core.camera.Camera.window_depth` for the same
+clipping range.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import vtk
+from vtk.util import numpy_support
+
+from splineviz.core import bform
+from splineviz.core.camera import Camera, parse_size
+from splineviz.core.material import BACK_COLOR, DEFAULT_MATERIAL, FRONT_COLOR, MATERIALS, Material
+from splineviz.core.partitions import type6
+from splineviz.core.raycast_reference import BACKGROUND, ClipPlaneError, normalize_clip_planes
+from splineviz.core.relevant_tets import RelevantTets, relevant_tets
+
+_HERE = Path(__file__).parent
+
+#: clip planes the fragment program takes (uniforms clipPlane0..)
+MAX_CLIP_PLANES = 6
+
+
+def _vec4_count(degree: int) -> int:
+    return -(-bform.n_coefficients(degree) // 4)
+
+
+def _blossom_glsl(degree: int) -> str:
+    """GLSL ``blossom(c, a_1, .., a_d)`` unrolled from the de Casteljau reduction tables, and
+    ``blossom1(c, x, u)`` = b(x, .., x, u)."""
+    args = [f"a{k}" for k in range(1, degree + 1)]
+    lines = [f"float blossom(float c[NCOEF], {', '.join('vec4 ' + a for a in args)})", "{"]
+    prev = [f"c[{i}]" for i in range(bform.n_coefficients(degree))]
+    for step, k in enumerate(range(degree, 0, -1), start=1):
+        table = bform._reduction_table(k)
+        cur = []
+        for i, row in enumerate(table):
+            name = f"s{step}_{i}"
+            lines.append(f"  float {name} = dot({args[step - 1]}, vec4("
+                         f"{', '.join(prev[int(j)] for j in row)}));")
+            cur.append(name)
+        prev = cur
+    lines += [f"  return {prev[0]};", "}", "",
+              "float blossom1(float c[NCOEF], vec4 x, vec4 u)", "{",
+              f"  return blossom(c, {', '.join(['x'] * (degree - 1) + ['u'])});", "}"]
+    return "\n".join(lines)
+
+
+@cache
+def shader_sources(degree: int) -> tuple[str, str]:
+    """(vertex, fragment) GLSL of the cell projection for B-forms of ``degree`` (2 or 3)."""
+    nv = _vec4_count(degree)
+    ncoef = bform.n_coefficients(degree)
+    vert = (_HERE / "cell_projection.vert.glsl").read_text()
+    frag = (_HERE / "cell_projection.frag.glsl").read_text()
+    vert = vert.replace("//CELLPROJ::CoefIn", "\n".join(f"in vec4 coef{i};" for i in range(nv)))
+    vert = vert.replace("//CELLPROJ::CoefOut",
+                        "\n".join(f"flat out vec4 coefVS{i};" for i in range(nv)))
+    vert = vert.replace("//CELLPROJ::CoefCopy",
+                        "\n".join(f"  coefVS{i} = coef{i};" for i in range(nv)))
+    frag = frag.replace("//VTK::System::Dec",
+                        f"//VTK::System::Dec\n#define DEGREE {degree}\n#define NCOEF {ncoef}")
+    frag = frag.replace("//CELLPROJ::CoefIn",
+                        "\n".join(f"flat in vec4 coefVS{i};" for i in range(nv)))
+    frag = frag.replace("//CELLPROJ::CoefUnpack", "\n".join(
+        f"  c[{i}] = coefVS{i // 4}[{i % 4}];" for i in range(ncoef)))
+    frag = frag.replace("//CELLPROJ::Blossom", _blossom_glsl(degree))
+    seg = []
+    for k in range(degree + 1):
+        seg.append(f"  b[{k}] = blossom(c, {', '.join(['p0'] * (degree - k) + ['p1'] * k)});")
+    frag = frag.replace("//CELLPROJ::Segment", "\n".join(seg))
+    return vert, frag
+
+
+@cache
+def _outward_faces() -> np.ndarray:
+    """(24, 4, 3) vertex indices of the four faces of each generic tet, counter-clockwise seen
+    from outside (OpenGL front faces)."""
+    out = np.empty((type6.N_TETS, 4, 3), np.int64)
+    for t, v in enumerate(type6.VERTICES):
+        for m in range(4):
+            face = [i for i in range(4) if i != m]
+            a, b, c = v[face]
+            if np.dot(np.cross(b - a, c - a), a - v[m]) < 0:
+                face = [face[0], face[2], face[1]]
+            out[t, m] = face
+    return out
+
+
+def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.vtkPolyData:
+    """The relevant tets as triangles with the per-vertex attributes of the shaders.
+
+    Parameters
+    ----------
+    tets : RelevantTets with N tets
+    origin, spacing : (3,) world origin and spacing of the volume
+    isovalue : float, subtracted from the coefficients in float64 before they are rounded
+        to float32 (the roots of ``p - iso`` then keep the coefficients' relative precision;
+        subtracting in the shader cost up to 7e-5 in depth on grazing rays)
+
+    Returns
+    -------
+    vtkPolyData with 4 N points (world coordinates), 4 N triangles and float32 point arrays
+    ``lam`` (4), ``gradx``, ``grady``, ``gradz`` (4 each) and ``coef0..`` (4 each: the
+    coefficients of ``p - isovalue``, zero-padded to whole vec4s).
+    """
+    n = len(tets)
+    spacing = np.asarray(spacing, dtype=np.float64)
+    pts = tets.vertices() * spacing + np.asarray(origin, dtype=np.float64)  # (N, 4, 3)
+    poly = vtk.vtkPolyData()
+    vpts = vtk.vtkPoints()
+    vpts.SetData(numpy_support.numpy_to_vtk(pts.reshape(-1, 3).astype(np.float32), deep=True))
+    poly.SetPoints(vpts)
+    tri = (_outward_faces()[tets.tet] + 4 * np.arange(n)[:, None, None]).reshape(-1, 3)
+    cells = vtk.vtkCellArray()
+    cells.SetData(numpy_support.numpy_to_vtk(np.arange(0, 3 * len(tri) + 1, 3), deep=True,
+                                             array_type=vtk.VTK_ID_TYPE),
+                  numpy_support.numpy_to_vtk(tri.ravel(), deep=True,
+                                             array_type=vtk.VTK_ID_TYPE))
+    poly.SetPolys(cells)
+
+    def add(name, per_vertex):
+        arr = numpy_support.numpy_to_vtk(
+            np.ascontiguousarray(per_vertex.reshape(4 * n, -1), dtype=np.float32), deep=True)
+        arr.SetName(name)
+        poly.GetPointData().AddArray(arr)
+
+    add("lam", np.broadcast_to(np.eye(4), (n, 4, 4)))
+    # d lam_m / d x_world = M[m, a] / spacing[a], the same at the tet's four vertices
+    grads = type6.barycentric_gradients()[tets.tet] / spacing  # (N, 4 lam, 3 axes)
+    for a, name in enumerate(("gradx", "grady", "gradz")):
+        add(name, np.broadcast_to(grads[:, None, :, a], (n, 4, 4)))
+    nv = _vec4_count(tets.degree)
+    coef = np.zeros((n, 4 * nv))
+    coef[:, :tets.coeffs.shape[1]] = tets.coeffs - float(isovalue)
+    for i in range(nv):
+        add(f"coef{i}", np.broadcast_to(coef[:, None, 4 * i:4 * i + 4], (n, 4, 4)))
+    return poly
+
+
+class CellProjectionLayer:
+    """A VTK actor that draws one isosurface of a type-6 spline by cell projection.
+
+    Parameters
+    ----------
+    spline : Type6Spline (``"super-quadratic"`` or ``"cubic-c1"``)
+    isovalue : float
+    """
+
+    def __init__(self, spline, isovalue: float):
+        self.spline = spline
+        self.actor = vtk.vtkActor()
+        self._mapper = vtk.vtkOpenGLPolyDataMapper()
+        # positions reach the shaders as world coordinates: the fragment program projects
+        # the hit with MCDCMatrix, which a VBO shift and scale would not match
+        self._mapper.SetVBOShiftScaleMethod(vtk.vtkOpenGLPolyDataMapper.DISABLE_SHIFT_SCALE)
+        self._mapper.ScalarVisibilityOff()
+        self.actor.SetMapper(self._mapper)
+        self.actor.GetProperty().BackfaceCullingOn()
+        vert, frag = shader_sources(spline.degree)
+        sp = self.actor.GetShaderProperty()
+        sp.SetVertexShaderCode(vert)
+        sp.SetFragmentShaderCode(frag)
+        self._uniforms = sp.GetFragmentCustomUniforms()
+        lo, hi = np.asarray(spline.bounds, dtype=np.float64).T
+        self._uniforms.SetUniform3f("boxMin", tuple(float(v) for v in lo))
+        self._uniforms.SetUniform3f("boxMax", tuple(float(v) for v in hi))
+        assoc = vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS
+        names = ["lam", "gradx", "grady", "gradz"]
+        names += [f"coef{i}" for i in range(_vec4_count(spline.degree))]
+        for name in names:
+            self._mapper.MapDataArrayToVertexAttribute(name, name, assoc, -1)
+        self.set_material()
+        self.set_appearance(FRONT_COLOR, 1.0, BACK_COLOR)
+        self.set_clip_planes(())
+        self.tets: RelevantTets | None = None
+        self.set_isovalue(isovalue)
+
+    def set_isovalue(self, isovalue: float) -> None:
+        """Classify the tets for ``isovalue`` and upload them."""
+        self.isovalue = float(isovalue)
+        self.tets = relevant_tets(self.spline, self.isovalue)
+        vol = self.spline.volume
+        self._mapper.SetInputData(tets_polydata(self.tets, vol.origin, vol.spacing,
+                                                self.isovalue))
+
+    def set_clip_planes(self, planes) -> None:
+        """Cut the surface exactly at up to :data:`MAX_CLIP_PLANES` planes, each an (origin,
+        normal) pair keeping the side its normal points to (as the ray casters)."""
+        arr = normalize_clip_planes(planes)
+        if len(arr) > MAX_CLIP_PLANES:
+            raise ClipPlaneError(f"cell projection takes at most {MAX_CLIP_PLANES} clip planes, "
+                                 f"got {len(arr)}")
+        self._uniforms.SetUniformi("clipCount", len(arr))
+        for i in range(MAX_CLIP_PLANES):
+            if i < len(arr):
+                o, n = arr[i]
+                plane = (*(float(v) for v in n), -float(np.dot(o, n)))
+            else:
+                plane = (0.0, 0.0, 0.0, 0.0)
+            self._uniforms.SetUniform4f(f"clipPlane{i}", plane)
+
+    def set_material(self, material: Material = MATERIALS[DEFAULT_MATERIAL]) -> None:
+        """Phong constants of the headlight model."""
+        u = self._uniforms
+        u.SetUniformf("ambientK", float(material.ambient))
+        u.SetUniformf("diffuseK", float(material.diffuse))
+        u.SetUniformf("specularK", float(material.specular))
+        u.SetUniformf("shininess", float(max(material.shininess, 1.0)))
+
+    def set_appearance(self, color, opacity: float, back_color=BACK_COLOR) -> None:
+        """Front and back colours (RGB in [0, 1]) and opacity of the surface."""
+        self._uniforms.SetUniform3f("frontColor", tuple(float(c) for c in color))
+        self._uniforms.SetUniform3f("backColor", tuple(float(c) for c in back_color))
+        self._uniforms.SetUniformf("surfaceOpacity", float(opacity))
+
+
+class OffscreenCellProjection:
+    """An off-screen window drawing one cell-projection layer, for many frames.
+
+    Parameters
+    ----------
+    layer : CellProjectionLayer
+    size : (width, height) or "WxH"
+    """
+
+    def __init__(self, layer: CellProjectionLayer, size):
+        self.layer = layer
+        self.size = parse_size(size)
+        self._ren = vtk.vtkRenderer()
+        self._ren.SetBackground(*BACKGROUND)
+        self._ren.AddActor(layer.actor)
+        #: the vtkRenderer, to add other props (they composite by depth with the surface)
+        self.renderer = self._ren
+        self._win = vtk.vtkRenderWindow()
+        self._win.SetOffScreenRendering(True)
+        self._win.SetSize(*self.size)
+        self._win.SetMultiSamples(0)
+        self._win.AddRenderer(self._ren)
+
+    def render(self, camera: Camera):
+        """One frame from ``camera`` (its clipping range, or the one fitted to the data box,
+        as the ray casters use).
+
+        Returns
+        -------
+        color : (H, W, 3) uint8, row 0 at the top
+        depth : (H, W) float32 OpenGL window depth, 1 where nothing was drawn
+        """
+        w, h = self.size
+        cam = self._ren.GetActiveCamera()
+        cam.SetPosition(*camera.position)
+        cam.SetFocalPoint(*camera.focal_point)
+        cam.SetViewUp(*camera.view_up)
+        cam.SetViewAngle(camera.view_angle)
+        cam.SetClippingRange(*camera.fit_clipping_range(self.layer.spline.bounds))
+        self._win.Render()
+        rgba = vtk.vtkUnsignedCharArray()
+        self._win.GetRGBACharPixelData(0, 0, w - 1, h - 1, 0, rgba, 0)
+        color = numpy_support.vtk_to_numpy(rgba).reshape(h, w, 4)[::-1, :, :3].copy()
+        zbuf = vtk.vtkFloatArray()
+        self._win.GetZbufferData(0, 0, w - 1, h - 1, zbuf)
+        depth = numpy_support.vtk_to_numpy(zbuf).reshape(h, w)[::-1].astype(np.float32)
+        return color, depth
+
+    def close(self) -> None:
+        """Release the window's OpenGL resources."""
+        self._win.Finalize()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def render_cell_projection(spline, camera: Camera, size, isovalue: float, clip_planes=()):
+    """Render one isosurface off screen by cell projection (:class:`OffscreenCellProjection`
+    for one frame).
+
+    Parameters
+    ----------
+    spline : Type6Spline
+    camera : Camera
+    size : (width, height) or "WxH"
+    isovalue : float
+    clip_planes : sequence of (origin, normal), see :meth:`CellProjectionLayer.set_clip_planes`
+
+    Returns
+    -------
+    color : (H, W, 3) uint8, row 0 at the top
+    depth : (H, W) float32 OpenGL window depth, 1 where nothing was drawn
+    """
+    layer = CellProjectionLayer(spline, isovalue)
+    layer.set_clip_planes(clip_planes)
+    with OffscreenCellProjection(layer, size) as view:
+        return view.render(camera)
