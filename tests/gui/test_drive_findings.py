@@ -55,3 +55,40 @@ def test_isosurface_panel_shows_the_loaded_sessions_isosurface(window, tmp_path)
     assert panel.spin.value() == pytest.approx(expected, rel=1e-4)
     lo, hi = w.scene.volume_of(loaded).active.finite_range
     assert panel.histogram.range() == pytest.approx((lo, hi))
+
+
+def _shown_labels(scene_view) -> list[list[str]]:
+    grid = scene_view._grid
+    out = []
+    for i in range(3):
+        arr = grid.GetAxisLabels(i)
+        out.append([arr.GetValue(j) for j in range(arr.GetNumberOfValues())
+                    if arr.GetValue(j)])
+    return out
+
+
+def test_tick_labels_thin_out_in_the_narrow_views_of_split_and_four_up(window):
+    from splineviz.core.ticks import LABEL_CHAR_PX
+    from splineviz.render.scene_view import grid_axis_px
+
+    w = window
+    w.resize(1280, 800)
+    w.scene.add_volume(Volume(np.random.default_rng(1).random((11, 11, 11)),
+                              spacing=(10.0,) * 3), name="box", isovalue=0.5)
+    assert pump(60, lambda: not w.jobs.jobs)
+    w.view.plotter.render()
+    wide = _shown_labels(w.view.scene_view)
+    w.scene.view.split = True
+    w.view_layout.actions[("four-up", None)].trigger()
+    assert pump(60, lambda: w.view2 is not None and not w.linked_views.opening
+                and w.view_layout.ready)
+    pump(0.5)
+    for view in w.linked_views.views:
+        view.plotter.render()
+        sv = view.scene_view
+        size = sv.plotter.renderer.GetSize()
+        narrow = _shown_labels(sv)
+        assert sum(map(len, narrow)) < sum(map(len, wide)), (size, narrow, wide)
+        for labels in narrow:
+            width = (max(map(len, labels)) + 2) * LABEL_CHAR_PX
+            assert len(labels) <= max(2, grid_axis_px(*size) // width), (size, labels)
