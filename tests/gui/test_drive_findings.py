@@ -92,3 +92,30 @@ def test_tick_labels_thin_out_in_the_narrow_views_of_split_and_four_up(window):
         for labels in narrow:
             width = (max(map(len, labels)) + 2) * LABEL_CHAR_PX
             assert len(labels) <= max(2, grid_axis_px(*size) // width), (size, labels)
+
+
+def test_slice_plane_outlines_show_in_both_halves_of_a_split_view(window):
+    w = window
+    lay = w.view_layout
+    w.scene.add_volume(Volume(np.random.default_rng(2).random((12, 12, 12))), name="box",
+                       isovalue=0.5)
+    assert pump(60, lambda: not w.jobs.jobs)
+    lay.actions[("four-up", None)].trigger()
+    w.scene.view.split = True
+    assert pump(60, lambda: w.view2 is not None and not w.linked_views.opening
+                and lay.ready and bool(lay.slices.marker.outlines))
+    marker = lay.slices.marker
+    for view in w.linked_views.views:
+        renderer = view.plotter.renderer
+        assert renderer in marker.renderers
+        actors = renderer.GetActors()
+        lines = [actors.GetItemAsObject(i) for i in range(actors.GetNumberOfItems())]
+        outline = [a for a in lines if a.GetVisibility() and a.GetMapper() is not None
+                   and a.GetMapper().GetInput() is marker._lines]
+        assert outline, "the slice planes are drawn in this half"
+        assert outline[0].GetMapper().GetInput().GetNumberOfPoints() == 15
+    # joined again: the right half's renderer is let go
+    right = w.view2.plotter.renderer
+    w.scene.view.split = False
+    assert pump(30, lambda: w.view2 is None)
+    assert right not in marker.renderers
