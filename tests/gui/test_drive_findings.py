@@ -119,3 +119,32 @@ def test_slice_plane_outlines_show_in_both_halves_of_a_split_view(window):
     w.scene.view.split = False
     assert pump(30, lambda: w.view2 is None)
     assert right not in marker.renderers
+
+
+def test_a_file_named_on_the_command_line_is_in_open_recent(qapp, tmp_path, monkeypatch):
+    from PySide6.QtCore import QSettings
+    from PySide6.QtWidgets import QApplication
+
+    from splineviz.cli import main
+    from splineviz.gui.main_window import MainWindow
+
+    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope,
+                      str(tmp_path / "settings"))
+    data = tmp_path / "cube.npy"
+    x = np.linspace(-1, 1, 9)
+    np.save(data, np.add.outer(np.add.outer(x**2, x**2), x**2))
+    windows = []
+    monkeypatch.setattr(MainWindow, "offer_recovery", lambda self: windows.append(self))
+
+    def leave(_app):
+        w = windows[-1]
+        w.ask_before_closing = False
+        pump(0.2)
+        assert w.recent.menu.isEnabled()
+        assert w.recent.files()[0] == str(data.absolute())
+        w.close()
+        return 0
+
+    monkeypatch.setattr(QApplication, "exec", leave)
+    assert main([str(data)]) == 0
+    assert windows
