@@ -148,3 +148,29 @@ def test_a_file_named_on_the_command_line_is_in_open_recent(qapp, tmp_path, monk
     monkeypatch.setattr(QApplication, "exec", leave)
     assert main([str(data)]) == 0
     assert windows
+
+
+def test_a_long_model_label_is_elided_in_the_box_and_whole_in_its_list(window):
+    from PySide6.QtGui import QFontMetrics
+
+    from splineviz.core.splines import MODELS
+    from splineviz.gui.panels.isosurface import model_label
+
+    w = window
+    w.resize(1280, 800)
+    w.open_default()
+    assert pump(120, lambda: bool(w.scene.isosurfaces) and not w.jobs.jobs)
+    panel = w.iso_panel
+    box = panel.model
+    longest = max(MODELS, key=lambda n: len(model_label(n)))
+    box.setItemText(box.findData(longest), model_label(longest) + " with a long name")
+    box.fit_popup()
+    box.setCurrentIndex(box.findData(longest))
+    pump(0.2)
+    whole = box.currentText()
+    shown = box.displayed_text()
+    metrics = QFontMetrics(box.font())
+    assert metrics.horizontalAdvance(whole) > box.width() - 30, (box.width(), w.width())
+    assert shown.endswith("…") and whole.startswith(shown[:-1])
+    assert box.itemData(box.currentIndex(), 0x03) == whole  # tooltip: the whole label
+    assert box.view().minimumWidth() >= metrics.horizontalAdvance(whole)

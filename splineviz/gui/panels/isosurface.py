@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QPaintEvent
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -19,6 +20,9 @@ from PySide6.QtWidgets import (
     QLabel,
     QPushButton,
     QSpinBox,
+    QStyle,
+    QStyleOptionComboBox,
+    QStylePainter,
     QWidget,
 )
 from superqt import QLabeledDoubleSlider
@@ -37,6 +41,41 @@ def model_label(name: str) -> str:
     degree = f", degree {spec.degree}" if spec.degree else ""
     path = "" if spec.family else " — NumPy reference, slow"
     return f"{spec.display_label}{degree}{path}"
+
+
+class ElidedComboBox(QComboBox):
+    """A combo box that shows a label too long for it cut with an ellipsis ("...") rather
+    than clipped mid-letter; its list opens as wide as the longest label, and each item's
+    tooltip is its whole label."""
+
+    def displayed_text(self) -> str:
+        """The current label as drawn: elided to the width of the box's text field."""
+        opt = QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        field = self.style().subControlRect(QStyle.ComplexControl.CC_ComboBox, opt,
+                                            QStyle.SubControl.SC_ComboBoxEditField, self)
+        return self.fontMetrics().elidedText(self.currentText(), Qt.TextElideMode.ElideRight,
+                                             max(field.width() - 4, 0))
+
+    def paintEvent(self, _event: QPaintEvent) -> None:  # noqa: N802 (Qt naming)
+        painter = QStylePainter(self)
+        opt = QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        painter.drawComplexControl(QStyle.ComplexControl.CC_ComboBox, opt)
+        opt.currentText = self.displayed_text()
+        painter.drawControl(QStyle.ControlElement.CE_ComboBoxLabel, opt)
+
+    def fit_popup(self) -> None:
+        """The list as wide as its longest label (after the items changed)."""
+        view = self.view()
+        widest = 0
+        for i in range(self.count()):
+            self.setItemData(i, self.itemText(i), Qt.ItemDataRole.ToolTipRole)
+            widest = max(widest, view.fontMetrics().horizontalAdvance(self.itemText(i)))
+        # the item's margins and a scroll bar's width beside the text
+        extra = 2 * view.frameWidth() + self.style().pixelMetric(
+            QStyle.PixelMetric.PM_ScrollBarExtent) + 16
+        view.setMinimumWidth(widest + extra)
 
 
 class IsosurfacePanel(QWidget):
@@ -61,7 +100,7 @@ class IsosurfacePanel(QWidget):
         self.spin.setDecimals(5)
         self.spin.setKeyboardTracking(False)
         self.spin.setToolTip("Isovalue: type a value and press Enter")
-        self.model = QComboBox()
+        self.model = ElidedComboBox()
         # long model labels must not widen the dock: the box elides, the list shows them
         self.model.setSizeAdjustPolicy(
             QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
@@ -130,6 +169,7 @@ class IsosurfacePanel(QWidget):
         self.model.clear()
         for name in MODELS:
             self.model.addItem(model_label(name), name)
+        self.model.fit_popup()
         self.model.blockSignals(False)
 
     # -- which node ----------------------------------------------------------------------
