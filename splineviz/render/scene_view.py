@@ -297,8 +297,14 @@ def label_grid(grid, bounds, unit: str = "", axis_px: float = 400.0) -> None:
     axes = [axis_ticks(lo, hi, name, unit) for (lo, hi), name in zip(bounds, "XYZ", strict=True)]
     grid.x_title, grid.y_title, grid.z_title = (t.title for t in axes)
     grid.update_bounds([v for t in axes for v in (t.lo, t.hi)])
+    # vtkCubeAxesActor makes its label texts anew only when an axis range changed: a range
+    # one part in 1e9 off every other time (invisible: the labels are given) redraws
+    # labels thinned for a new view size over the same data
+    nudge = 1e-9 if getattr(grid, "_relabel_nudge", 0.0) == 0.0 else 0.0
+    grid._relabel_nudge = nudge
     for i, t in enumerate(axes):
-        getattr(grid, f"Set{'XYZ'[i]}AxisRange")(t.shown_range)
+        lo, hi = t.shown_range
+        getattr(grid, f"Set{'XYZ'[i]}AxisRange")((lo, hi + (hi - lo) * nudge))
         labels = vtk.vtkStringArray()
         stride = label_stride(t.labels, axis_px)
         k0 = round(t.lo / t.step)

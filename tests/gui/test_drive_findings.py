@@ -174,3 +174,25 @@ def test_a_long_model_label_is_elided_in_the_box_and_whole_in_its_list(window):
     assert shown.endswith("…") and whole.startswith(shown[:-1])
     assert box.itemData(box.currentIndex(), 0x03) == whole  # tooltip: the whole label
     assert box.view().minimumWidth() >= metrics.horizontalAdvance(whole)
+
+
+def test_labels_thinned_for_a_smaller_view_are_drawn_anew():
+    """vtkCubeAxesActor keeps its label texts while the axis ranges stay: the labels of a
+    view that narrowed over the same data must still be drawn thinned."""
+    import pyvista as pv
+
+    from splineviz.render.scene_view import label_grid
+
+    pl = pv.Plotter(off_screen=True, window_size=(320, 320))
+    pl.add_mesh(pv.Cube(center=(50, 50, 50), x_length=100, y_length=100, z_length=100))
+    grid = pl.show_bounds(bounds=(0, 1, 0, 1, 0, 1), location="outer", ticks="outside",
+                          font_size=10, minor_ticks=False, use_3d_text=False, render=False)
+    bounds = ((0.0, 100.0),) * 3
+    pictures = []
+    for axis_px in (2000.0, 60.0, 2000.0):
+        label_grid(grid, bounds, axis_px=axis_px)
+        pl.render()
+        pictures.append(pl.screenshot(return_img=True).astype(int))
+    pl.close()
+    assert np.abs(pictures[0] - pictures[1]).sum() > 0, "the thinned labels are drawn"
+    assert np.abs(pictures[0] - pictures[2]).sum() == 0, "and the whole labels again"
