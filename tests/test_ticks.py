@@ -3,7 +3,7 @@ no "-0", no float noise, one exponent per axis shown in its title."""
 
 import pytest
 
-from splineviz.core.ticks import axis_ticks, vtk_step
+from splineviz.core.ticks import LABEL_CHAR_PX, MAX_LABELS, axis_ticks, label_stride, vtk_step
 
 
 def test_float_noise_at_an_origin_is_zero():
@@ -40,3 +40,16 @@ def test_labels_are_whole_steps_that_cover_the_range(lo, hi):
     assert shown == pytest.approx([(t.lo + k * t.step) * scale for k in range(n + 1)],
                                   abs=1e-9 * scale * t.step)
     assert all(float(x) != 0 or x == "0" for x in t.labels)  # no "-0", no "0.0"
+
+
+def test_a_narrow_axis_shows_fewer_labels_that_fit_and_keep_zero():
+    labels = axis_ticks(0.0, 100.0, "X").labels  # 0, 20, ..., 100 (or finer)
+    wide = label_stride(labels, 2000.0)
+    assert len(labels[::wide]) <= MAX_LABELS
+    for axis_px in (60.0, 90.0, 140.0, 200.0):
+        stride = label_stride(labels, axis_px)
+        shown = [t for k, t in enumerate(labels) if k % stride == 0]
+        assert shown[0] == "0" and len(shown) >= 1
+        width = (max(map(len, labels)) + 2) * LABEL_CHAR_PX
+        assert len(shown) <= max(2, axis_px // width), (axis_px, shown)
+    assert label_stride(labels, 60.0) > label_stride(labels, 400.0)

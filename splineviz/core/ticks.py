@@ -111,6 +111,33 @@ def axis_title(name: str, exponent: int, unit: str = "") -> str:
     return name if exponent == 0 else f"{name} (x 1e{exponent})"
 
 
+#: the most labels one axis shows, however wide the view
+MAX_LABELS = 6
+
+#: width of one character of the grid's labels (VTK's 10-point font) in pixels
+LABEL_CHAR_PX = 7.0
+
+
+def label_stride(labels: tuple[str, ...] | list[str], axis_px: float,
+                 char_px: float = LABEL_CHAR_PX) -> int:
+    """Every how many ticks a label fits along an axis ``axis_px`` pixels long on screen.
+
+    A label takes its characters plus two of space; the stride is 1, 2 or 5 times a power
+    of ten (labels at multiples of it keep 0 labelled and stay round) and leaves at most
+    :data:`MAX_LABELS`, and at least the two ends' worth, on the axis.
+    """
+    n = len(labels)
+    width = (max((len(t) for t in labels), default=1) + 2) * char_px
+    fits = max(2, min(MAX_LABELS, int(max(axis_px, 0.0) // width)))
+    stride = 1
+    for decade in (1, 10, 100, 1000):
+        for m in (1, 2, 5):
+            stride = m * decade
+            if math.ceil(n / stride) <= fits:
+                return stride
+    return stride
+
+
 def axis_ticks(lo: float, hi: float, name: str = "", unit: str = "") -> AxisTicks:
     """Labels of an axis over the data range ``[lo, hi]`` (see the module docstring).
 

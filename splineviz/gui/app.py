@@ -106,6 +106,11 @@ def run_gui(args) -> int:
         window.open_path(args.file)
     elif window.scene.volumes and not restoring:
         window.scene.select(window.scene.volumes[0])
+    if args.file and not session and not restoring:
+        # read before the window, it goes to File > Open Recent as if opened from the menu
+        from splineviz.gui import opening
+
+        opening.opened(window, args.file)
     code = app.exec()
     window_state.remember(window)
     window.join_workers()

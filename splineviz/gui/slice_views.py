@@ -253,6 +253,8 @@ class SliceViews(QObject):
         super().__init__(parent)
         self.scene = scene
         self.view3d = view3d
+        #: the 3-D views the slice planes are drawn in (the first, and a split's second)
+        self._views3d = [view3d] if view3d is not None else []
         self.state = SliceViewNode(id="slices")
         self.views: dict[str, SliceView] = {}
         self.worker = SliceWorker(self)
@@ -477,7 +479,25 @@ class SliceViews(QObject):
         self.marker.frame = frame
         self.marker.update(bounds if bounds is not None else ((0, 0),) * 3,
                            self.state.crosshair, shown)
-        self.view3d.request_render()
+        self._render_3d()
+
+    def add_view3d(self, view) -> None:
+        """Show the slice planes and the ruler in another 3-D view too (the right half of
+        a split view, :class:`splineviz.gui.split.LinkedViews`)."""
+        if self.marker is not None and view not in self._views3d:
+            self._views3d.append(view)
+            self.marker.add_renderer(view.plotter.renderer)
+            view.request_render()
+
+    def remove_view3d(self, view) -> None:
+        """Stop drawing in a 3-D view that closes."""
+        if view in self._views3d and view is not self.view3d:
+            self._views3d.remove(view)
+            self.marker.remove_renderer(view.plotter.renderer)
+
+    def _render_3d(self) -> None:
+        for view in self._views3d:
+            view.request_render()
 
     # -- the scene's view: what sessions keep ---------------------------------------------
 
@@ -567,7 +587,7 @@ class SliceViews(QObject):
         self._show_ruler()
         if self.marker is not None:
             self.marker.set_ruler(a, b, self.unit)
-            self.view3d.request_render()
+            self._render_3d()
         length = float(np.linalg.norm(b - a))
         unit = f" {self.unit}" if self.unit else ""
         self.readout.emit(f"ruler {format_quantity(length, self.unit, digits=5)} from "

@@ -253,6 +253,7 @@ class LinkedViews:
         view, self._opening = self._opening, None
         view.add_axes()
         self.second = view
+        self.window.view_layout.slices.add_view3d(view)
         view.request_render()
         view.hold_refine(False)
         # a drag that began in the first view while this one opened: follow it
@@ -278,6 +279,7 @@ class LinkedViews:
             self.window.view.request_render()
             return
         planes, self._second_planes = self._second_planes, None
+        self.window.view_layout.slices.remove_view3d(view)
         # in two turns of the event loop: it stops following the scene and is hidden now (the
         # first view takes the width and is repainted), its widget and OpenGL context are
         # closed in the next: in one piece the two held the GUI thread 120-260 ms

@@ -99,6 +99,7 @@ class SceneView:
         self._props: dict[str, str] = {}  # node id -> prop name in the SplineScene
         self._handlers: dict[str, object] = {}
         self._grid = None
+        self._grid_size: tuple[int, int] = (0, 0)
         self._grid_enabled = bool(grid)
         self._camera_lock = False
         scene.inserted.connect(self._inserted)
@@ -267,11 +268,21 @@ class SceneView:
                 bounds=(0, 1, 0, 1, 0, 1), color=OUTLINE_COLOR, grid=False, location="outer",
                 ticks="outside", font_size=10, minor_ticks=False, fmt="%.3g",
                 use_3d_text=False, render=False)
+            # a view resized (split, four-up) relabels its axes for its new width
+            self.plotter.renderer.AddObserver("StartEvent", self._grid_resized)
         bounds = self.scene.bounds()
         show = self.scene.view.show_scale and bounds is not None
         if show:
-            label_grid(self._grid, bounds, self.scene.length_unit())
+            self._grid_size = tuple(self.plotter.renderer.GetSize())
+            label_grid(self._grid, bounds, self.scene.length_unit(),
+                       grid_axis_px(*self._grid_size))
         self._grid.SetVisibility(int(show))
+
+    def _grid_resized(self, *_args) -> None:
+        """Before a render: the labels again when the view's size in pixels changed."""
+        size = tuple(self.plotter.renderer.GetSize())
+        if size != self._grid_size and self._grid.GetVisibility():
+            self._update_grid()
 
     # -- pictures ------------------------------------------------------------------------
 
@@ -293,27 +304,40 @@ class SceneView:
         self.spline_scene.close()
 
 
-def label_grid(grid, bounds, unit: str = "") -> None:
+def label_grid(grid, bounds, unit: str = "", axis_px: float = 400.0) -> None:
     """Place pyvista's cube axes ``grid`` around ``bounds`` ``((x0, x1), (y0, y1), (z0,
     z1))`` padded to round ticks, with the labels and titles of
     :func:`splineviz.core.ticks.axis_ticks` (engineering notation, no "-0" or float noise),
-    all set anew for each data set."""
+    all set anew for each data set; ``axis_px``: about how many pixels an axis spans on
+    screen (labels are thinned to fit, :func:`splineviz.core.ticks.label_stride`)."""
     import vtk
 
-    from splineviz.core.ticks import axis_ticks
+    from splineviz.core.ticks import axis_ticks, label_stride
 
     axes = [axis_ticks(lo, hi, name, unit) for (lo, hi), name in zip(bounds, "XYZ", strict=True)]
     grid.x_title, grid.y_title, grid.z_title = (t.title for t in axes)
     grid.update_bounds([v for t in axes for v in (t.lo, t.hi)])
+    # vtkCubeAxesActor makes its label texts anew only when an axis range changed: a range
+    # one part in 1e9 off every other time (invisible: the labels are given) redraws
+    # labels thinned for a new view size over the same data
+    nudge = 1e-9 if getattr(grid, "_relabel_nudge", 0.0) == 0.0 else 0.0
+    grid._relabel_nudge = nudge
     for i, t in enumerate(axes):
-        getattr(grid, f"Set{'XYZ'[i]}AxisRange")(t.shown_range)
+        lo, hi = t.shown_range
+        getattr(grid, f"Set{'XYZ'[i]}AxisRange")((lo, hi + (hi - lo) * nudge))
         labels = vtk.vtkStringArray()
-        # at most 6 labels an axis: beyond, every other one (the even steps, so 0 stays)
-        thin = len(t.labels) > 6
+        stride = label_stride(t.labels, axis_px)
         k0 = round(t.lo / t.step)
         for k, text in enumerate(t.labels, start=k0):
-            labels.InsertNextValue("" if thin and k % 2 else text)
+            labels.InsertNextValue("" if k % stride else text)
         grid.SetAxisLabels(i, labels)
+
+
+def grid_axis_px(width: int, height: int) -> float:
+    """About how many pixels one axis of the grid spans in a view of ``width`` x ``height``
+    pixels: the framed data box fills about the narrower side, and an axis of the
+    isometric view is about 0.4 of that."""
+    return 0.4 * max(min(width, height), 0)
 
 
 class NodeView:

@@ -307,7 +307,10 @@ class SliceScene:
 
 
 class SlicePlanesMarker:
-    """The slice planes and the crosshair point in the 3-D view (see module docstring).
+    """The slice planes and the crosshair point in the 3-D views (see module docstring).
+
+    Each 3-D view (both halves of a split view) has its own actors over the same lines:
+    VTK props are not shared between render windows (each has its own OpenGL context).
 
     Parameters
     ----------
@@ -316,47 +319,80 @@ class SlicePlanesMarker:
 
     def __init__(self, renderer):
         self.renderer = renderer
-        self._actor, self._mapper = _line_actor(2.0)
-        renderer.AddActor(self._actor)
         #: the outlines shown: slice name -> (5, 3) world points (closed rectangle)
         self.outlines: dict[str, np.ndarray] = {}
-        self._ruler_actor, self._ruler_mapper = _line_actor(3.0, RULER_COLOR)
-        self._ruler_actor.VisibilityOff()
-        renderer.AddActor(self._ruler_actor)
-        self._ruler_label = vtkTextActor()
-        prop = self._ruler_label.GetTextProperty()
+        self._lines = _polylines3([], [])
+        self._ruler_lines = _polylines3([], [])
+        #: the ruler's ends ``(2, 3)`` (world) while one is shown
+        self.ruler: np.ndarray | None = None
+        self._ruler_text = ""
+        self._ruler_mid = (0.0, 0.0, 0.0)
+        #: the volume whose own frame the slice views work in: their points are drawn
+        #: turned into world by its direction (an oblique scan); None: world itself
+        self.frame = None
+        #: renderer -> (outline actor, ruler actor, ruler label) drawn in it
+        self._props: dict = {}
+        self.add_renderer(renderer)
+
+    @property
+    def renderers(self) -> list:
+        """The renderers the marker draws in (the first 3-D view's first)."""
+        return list(self._props)
+
+    def add_renderer(self, renderer) -> None:
+        """Draw the marker in ``renderer`` too (the second view of a split)."""
+        if renderer in self._props:
+            return
+        actor, mapper = _line_actor(2.0)
+        mapper.SetInputData(self._lines)
+        actor.SetVisibility(bool(self.outlines))
+        renderer.AddActor(actor)
+        ruler, ruler_mapper = _line_actor(3.0, RULER_COLOR)
+        ruler_mapper.SetInputData(self._ruler_lines)
+        renderer.AddActor(ruler)
+        label = vtkTextActor()
+        prop = label.GetTextProperty()
         prop.SetColor(*RULER_COLOR)
         prop.SetFontSize(14)
         prop.SetBackgroundColor(0.0, 0.0, 0.0)
         prop.SetBackgroundOpacity(0.55)
-        self._ruler_label.GetPositionCoordinate().SetCoordinateSystemToWorld()
-        self._ruler_label.VisibilityOff()
-        renderer.AddViewProp(self._ruler_label)
-        #: the ruler's ends ``(2, 3)`` (world) while one is shown
-        self.ruler: np.ndarray | None = None
-        #: the volume whose own frame the slice views work in: their points are drawn
-        #: turned into world by its direction (an oblique scan); None: world itself
-        self.frame = None
+        label.GetPositionCoordinate().SetCoordinateSystemToWorld()
+        renderer.AddViewProp(label)
+        self._props[renderer] = (actor, ruler, label)
+        self._show_ruler(renderer)
+
+    def remove_renderer(self, renderer) -> None:
+        """Stop drawing in ``renderer`` (a closed view)."""
+        props = self._props.pop(renderer, None)
+        if props is not None:
+            actor, ruler, label = props
+            renderer.RemoveActor(actor)
+            renderer.RemoveActor(ruler)
+            renderer.RemoveViewProp(label)
+
+    def _show_ruler(self, renderer) -> None:
+        _actor, ruler, label = self._props[renderer]
+        shown = self.ruler is not None and bool(np.any(self.ruler[0] != self.ruler[1]))
+        ruler.SetVisibility(shown)
+        label.SetInput(self._ruler_text)
+        label.GetPositionCoordinate().SetValue(*self._ruler_mid)
+        label.SetVisibility(shown)
 
     def set_ruler(self, a, b, unit: str = "") -> None:
         """A ruler between the world points ``a`` and ``b`` labelled with its length in
         ``unit`` (``a`` None: no ruler)."""
         if a is None:
             self.ruler = None
-            self._ruler_actor.VisibilityOff()
-            self._ruler_label.VisibilityOff()
-            return
-        a = np.asarray(a, dtype=np.float64)
-        b = a if b is None else np.asarray(b, dtype=np.float64)
-        self.ruler = np.stack([a, b])
-        self._ruler_mapper.SetInputData(_polylines3([to_world(self.frame, self.ruler)],
-                                                    [RULER_COLOR]))
-        length = float(np.linalg.norm(b - a))
-        self._ruler_actor.SetVisibility(length > 0)
-        self._ruler_label.SetInput(format_quantity(length, unit, ascii=True))
-        mid = to_world(self.frame, 0.5 * (a + b))
-        self._ruler_label.GetPositionCoordinate().SetValue(*map(float, mid))
-        self._ruler_label.SetVisibility(length > 0)
+        else:
+            a = np.asarray(a, dtype=np.float64)
+            b = a if b is None else np.asarray(b, dtype=np.float64)
+            self.ruler = np.stack([a, b])
+            self._ruler_lines.DeepCopy(_polylines3([to_world(self.frame, self.ruler)],
+                                                   [RULER_COLOR]))
+            self._ruler_text = format_quantity(float(np.linalg.norm(b - a)), unit, ascii=True)
+            self._ruler_mid = tuple(map(float, to_world(self.frame, 0.5 * (a + b))))
+        for renderer in self._props:
+            self._show_ruler(renderer)
 
     def update(self, bounds, point, names) -> None:
         """Outline the slices ``names`` through ``point`` within the box ``bounds`` (no
@@ -377,13 +413,13 @@ class SlicePlanesMarker:
             self.outlines[name] = corners
             segments.append(corners)
             colors.append(SLICE_COLORS[name])
-        self._mapper.SetInputData(_polylines3(segments, colors))
-        self._actor.SetVisibility(bool(segments))
+        self._lines.DeepCopy(_polylines3(segments, colors))
+        for actor, _ruler, _label in self._props.values():
+            actor.SetVisibility(bool(segments))
 
     def close(self) -> None:
-        self.renderer.RemoveActor(self._actor)
-        self.renderer.RemoveActor(self._ruler_actor)
-        self.renderer.RemoveViewProp(self._ruler_label)
+        for renderer in list(self._props):
+            self.remove_renderer(renderer)
 
 
 def _polylines3(lines, colors) -> vtkPolyData:

@@ -10,7 +10,9 @@ The histogram of a big volume is computed in a worker and cached per volume.
 
 from __future__ import annotations
 
+import numpy as np
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QPaintEvent
 from PySide6.QtWidgets import (
     QComboBox,
     QDoubleSpinBox,
@@ -18,6 +20,9 @@ from PySide6.QtWidgets import (
     QLabel,
     QPushButton,
     QSpinBox,
+    QStyle,
+    QStyleOptionComboBox,
+    QStylePainter,
     QWidget,
 )
 from superqt import QLabeledDoubleSlider
@@ -26,7 +31,7 @@ from splineviz.core.splines import MODELS
 from splineviz.gui.undo import undo_stack
 from splineviz.gui.widgets import ColorButton, HistogramSlider
 from splineviz.model import MATERIALS, SIDES, IsosurfaceNode, Scene, VolumeNode
-from splineviz.model.summaries import cached_histogram
+from splineviz.model.summaries import HISTOGRAM_BINS, cached_histogram
 
 #: volumes with at most this many samples get their histogram in the GUI thread
 INLINE_HISTOGRAM_SAMPLES = 2_000_000
@@ -36,6 +41,41 @@ def model_label(name: str) -> str:
     degree = f", degree {spec.degree}" if spec.degree else ""
     path = "" if spec.family else " — NumPy reference, slow"
     return f"{spec.display_label}{degree}{path}"
+
+
+class ElidedComboBox(QComboBox):
+    """A combo box that shows a label too long for it cut with an ellipsis ("...") rather
+    than clipped mid-letter; its list opens as wide as the longest label, and each item's
+    tooltip is its whole label."""
+
+    def displayed_text(self) -> str:
+        """The current label as drawn: elided to the width of the box's text field."""
+        opt = QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        field = self.style().subControlRect(QStyle.ComplexControl.CC_ComboBox, opt,
+                                            QStyle.SubControl.SC_ComboBoxEditField, self)
+        return self.fontMetrics().elidedText(self.currentText(), Qt.TextElideMode.ElideRight,
+                                             max(field.width() - 4, 0))
+
+    def paintEvent(self, _event: QPaintEvent) -> None:  # noqa: N802 (Qt naming)
+        painter = QStylePainter(self)
+        opt = QStyleOptionComboBox()
+        self.initStyleOption(opt)
+        painter.drawComplexControl(QStyle.ComplexControl.CC_ComboBox, opt)
+        opt.currentText = self.displayed_text()
+        painter.drawControl(QStyle.ControlElement.CE_ComboBoxLabel, opt)
+
+    def fit_popup(self) -> None:
+        """The list as wide as its longest label (after the items changed)."""
+        view = self.view()
+        widest = 0
+        for i in range(self.count()):
+            self.setItemData(i, self.itemText(i), Qt.ItemDataRole.ToolTipRole)
+            widest = max(widest, view.fontMetrics().horizontalAdvance(self.itemText(i)))
+        # the item's margins and a scroll bar's width beside the text
+        extra = 2 * view.frameWidth() + self.style().pixelMetric(
+            QStyle.PixelMetric.PM_ScrollBarExtent) + 16
+        view.setMinimumWidth(widest + extra)
 
 
 class IsosurfacePanel(QWidget):
@@ -60,7 +100,7 @@ class IsosurfacePanel(QWidget):
         self.spin.setDecimals(5)
         self.spin.setKeyboardTracking(False)
         self.spin.setToolTip("Isovalue: type a value and press Enter")
-        self.model = QComboBox()
+        self.model = ElidedComboBox()
         # long model labels must not widen the dock: the box elides, the list shows them
         self.model.setSizeAdjustPolicy(
             QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
@@ -120,6 +160,7 @@ class IsosurfacePanel(QWidget):
         self.add_button.clicked.connect(self.add_isosurface)
         scene.selection.connect(self._selection_changed)
         scene.removed.connect(self._removed)
+        scene.inserted.connect(self._inserted)
         self.set_node(None)
 
     def fill_models(self) -> None:
@@ -128,6 +169,7 @@ class IsosurfacePanel(QWidget):
         self.model.clear()
         for name in MODELS:
             self.model.addItem(model_label(name), name)
+        self.model.fit_popup()
         self.model.blockSignals(False)
 
     # -- which node ----------------------------------------------------------------------
@@ -140,6 +182,12 @@ class IsosurfacePanel(QWidget):
             self.set_node(isos[0] if isos else None, volume=node)
         elif node is None and self.node is not None and self.node.id not in self.scene:
             self.set_node(None)
+
+    def _inserted(self, node) -> None:
+        # an empty panel shows the first isosurface that arrives (a loaded session selects
+        # nothing; its first isosurface is what the user expects to edit)
+        if self.node is None and isinstance(node, IsosurfaceNode):
+            self.set_node(node)
 
     def _removed(self, node) -> None:
         if node is self.node or node is self._volume:
@@ -164,11 +212,27 @@ class IsosurfacePanel(QWidget):
             self.title.setText("Select an isosurface or a volume in the data panel")
             self.k.setVisible(False)
             self.k_label.setVisible(False)
+            self._clear_widgets()
             return
+        self.spin.setSpecialValueText("")
         node.events.connect(self._node_changed)
         self.title.setText(f"{node.name} of {self._volume.name}")
         self._load_histogram()
         self._sync_all()
+
+    def _clear_widgets(self) -> None:
+        """No node: no histogram and no isovalue left over from the node shown before."""
+        self._syncing = True
+        try:
+            self.histogram.set_histogram(np.zeros(HISTOGRAM_BINS),
+                                         np.linspace(0.0, 1.0, HISTOGRAM_BINS + 1))
+            self.histogram.setValue(0.0)
+            # a blank box: the special text shows while the value is the minimum
+            self.spin.setSpecialValueText(" ")
+            self.spin.setRange(0.0, 0.0)
+            self.spin.setValue(0.0)
+        finally:
+            self._syncing = False
 
     def _load_histogram(self) -> None:
         vol = self._volume.active
@@ -176,8 +240,6 @@ class IsosurfacePanel(QWidget):
         if vol.data.size <= INLINE_HISTOGRAM_SAMPLES:
             self.histogram.set_histogram(*cached_histogram(vol))
         else:
-            import numpy as np
-
             # the range now, the counts when the worker has them
             self.histogram.set_histogram(np.zeros(1), np.array([lo, hi if hi > lo else lo + 1]))
             node = self.node
