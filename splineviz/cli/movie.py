@@ -3,9 +3,9 @@
 The scene is built as ``splineviz render`` builds it (:func:`splineviz.cli.render.run`'s
 steps: the app's opening, outline and axes off, the camera of ``--camera`` or the default
 one for a volume, the session's for a session); :func:`splineviz.render.movie.movie` (what
-``sv.movie`` is) takes the frames from the presets asked for (``--orbit``, ``--iso-sweep``,
-``--clip-sweep``, combined), else from the session's animation, else a full orbit, renders
-each exactly and encodes it beside the rendering.
+``sv.movie`` is) takes the frames from the presets asked for (``--all-times``, ``--orbit``,
+``--iso-sweep``, ``--clip-sweep``, combined), else from the session's animation, else a
+full orbit, renders each exactly and encodes it beside the rendering.
 """
 
 from __future__ import annotations
@@ -38,19 +38,29 @@ def _positive_int(text: str) -> int:
 
 
 def run(args) -> int:
+    import argparse
+
     from tqdm import tqdm
 
+    from splineviz.cli.render import _time_scene
     from splineviz.model.opening import scene_from_path
     from splineviz.render.movie import movie
 
     size = parse_size(args.size)
-    scene = scene_from_path(args.file, isovalue=args.iso, model=args.model,
-                            allow_outside=args.allow_outside_data)
+    if args.all_times:
+        # a 4-D file, a series or a session, opened as splineviz render --all-times does
+        scene = _time_scene(argparse.Namespace(
+            volume=args.file, time=None, iso=args.iso, model=args.model,
+            allow_outside_data=args.allow_outside_data), {})
+    else:
+        scene = scene_from_path(args.file, isovalue=args.iso, model=args.model,
+                                allow_outside=args.allow_outside_data)
     if not scene.isosurfaces:
         raise RenderArgumentError(f"{args.file} holds no volume to render")
     for vol in scene.volumes:
         vol.show_outline = False
     scene.view.show_scale = False
+    scene.view.show_time = args.time_label
     session = str(args.file).lower().endswith(".svs")
     if not session or args.camera is not None:
         scene.aspect = size[0] / size[1]
@@ -70,7 +80,8 @@ def run(args) -> int:
 
     try:
         stats = movie(scene, args.output, orbit=args.orbit, iso_sweep=args.iso_sweep,
-                      clip_sweep=args.clip_sweep, frames=args.frames, fps=args.fps, size=size,
+                      clip_sweep=args.clip_sweep, all_times=args.all_times,
+                      frames=args.frames, fps=args.fps, size=size,
                       quality=args.quality, transparent_background=args.transparent,
                       device=args.device, progress=progress)
     finally:
@@ -87,7 +98,8 @@ def register(subparsers) -> None:
     from splineviz.render.movie import DEFAULT_QUALITY
 
     p = subparsers.add_parser(
-        "movie", help="render an animation (orbit, isovalue or clip sweep) into MP4/GIF/PNGs",
+        "movie", help="render an animation (orbit, isovalue or clip sweep, time steps) into "
+        "MP4/GIF/PNGs",
         description="Render a movie of a volume or session without a display: every frame "
         "is an exact ray-cast picture. With no preset flag a session's own animation is "
         "used, else a full orbit.")
@@ -100,8 +112,16 @@ def register(subparsers) -> None:
                    help="isovalue of the first isosurface from A to B")
     p.add_argument("--clip-sweep", choices=tuple(SWEEP_AXES), default=None, metavar="AXIS",
                    help="a clip plane moving through the volume along " + "|".join(SWEEP_AXES))
+    p.add_argument("--time-label", action="store_true",
+                   help="draw the time step (t = 0.75 s (step 4/6)) in the upper-left corner "
+                   "of a time-varying volume's pictures")
+    p.add_argument("--all-times", action="store_true",
+                   help="play every time step of a 4-D file, a series (a folder or a pattern "
+                   "such as run_####.vti) or a session's time-varying volume: one frame a "
+                   "step, or spread over --frames; combines with the other presets")
     p.add_argument("--frames", type=_positive_int, default=None,
-                   help="number of frames (default 120, or the session animation's)")
+                   help="number of frames (default 120, one per step with --all-times, or "
+                   "the session animation's)")
     p.add_argument("--fps", type=finite_float, default=None,
                    help="frames per second (default 30, or the session animation's)")
     p.add_argument("--size", default="1280x720", help="frame size WxH (even for MP4)")

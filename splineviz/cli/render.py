@@ -167,6 +167,7 @@ def run(args) -> int:
     for vol in scene.volumes:
         vol.show_outline = False
     scene.view.show_scale = False
+    scene.view.show_time = args.time_label
     if not str(args.volume).lower().endswith(".svs") or args.camera is not None:
         bounds = scene.bounds()
         try:
@@ -258,6 +259,9 @@ def register(subparsers) -> None:
                    help="time-varying volumes (4-D files, a folder or a pattern such as "
                    "run_####.vti): the step to render, by index (0, -1) or by time with its "
                    "unit (2.5s, 250ms)")
+    p.add_argument("--time-label", action="store_true",
+                   help="draw the time step (t = 0.75 s (step 4/6)) in the upper-left corner "
+                   "of a time-varying volume's pictures")
     p.add_argument("--all-times", action="store_true",
                    help="render every step, to -o with {t} (the step) in it, e.g. "
                    "frame_{t:04d}.png")

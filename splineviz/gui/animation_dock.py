@@ -1,11 +1,14 @@
 """The Animation dock (ParaView's Animation View, lite) and File > Export animation.
 
 :class:`AnimationPanel` edits the scene's :class:`~splineviz.model.animation.Animation`
-(``scene.animation``, saved with the session): presets (orbit, isovalue sweep, clip sweep;
-"combine" adds a preset's tracks to the animation there is), the tracks with their keyframes,
+(``scene.animation``, saved with the session): presets (orbit, isovalue sweep, clip sweep,
+and time playback while the scene holds a time-varying volume; "combine" adds a preset's
+tracks to the animation there is), the tracks with their keyframes,
 "add keyframe" of the camera or of the current isosurface's isovalue at the slider's frame,
 a frame slider that sets the scene to that frame (the view previews while it is dragged and
 refines after), and Play (previews only while playing, the exact frame when it stops).
+The GUI thread never reads a time step: a frame whose steps are not read yet is shown once
+a job (or, while playing, the series' read-ahead) has read them, as the time toolbar does.
 
 :func:`export_animation` asks for size, frame rate, format and quality
 (:class:`ExportAnimationDialog`) and a file, then :func:`start_export` runs
@@ -43,15 +46,21 @@ from PySide6.QtWidgets import (
 
 from splineviz.model.animation import (
     SWEEP_AXES,
+    TIME_TARGET,
     Animation,
     clip_sweep,
     isovalue_sweep,
     orbit,
+    time_playback,
 )
 from splineviz.model.nodes import IsosurfaceNode
 
-#: (label, preset key) of the preset list
-PRESET_CHOICES = (("Orbit", "orbit"), ("Isovalue sweep", "iso"), ("Clip sweep", "clip"))
+#: (label, preset key) of the preset list (the last offered only while the scene holds a
+#: time-varying volume)
+PRESET_CHOICES = (("Orbit", "orbit"), ("Isovalue sweep", "iso"), ("Clip sweep", "clip"),
+                  ("Time playback", "time"))
+#: steps read ahead of the frame shown while playing
+READ_AHEAD = 3
 
 
 class AnimationPanel(QWidget):
@@ -69,7 +78,7 @@ class AnimationPanel(QWidget):
 
         form = QFormLayout()
         self.preset = QComboBox()
-        for label, key in PRESET_CHOICES:
+        for label, key in PRESET_CHOICES[:-1]:
             self.preset.addItem(label, key)
         self.preset.setToolTip("What the preset animates")
         form.addRow("Preset", self.preset)
@@ -81,9 +90,21 @@ class AnimationPanel(QWidget):
         self.axis = QComboBox()
         self.axis.addItems(list(SWEEP_AXES))
         self.axis.setToolTip("Direction the clip plane moves through the volume")
+        self.step_from = QSpinBox()
+        self.step_from.setToolTip("The first time step played")
+        self.step_to = QSpinBox()
+        self.step_to.setToolTip("The last time step played")
+        self.per_step = QSpinBox()
+        self.per_step.setRange(0, 1000)
+        self.per_step.setValue(1)
+        self.per_step.setSpecialValueText("match play rate")
+        self.per_step.setToolTip("Frames each step lasts (0: as many as the frame rate over "
+                                 "the time toolbar's speed); the steps set the frame count")
         for rows in ((("Turn", self.degrees),),
                      (("From", self.iso_from), ("To", self.iso_to)),
-                     (("Axis", self.axis),)):
+                     (("Axis", self.axis),),
+                     (("From step", self.step_from), ("To step", self.step_to),
+                      ("Frames a step", self.per_step))):
             page = QWidget()
             f = QFormLayout(page)
             f.setContentsMargins(0, 0, 0, 0)
@@ -143,13 +164,31 @@ class AnimationPanel(QWidget):
         layout.addLayout(row)
         layout.addStretch(1)
         self._shown = None
+        self._read_job = None
+        self._pending: int | None = None
         # a session loaded into the scene brings its own animation
         self.scene.changed.connect(self._scene_changed)
         self.refresh()
+        self._offer_time()
 
     def _scene_changed(self) -> None:
         if self.scene.animation is not self._shown:
             self.refresh()
+        self._offer_time()
+
+    def _offer_time(self) -> None:
+        """The time-playback preset, listed while the scene holds a time-varying volume
+        (its step range follows the scene's steps)."""
+        n = len(self.scene.time_steps())
+        index = self.preset.findData("time")
+        if n and index < 0:
+            self.preset.addItem(*PRESET_CHOICES[-1])
+        elif not n and index >= 0:
+            self.preset.removeItem(index)
+        if n and self.step_to.maximum() != n - 1:
+            for box in (self.step_from, self.step_to):
+                box.setRange(0, n - 1)
+            self.step_to.setValue(n - 1)
 
     # -- state ---------------------------------------------------------------------------
 
@@ -217,6 +256,10 @@ class AnimationPanel(QWidget):
         elif key == "iso":
             anim = isovalue_sweep(self.scene, self.iso_from.value(), self.iso_to.value(),
                                   frames=n, isosurface=self._isosurface(), fps=fps)
+        elif key == "time":
+            anim = time_playback(self.scene, self.step_from.value(), self.step_to.value(),
+                                 frames_per_step=self.per_step.value() or None, fps=fps)
+            self.frames.setValue(anim.frames)
         else:
             # the plane of the sweep there is moves again (Make twice adds no second plane)
             old = self.animation
@@ -268,8 +311,51 @@ class AnimationPanel(QWidget):
         self._label()
         if anim is None:
             return
-        self.window.guard(anim.apply, self.scene, min(k, anim.frames - 1))
+        k = min(k, anim.frames - 1)
+        if not self._steps_read(anim, k):
+            # shown once a job has read its steps (the last frame asked for wins)
+            self._pending = k
+            if self._read_job is None:
+                self._read_job = self.window.jobs.run(
+                    "reading time step", self._read_steps, anim, k,
+                    on_done=self._steps_done, on_error=self._steps_failed)
+            return
+        self._pending = None
+        self.window.guard(anim.apply, self.scene, k)
         self.window.request_render()
+
+    def _unread_steps(self, anim: Animation, k: int) -> list[tuple]:
+        """``(series, index)`` of each step frame ``k`` shows that is not read yet."""
+        track = anim.track(TIME_TARGET, "time")
+        if track is None:
+            return []
+        t = track.value_at(k)[0]
+        out = []
+        for node in self.scene.time_varying:
+            index = node.series.index_at_or_before(t - node.time_offset)
+            if not node.series.cached(index):
+                out.append((node.series, index))
+        return out
+
+    def _steps_read(self, anim: Animation, k: int) -> bool:
+        return not self._unread_steps(anim, k)
+
+    def _read_steps(self, anim: Animation, k: int) -> int:
+        for series, index in self._unread_steps(anim, k):
+            series.step(index)
+        return k
+
+    def _steps_done(self, _k: int) -> None:
+        self._read_job = None
+        if self._pending is not None:
+            self._slider_moved(self._pending)
+
+    def _steps_failed(self, exc) -> None:
+        from splineviz.gui.jobs import error_message
+
+        self._read_job = self._pending = None
+        self.play(False)
+        self.window.show_error(f"reading a time step failed: {error_message(exc)}")
 
     def play(self, on: bool) -> None:
         """Play the animation in the view (looping), or stop."""
@@ -296,7 +382,12 @@ class AnimationPanel(QWidget):
         if anim is None:
             self.play(False)
             return
+        if self._read_job is not None:
+            return  # the frame shown waits for its steps
         self.show_frame((self.slider.value() + 1) % anim.frames)
+        if anim.track(TIME_TARGET, "time") is not None:
+            for node in self.scene.time_varying:
+                node.series.read_ahead(node.time_index, READ_AHEAD, loop=True)
 
 
 def _spin(lo, hi, value, suffix, tip) -> QDoubleSpinBox:
@@ -428,11 +519,11 @@ def start_export(window, path, **options):
 
 
 def install(window) -> QDockWidget:
-    """Add the Animation dock to ``window`` (tabbed with the right-hand panels)."""
+    """Add the Animation dock to ``window``: under the view, as ParaView's Animation View,
+    hidden until View > Panels shows it."""
     window.animation_panel = AnimationPanel(window)
     dock = window._dock("Animation", window.animation_panel,
-                        Qt.DockWidgetArea.RightDockWidgetArea)
-    window.tabifyDockWidget(window.docks["Analysis"], dock)
-    window.docks["Clipping"].raise_()
+                        Qt.DockWidgetArea.BottomDockWidgetArea)
+    dock.hide()
     window.docks["Animation"] = dock
     return dock

@@ -155,20 +155,29 @@ class MainWindow(QMainWindow):
             "Isosurface": self._dock("Isosurface", self.iso_panel, left),
             "Clipping": self._dock("Clipping", self.clip_panel, right),
             "Smoothing": self._dock("Smoothing", self.smooth_panel, right),
-            "Volume rendering": self._dock("Volume rendering", self.volume_panel, right),
+            # beside the isosurface: the two ways the volume is shown (ParaView's
+            # representations)
+            "Volume rendering": self._dock("Volume rendering", self.volume_panel, left),
             "Remeshing": self._dock("Remeshing", self.remesh_panel, right),
             "Analysis": self._dock("Analysis", self.analysis_panel, right),
-            "Quantities": self._dock("Quantities", self.quantities_panel, right),
+            "Quantities": self._dock("Quantities", self.quantities_panel,
+                                     Qt.DockWidgetArea.BottomDockWidgetArea),
             "Log": self._dock("Log", self.log, Qt.DockWidgetArea.BottomDockWidgetArea),
         }
         # the right column as tabs: narrower, so the 3-D view keeps its room
         self.tabifyDockWidget(self.docks["Clipping"], self.docks["Smoothing"])
-        self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Volume rendering"])
-        self.tabifyDockWidget(self.docks["Volume rendering"], self.docks["Remeshing"])
+        self.tabifyDockWidget(self.docks["Smoothing"], self.docks["Remeshing"])
         self.tabifyDockWidget(self.docks["Remeshing"], self.docks["Analysis"])
-        self.tabifyDockWidget(self.docks["Analysis"], self.docks["Quantities"])
+        self.tabifyDockWidget(self.docks["Isosurface"], self.docks["Volume rendering"])
+        self.docks["Isosurface"].raise_()
         self.docks["Clipping"].raise_()
+        # the plots over time and the log under the view (ParaView's bottom row), shown from
+        # View > Panels: seven tabs in one column no longer fit a 1280x800 screen
         self.docks["Log"].hide()
+        self.docks["Quantities"].hide()
+        # the minimum size of the window was fixed while the docks were still stacked (each
+        # added dock is placed below the last until tabified); work it out for the tabs
+        self.layout().activate()
 
     def _add_panel_toggles(self):
         for name, dock in self.docks.items():

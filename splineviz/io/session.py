@@ -310,6 +310,8 @@ class View(_Model):
                       Field(max_length=MAX_OBJECTS)] = []
     show_axes: bool = True
     show_scale: bool = True
+    #: the time of time-varying volumes drawn in the view (written only when off)
+    show_time: bool = True
     #: the window's layout of the 3-D view and slice views, the slice a "one-slice" layout
     #: shows and where the slice planes meet (None: the volume's centre). Written only when
     #: not the defaults, so documents of scenes that never used the slice views stay as

@@ -2,8 +2,9 @@
 
 An :class:`Animation` is ``frames`` pictures at ``fps`` and a list of :class:`Track`\\ s. A
 track animates one property (:data:`ANIMATED`: the camera, an isosurface's isovalue or
-opacity, a clip plane's origin or normal, a colour-by range) of one node, named by id (the
-camera's id is ``"camera"``), through :class:`Keyframe`\\ s: the value at frame ``k`` is the
+opacity, a clip plane's origin or normal, a colour-by range, the scene's current time) of
+one node, named by id (the camera's id is ``"camera"``, the scene's clock's
+:data:`TIME_TARGET`), through :class:`Keyframe`\\ s: the value at frame ``k`` is the
 keyframes' interpolation there, held before the first and after the last key.
 :meth:`Animation.apply` sets frame ``k``'s values on the scene's nodes (each node updated at
 once, so views never see a camera half moved); whatever draws the scene then draws frame
@@ -55,6 +56,8 @@ MAX_TRACKS = 64
 MAX_KEYS = 10_000
 #: the largest turn between two keys of a camera track that a preset makes (degrees)
 CAMERA_KEY_STEP_DEG = 90.0
+#: the target of a track of the scene's current time (like ``"camera"`` for the camera)
+TIME_TARGET = "time"
 
 Finite = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_MAGNITUDE, le=MAX_MAGNITUDE)]
 
@@ -157,6 +160,26 @@ def _camera_write(_cam, v) -> dict:
             "view_up": tuple(v[6:9]), "view_angle": v[9]}
 
 
+class SceneTime:
+    """The scene's current time as a track's node: ``time`` reads it, ``update(time=t)``
+    moves the scene there (:meth:`~splineviz.model.scene.Scene.set_time`: every
+    time-varying volume shows its last step at or before ``t``)."""
+
+    kind = "scene time"
+
+    def __init__(self, scene):
+        self.scene = scene
+
+    @property
+    def time(self) -> float:
+        return self.scene.time
+
+    def update(self, fields=None, **more) -> None:
+        fields = {**(fields or {}), **more}
+        if "time" in fields:
+            self.scene.set_time(fields["time"])
+
+
 def _colour_range_write(node, v) -> dict:
     # a range the animation sets is the manual range (the automatic one follows the frame)
     lo, hi = float(v[0]), float(v[1])
@@ -185,6 +208,11 @@ ANIMATED: Registry[AnimatedProperty] = Registry("animated property", {
     "color_range": AnimatedProperty(
         2, (IsosurfaceNode,), lambda n: (n.color_min, n.color_max), _colour_range_write,
         _lerp, "the range an isosurface's colour-by map spans (made manual)"),
+    # keys at the steps' own times: a frame between two keys of neighbouring steps shows
+    # the earlier step (set_time takes the last step at or before the time)
+    "time": AnimatedProperty(
+        1, (SceneTime,), lambda n: (n.time,), lambda n, v: {"time": v[0]}, _lerp,
+        "the scene's current time (the step of every time-varying volume)"),
 }, error=AnimationError)
 
 
@@ -315,7 +343,7 @@ class Animation(_Model):
     def restore(self, scene, state: dict) -> None:
         """Put back the values :meth:`state_of` took (nodes removed since are skipped)."""
         for target, fields in state.items():
-            if target == "camera" or target in scene:
+            if target in ("camera", TIME_TARGET) or target in scene:
                 _target(scene, target).update(fields)
 
     def without(self, target: str) -> Animation:
@@ -360,6 +388,11 @@ class Animation(_Model):
 def _target(scene, target: str):
     if target == "camera":
         return scene.camera
+    if target == TIME_TARGET:
+        if not scene.time_steps():
+            raise AnimationError("the animation plays the scene's time, but the scene holds "
+                                 "no time-varying volume")
+        return SceneTime(scene)
     if target not in scene:
         raise AnimationError(f"the animation animates {target!r}, which is not in the scene")
     return scene.get(target)
@@ -476,18 +509,62 @@ def clip_sweep(scene, axis: str = "x", frames: int = 120, volume=None, plane=Non
                           tracks=[Track(target=plane.id, property="origin", keys=keys)])
 
 
+def time_playback(scene, start: int = 0, stop: int = -1, frames_per_step: int | None = 1,
+                  frames: int | None = None, fps: float = 30.0) -> Animation:
+    """The scene's time steps ``start`` to ``stop`` (indices of
+    :meth:`~splineviz.model.scene.Scene.time_steps`, both shown; negative counts from the
+    end), in order.
+
+    Each step lasts ``frames_per_step`` frames; ``None`` matches the movie to the scene's
+    play rate (``round(fps / scene.play_rate)`` frames a step, at least one, so the movie
+    plays the steps as fast as the time toolbar does). ``frames`` (which overrides
+    ``frames_per_step``) spreads the steps evenly over that many frames instead (frame
+    ``k`` shows step ``start + floor(k * steps / frames)``; fewer frames than steps skip
+    some). The track keys the step's own time on the first frame of each step."""
+    steps = scene.time_steps()
+    if not steps:
+        raise AnimationError("time playback needs a time-varying volume in the scene")
+    n = len(steps)
+    first, last = (int(i) + n if int(i) < 0 else int(i) for i in (start, stop))
+    if not 0 <= first <= last < n:
+        raise AnimationError(f"the scene has {n} time step(s) (0 to {n - 1}); steps "
+                             f"{start} to {stop} are not a range of them")
+    count = last - first + 1
+    if frames is None:
+        if frames_per_step is None:
+            frames_per_step = max(1, round(float(fps) / scene.play_rate))
+        if not isinstance(frames_per_step, int | np.integer) or frames_per_step < 1:
+            raise AnimationError(f"a step lasts 1 or more frames, got {frames_per_step!r}")
+        frames = count * int(frames_per_step)
+    frames = _frames(frames)
+    keys, shown = [], None
+    for k in range(frames):
+        step = first + k * count // frames
+        if step != shown:
+            keys.append(Keyframe(frame=k, value=(steps[step],)))
+            shown = step
+    return Animation.make(frames=frames, fps=fps, tracks=[
+        Track(target=TIME_TARGET, property="time", keys=keys)])
+
+
 #: preset name -> function(scene, frames=..., **options) -> Animation
-PRESETS = {"orbit": orbit, "isovalue sweep": isovalue_sweep, "clip sweep": clip_sweep}
+PRESETS = {"orbit": orbit, "isovalue sweep": isovalue_sweep, "clip sweep": clip_sweep,
+           "time playback": time_playback}
 
 
 def preset_animation(scene, *, orbit_degrees: float | None = None, iso_sweep=None,
-                     clip_axis: str | None = None, frames: int = 120,
-                     fps: float = 30.0) -> Animation | None:
-    """The combination of the presets asked for (None: none asked): a turntable of
-    ``orbit_degrees``, an isovalue sweep ``(start, stop)`` of the first isosurface and a
-    clip sweep along ``clip_axis``, all over ``frames`` frames (what ``splineviz movie``'s
-    flags and ``sv.movie``'s keywords make)."""
+                     clip_axis: str | None = None, all_times: bool = False,
+                     frames: int | None = 120, fps: float = 30.0) -> Animation | None:
+    """The combination of the presets asked for (None: none asked): a playback of every
+    time step (``all_times``), a turntable of ``orbit_degrees``, an isovalue sweep
+    ``(start, stop)`` of the first isosurface and a clip sweep along ``clip_axis``, all
+    over ``frames`` frames (what ``splineviz movie``'s flags and ``sv.movie``'s keywords
+    make). ``frames=None``: 120, or with ``all_times`` one frame per step."""
     parts = []
+    if all_times:
+        parts.append(time_playback(scene, frames=frames, fps=fps))
+        frames = parts[0].frames
+    frames = 120 if frames is None else frames
     if orbit_degrees is not None:
         parts.append(orbit(scene, orbit_degrees, frames=frames, fps=fps))
     if iso_sweep is not None:

@@ -474,6 +474,9 @@ class ViewNode(Node):
     background2: RGB | None = None
     show_axes: bool = True
     show_scale: bool = True
+    #: the scene's current time drawn in a corner while a volume varies in time (sessions
+    #: write it only when off)
+    show_time: bool = True
     split: bool = per_view(False)
     #: the window's layout of the 3-D view and the slice views (see
     #: :class:`splineviz.model.slices.SliceViewNode`; sessions write it only when not "3d")

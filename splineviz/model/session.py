@@ -333,7 +333,7 @@ def apply_session(scene: Scene, session: Session, data: dict | None = None) -> S
 def _check_animation(session: Session) -> None:
     """The objects the session's animation animates are in it, of a kind that has the
     property (checked before the scene changes)."""
-    from splineviz.model.animation import ANIMATED
+    from splineviz.model.animation import ANIMATED, TIME_TARGET, SceneTime
 
     if session.animation is None:
         return
@@ -341,6 +341,8 @@ def _check_animation(session: Session) -> None:
     for track in session.animation.tracks:
         if track.target == "camera":
             node_cls = CameraNode
+        elif track.target == TIME_TARGET:
+            node_cls = SceneTime
         elif track.target in kinds:
             node_cls = kinds[track.target]
         else:

@@ -427,17 +427,19 @@ def export_session(session, data: dict, path, *, job=None, **options) -> MovieSt
 
 
 def movie(scene, path, animation=None, *, orbit: float | None = None,
-          iso_sweep=None, clip_sweep: str | None = None, frames: int | None = None,
-          fps: float | None = None, size=(1280, 720), **options) -> MovieStats:
+          iso_sweep=None, clip_sweep: str | None = None, all_times: bool = False,
+          frames: int | None = None, fps: float | None = None, size=(1280, 720),
+          **options) -> MovieStats:
     """``sv.movie``: write a movie of ``scene`` to ``path``.
 
-    The frames come from ``animation``, else from the presets asked for (``orbit``:
-    degrees of a turntable; ``iso_sweep``: ``(start, stop)`` isovalues of the first
-    isosurface; ``clip_sweep``: an axis of
+    The frames come from ``animation``, else from the presets asked for (``all_times``:
+    every time step of the scene's time-varying volumes, one frame each, or spread over
+    ``frames``; ``orbit``: degrees of a turntable; ``iso_sweep``: ``(start, stop)``
+    isovalues of the first isosurface; ``clip_sweep``: an axis of
     :data:`~splineviz.model.animation.SWEEP_AXES`, combined when several are given), else
     from the scene's own animation, else a 360-degree orbit. ``frames`` and ``fps``
-    default to the animation's (120 and 30 for presets). The other keywords are
-    :func:`export_movie`'s.
+    default to the animation's (120 and 30 for presets; the number of steps with
+    ``all_times``). The other keywords are :func:`export_movie`'s.
 
     Examples
     --------
@@ -452,8 +454,8 @@ def movie(scene, path, animation=None, *, orbit: float | None = None,
                              "leave frames out or make the animation with it")
     else:
         animation = preset_animation(scene, orbit_degrees=orbit, iso_sweep=iso_sweep,
-                                     clip_axis=clip_sweep, frames=frames or 120,
-                                     fps=fps or 30.0)
+                                     clip_axis=clip_sweep, all_times=all_times,
+                                     frames=frames, fps=fps or 30.0)
     if animation is None:
         animation = scene.animation
         if animation is None or (frames is not None and frames != animation.frames):

@@ -7,7 +7,8 @@ and keeps a :class:`~splineviz.render.scene.SplineScene` in step through one
 :class:`~splineviz.render.isosurface.IsosurfaceLayer` per isosurface node (reading the
 node), an outline per volume, points and meshes as VTK props, clip planes per volume or
 scene-wide, section curves; and the camera and the view settings (background or gradient,
-axes grid with world units). It holds no state of its own that a session would need.
+axes grid with world units, the time of time-varying volumes in the upper-left corner). It
+holds no state of its own that a session would need.
 
 The window, ``splineviz FILE --screenshot``, ``splineviz render`` and session rendering all
 draw through this class, so a session renders the same headless as in the window.
@@ -100,12 +101,15 @@ class SceneView:
         self._handlers: dict[str, object] = {}
         self._grid = None
         self._grid_size: tuple[int, int] = (0, 0)
+        self._resize_observer = None
         self._grid_enabled = bool(grid)
+        self._time_label = None
         self._camera_lock = False
         scene.inserted.connect(self._inserted)
         scene.removed.connect(self._removed)
         scene.camera.events.connect(self._camera_changed)
         scene.view.events.connect(self._view_changed)
+        scene.time_changed.connect(self._update_time_label)
         for node in scene:
             self._inserted(node)
         self._view_changed()
@@ -121,6 +125,8 @@ class SceneView:
 
         self._handlers[node.id] = changed
         node.events.connect(changed)
+        if isinstance(node, VolumeNode) and node.series is not None:
+            self._update_time_label()
 
     def _removed(self, node: Node) -> None:
         handler = self._handlers.pop(node.id, None)
@@ -130,12 +136,16 @@ class SceneView:
         if view is not None:
             view.remove()
         self._update_grid()
+        if self._time_label is not None:
+            self._update_time_label()
 
     def _node_changed(self, node: Node, what: str) -> None:
         view = self.views.get(node.id)
         if view is not None:
             view.changed(what)
         self._dependents_changed(node, what)
+        if isinstance(node, VolumeNode) and what in ("series", "time_index", "time_offset"):
+            self._update_time_label()
 
     def _dependents_changed(self, node: Node, what: str) -> None:
         """What shows other nodes through ``node``: a volume's isosurfaces, the surfaces
@@ -241,6 +251,7 @@ class SceneView:
         else:  # a gradient, bottom to top, as ParaView's
             self.plotter.set_background(view.background, top=view.background2)
         self._update_grid()
+        self._update_time_label()
 
     def enable_grid(self) -> None:
         """Show the axes grid from now on (see the ``grid`` parameter)."""
@@ -268,8 +279,10 @@ class SceneView:
                 bounds=(0, 1, 0, 1, 0, 1), color=OUTLINE_COLOR, grid=False, location="outer",
                 ticks="outside", font_size=10, minor_ticks=False, fmt="%.3g",
                 use_3d_text=False, render=False)
-            # a view resized (split, four-up) relabels its axes for its new width
-            self.plotter.renderer.AddObserver("StartEvent", self._grid_resized)
+            if self._resize_observer is None:
+                # a view resized (split, four-up) relabels its axes for its new width
+                self._resize_observer = self.plotter.renderer.AddObserver(
+                    "StartEvent", self._grid_resized)
         bounds = self.scene.bounds()
         show = self.scene.view.show_scale and bounds is not None
         if show:
@@ -281,8 +294,26 @@ class SceneView:
     def _grid_resized(self, *_args) -> None:
         """Before a render: the labels again when the view's size in pixels changed."""
         size = tuple(self.plotter.renderer.GetSize())
-        if size != self._grid_size and self._grid.GetVisibility():
+        if self._grid is not None and size != self._grid_size and self._grid.GetVisibility():
             self._update_grid()
+
+    def _update_time_label(self, *_args) -> None:
+        """"t = 0.75 s (step 4/6)" in the upper-left corner while the scene holds a
+        time-varying volume and the view's ``show_time`` is on. The annotation is made the
+        first time it shows (a scene without time-varying volumes draws as if it had none)
+        and then only changed or hidden; its font follows the window's size, so a 4K
+        screenshot's label is as legible as the view's."""
+        steps = self.scene.time_steps()
+        show = bool(steps) and self.scene.view.show_time
+        if self._time_label is None:
+            if not show:
+                return
+            self._time_label = self.plotter.add_text(
+                "", position="upper_left", font_size=12, color=OUTLINE_COLOR,
+                name="time label", render=False)
+        if show:
+            self._time_label.set_text("upper_left", time_label(self.scene))
+        self._time_label.SetVisibility(int(show))
 
     # -- pictures ------------------------------------------------------------------------
 
@@ -295,6 +326,10 @@ class SceneView:
         self.scene.removed.disconnect(self._removed)
         self.scene.camera.events.disconnect(self._camera_changed)
         self.scene.view.events.disconnect(self._view_changed)
+        self.scene.time_changed.disconnect(self._update_time_label)
+        if self._resize_observer is not None:
+            self.plotter.renderer.RemoveObserver(self._resize_observer)
+            self._resize_observer = None
         for node in self.scene:
             handler = self._handlers.pop(node.id, None)
             if handler is not None:
@@ -302,6 +337,18 @@ class SceneView:
         for layer in self.layers.values():
             layer.close()
         self.spline_scene.close()
+
+
+def time_label(scene: Scene) -> str:
+    """The scene's current time step as the view draws it: ``"t = 0.75 s (step 4/6)"``
+    (the time the step starts, in the unit of the first time-varying volume; no unit when
+    the data name none). ``scene`` holds a time-varying volume."""
+    from splineviz.io.time_series import format_time
+
+    steps = scene.time_steps()
+    unit = scene.time_varying[0].time_unit if scene.time_varying else ""
+    k = scene.step_index()
+    return f"t = {format_time(steps[k], unit)} (step {k + 1}/{len(steps)})"
 
 
 def label_grid(grid, bounds, unit: str = "", axis_px: float = 400.0) -> None:

@@ -18,13 +18,14 @@ was cast against (:attr:`VolumeFrame.depth_sig`).
 
 from __future__ import annotations
 
+import contextlib
 import threading
 import zlib
 from dataclasses import dataclass
 
 import numpy as np
 
-from splineviz.render.isosurface import ViewState
+from splineviz.render.isosurface import _WORKERS_ON_DEVICE, ViewState
 
 #: the model of previews (the cheapest sampling; bench dvr measures it)
 PREVIEW_MODEL = "trilinear"
@@ -174,8 +175,13 @@ class VolumeLayer:
         another thread is casting."""
         from splineviz.compute.dvr import depth_stop
 
+        if not blocking and _WORKERS_ON_DEVICE.busy:
+            # a worker's frame (an isosurface's or this one's) holds the device: the GUI
+            # thread's kernel would queue behind it for up to a second
+            return None
         if not self._lock.acquire(blocking=blocking):
             return None
+        on_device = _WORKERS_ON_DEVICE if blocking else contextlib.nullcontext()
         try:
             state = self.state
             model = PREVIEW_MODEL if preview else self.model
@@ -185,9 +191,10 @@ class VolumeLayer:
             stop = depth_stop(d, np.zeros((h, w, 3), np.uint8), camera,
                               camera.clipping_range)
             stop[1][..., 3] = 0.0  # the scene's colour is composited below, by blending
-            frame = self._renderer(model).render(camera, (w, h),
-                                                 clip_planes=list(view.clip_planes)
-                                                 + list(self.clip_planes), stop=stop)
+            with on_device:
+                frame = self._renderer(model).render(camera, (w, h),
+                                                     clip_planes=list(view.clip_planes)
+                                                     + list(self.clip_planes), stop=stop)
             self.warm_sizes.add((model, (w, h)))
         finally:
             self._lock.release()

@@ -106,3 +106,35 @@ def test_cancelled_export_leaves_no_file_and_the_window_responsive(window, tmp_p
     assert job.state == "cancelled"
     assert not out.exists() and not staging_folder(out).exists()
     assert list(tmp_path.glob("long*")) == []
+
+
+def test_time_playback_preset_is_offered_for_a_time_varying_volume(window, tmp_path):
+    nib = pytest.importorskip("nibabel")
+    w = window
+    panel = w.animation_panel
+    assert panel.preset.findData("time") < 0  # the default volume does not vary
+    g = np.linspace(-1, 1, 16)
+    x, y, z = np.meshgrid(g, g, g, indexing="ij")
+    steps = [((1 - np.sqrt((x - 0.3 * t) ** 2 + y**2 + z**2)) * 200).clip(0, 255)
+             for t in range(4)]
+    img = nib.Nifti1Image(np.stack(steps, -1).astype(np.uint8), np.eye(4))
+    img.header.set_xyzt_units("mm", "sec")
+    path = tmp_path / "moving.nii.gz"
+    nib.save(img, path)
+    w.open_path(path, mode="replace", block=True)
+    assert pump(60, lambda: bool(w.scene.time_varying) and not w.jobs.jobs)
+    assert pump(5, lambda: panel.preset.findData("time") >= 0)
+    panel.preset.setCurrentIndex(panel.preset.findData("time"))
+    panel.step_from.setValue(1)
+    panel.per_step.setValue(2)
+    panel.make_preset()
+    anim = w.scene.animation
+    assert anim.frames == 6 and panel.frames.value() == 6
+    assert pump(30, lambda: w.scene.step_index() == 1)  # frame 0, read by a job
+    with StallMeter() as meter:
+        panel.slider.setValue(5)  # its step read by a job when not read yet
+        assert pump(30, lambda: w.scene.step_index() == 3)
+        panel.play_button.click()
+        assert pump(30, lambda: w.scene.step_index() == 1)  # looped round
+        panel.play_button.click()
+    assert meter.max_ms < MAX_STALL_MS, f"GUI thread stalled {meter.max_ms:.0f} ms"
