@@ -3,13 +3,14 @@ baselines run in the same run (VTK flying edges and trilinear ray casting for ``
 flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 dask workers for
 ``bricks``; Open3D Poisson, ball pivoting and Poisson + pymeshlab remeshing for ``remesh``;
 the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render of each step
-for ``time``)."""
+for ``time``; flying edges and flying edges + pymeshlab remeshing for ``spline-mesh``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from splineviz.cli.render import finite_float
+from splineviz.core.errors import SplinevizError
 
 
 def _run(args) -> int:
@@ -41,6 +42,17 @@ def _run(args) -> int:
         models = tuple(args.models.split(",")) if args.models else MODELS
         run_time_bench(n=args.n or 256, steps=args.steps, models=models, size=(w, h),
                        preview=(pw, ph), device=args.device, timeout=args.timeout or 900.0)
+    elif args.which == "spline-mesh":
+        from splineviz.bench.spline_mesh import SETS, run
+
+        sets = args.sets.split(",") if args.sets else ["tooth", "bonsai"]
+        unknown = [name for name in sets if name not in SETS]
+        if unknown:
+            raise SplinevizError(f"unknown spline-mesh set {unknown[0]!r}; choose from "
+                                 f"{', '.join(SETS)}")
+        model = args.models.split(",")[0] if args.models else "cubic-c1"
+        for name in sets:
+            run(Path(data), name, model)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -58,7 +70,8 @@ def _run(args) -> int:
 def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
-    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time"],
+    p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time",
+                            "spline-mesh"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
@@ -88,5 +101,7 @@ def register(subparsers) -> None:
     p.add_argument("--volume", default=None,
                    help="gui: volume file in the data folder's volumes/ (default: the embedded "
                         "default data)")
+    p.add_argument("--sets", default=None,
+                   help="spline-mesh: comma-separated sets (tooth,bonsai; bonsai-crop: 40^3)")
     p.add_argument("--iso", type=finite_float, default=None, help="gui: isovalue of --volume")
     p.set_defaults(func=_run)

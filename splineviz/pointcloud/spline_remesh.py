@@ -112,18 +112,20 @@ def flying_edges_start(spline, iso: float, step: float):
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     v = vtk_to_numpy(out.GetPoints().GetData()).astype(np.float64)
     f = vtk_to_numpy(out.GetPolys().GetConnectivityArray()).astype(np.int64).reshape(-1, 3)
-    # a grid corner exactly at the isovalue gives zero-area triangles
-    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
-    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])
-          & (np.linalg.norm(np.cross(b - a, c - a), axis=1) > 0)]
-    return v, f
+    # a grid corner exactly at the isovalue is a vertex of each of its edges: one vertex,
+    # and the triangles between those copies go
+    v, inverse = np.unique(v, axis=0, return_inverse=True)
+    f = inverse.reshape(-1)[f]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])]
+    return _compact(v, f)
 
 
 def _adjacency(n: int, faces: np.ndarray):
     """CSR vertex -> neighbours and vertex -> faces of a triangle mesh."""
     e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     e = np.concatenate([e, e[:, ::-1]])
-    key = np.unique(e[:, 0] * n + e[:, 1])
+    key = np.sort(e[:, 0] * n + e[:, 1])
+    key = key[np.r_[True, key[1:] != key[:-1]]]
     vv_idx = (key % n).astype(np.int64)
     vv_ptr = np.searchsorted(key // n, np.arange(n + 1)).astype(np.int64)
     fv = faces.ravel()
@@ -216,7 +218,8 @@ def _collapse_pass(v, faces, alive, ea, eb, vv_ptr, vv_idx, vf_ptr, vf_idx, fixe
 
 
 def _compact(vertices, faces):
-    used = np.unique(faces)
+    """The vertices some face uses, and the faces renumbered."""
+    used = np.flatnonzero(np.bincount(faces.ravel(), minlength=len(vertices)))
     remap = np.full(len(vertices), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
     return vertices[used], remap[faces]
