@@ -26,6 +26,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from splineviz.pointcloud import spline_kernels
 from splineviz.pointcloud.relaxation import border_vertices, optimize
 from splineviz.pointcloud.spline_mesh import (
     DEFAULT_MIN_LENGTH,
@@ -34,7 +35,6 @@ from splineviz.pointcloud.spline_mesh import (
     SplineMeshError,
     _finish,
     _stage,
-    _values,
     project_onto,
 )
 
@@ -55,6 +55,49 @@ MAX_VALENCE = 9
 ROUNDS = 3
 #: spline samples evaluated at once (bounds the memory of the start grid)
 SLAB_POINTS = 2_000_000
+#: points per task of the parallel Newton projection
+PROJECT_CHUNK = 4096
+
+
+@numba.njit(cache=True, parallel=True)
+def _grid_kernel(params, n_work, xs, ys, zs, out):
+    """Spline values ``out (nz, ny, nx)`` at the grid ``xs (nx,) x ys (ny,) x zs (nz,)``, one
+    z slice per task."""
+    for k in numba.prange(zs.shape[0]):
+        work = np.empty(n_work)
+        res = np.empty(4)
+        for j in range(ys.shape[0]):
+            for i in range(xs.shape[0]):
+                spline_kernels._value_gradient(params, xs[i], ys[j], zs[k], work, res)
+                out[k, j, i] = res[0]
+
+
+@numba.njit(cache=True, parallel=True)
+def _project_kernel(params, points, iso, steps, tol, lo, hi, step_limit, n_work, chunk):
+    """:func:`splineviz.pointcloud.spline_kernels.project` over chunks of ``points`` on all
+    threads."""
+    out = np.empty_like(points)
+    normals = np.empty_like(points)
+    n_chunks = (points.shape[0] + chunk - 1) // chunk
+    for c in numba.prange(n_chunks):
+        a = c * chunk
+        b = min(a + chunk, points.shape[0])
+        p, nrm = spline_kernels.project(params, points[a:b], iso, steps, tol, lo, hi,
+                                        step_limit, n_work)
+        out[a:b] = p
+        normals[a:b] = nrm
+    return out, normals
+
+
+def _project(spline, points, iso, steps, tol):
+    """Newton projection onto ``s = iso`` (:func:`.spline_mesh.project_onto`), on all cores
+    where the compiled kernels cover the model: points ``(M, 3)`` and unit normals ``(M, 3)``."""
+    fast = spline_kernels.compiled(spline)
+    if fast is None or len(points) < 2 * PROJECT_CHUNK:
+        return project_onto(spline, points, iso, steps, tol)
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    return _project_kernel(fast.params, pts, float(iso), int(steps), float(tol), fast.lo,
+                           fast.hi, 0.5 * fast.step, fast.n_work, PROJECT_CHUNK)
 
 
 def _grid_values(spline, step: float):
@@ -68,8 +111,12 @@ def _grid_values(spline, step: float):
     hi = np.array([b[1] for b in spline.bounds], dtype=np.float64)
     dims = np.maximum(np.ceil((hi - lo) / step).astype(int), 1) + 1
     spacing = (hi - lo) / (dims - 1)
-    x = lo[0] + spacing[0] * np.arange(dims[0])
-    y = lo[1] + spacing[1] * np.arange(dims[1])
+    x, y, z = (lo[d] + spacing[d] * np.arange(dims[d]) for d in range(3))
+    fast = spline_kernels.compiled(spline)
+    if fast is not None:
+        values = np.empty((dims[2], dims[1], dims[0]))
+        _grid_kernel(fast.params, fast.n_work, x, y, z, values)
+        return values, lo, spacing
     xx, yy = np.meshgrid(x, y)  # (ny, nx): VTK's point order, x fastest
     plane = np.stack([xx.ravel(), yy.ravel(), np.zeros(xx.size)], axis=1)
     values = np.empty((dims[2], dims[1] * dims[0]))
@@ -77,8 +124,8 @@ def _grid_values(spline, step: float):
     for k0 in range(0, dims[2], per):
         ks = np.arange(k0, min(k0 + per, dims[2]))
         pts = np.tile(plane, (len(ks), 1))
-        pts[:, 2] = np.repeat(lo[2] + spacing[2] * ks, len(plane))
-        values[ks] = _values(spline, pts).reshape(len(ks), -1)
+        pts[:, 2] = np.repeat(z[ks], len(plane))
+        values[ks] = spline.evaluate(pts).reshape(len(ks), -1)
     return values.reshape(dims[2], dims[1], dims[0]), lo, spacing
 
 
@@ -265,7 +312,7 @@ def collapse_short_edges(spline, iso, vertices, faces, length: float, tol: float
                            fixed, (LONG * length) ** 2, COLLAPSE_KEEP, MAX_VALENCE, moved)
         f = f[alive]
         if moved.any():
-            v[moved], _n = project_onto(spline, v[moved], iso, 30, tol)
+            v[moved], _n = _project(spline, v[moved], iso, 30, tol)
         total += k
         if k == 0:
             break
@@ -281,7 +328,7 @@ class _SplineSurface:
         self.spline, self.iso, self.tol = spline, float(iso), tol
 
     def project_with_normals(self, points, normal_hint=None):
-        return project_onto(self.spline, points, self.iso, 30, self.tol)
+        return _project(self.spline, points, self.iso, 30, self.tol)
 
     def project(self, points):
         return self.project_with_normals(points)[0]
@@ -337,7 +384,7 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
         if len(f) == 0:
             raise SplineMeshError("the clip planes leave no part of the isosurface")
         v, f = _compact(v, f)
-        v, _n = project_onto(spline, v, iso, 30, tol)
+        v, _n = _project(spline, v, iso, 30, tol)
     surface = _SplineSurface(spline, iso, tol)
     with _stage(timings, "remesh"):
         for r in range(rounds):

@@ -100,3 +100,21 @@ def test_export_mesh_by_remeshing(tmp_path):
     pts = np.asarray(mesh.points)
     assert pts[:, 0].min() > -1e-6 and mesh.point_data.active_normals is not None
     np.testing.assert_allclose(np.linalg.norm(pts, axis=1), 10.0, rtol=1e-6)
+
+
+def test_parallel_kernels_agree_with_the_spline(spline):
+    from splineviz.pointcloud.spline_mesh import project_onto
+    from splineviz.pointcloud.spline_remesh import _grid_values, _project
+
+    values, origin, spacing = _grid_values(spline, 0.7)
+    k, j, i = np.indices(values.shape).reshape(3, -1)[:, ::97]
+    pts = origin + spacing * np.stack([i, j, k], axis=1)
+    np.testing.assert_allclose(values[k, j, i], spline.evaluate(pts), rtol=1e-12, atol=1e-9)
+    rng = np.random.default_rng(3)
+    start = rng.normal(size=(20000, 3))
+    start *= (10.0 + rng.uniform(-0.3, 0.3, len(start)))[:, None] / np.linalg.norm(
+        start, axis=1)[:, None]
+    p, n = _project(spline, start, ISO, 30, 1e-9)
+    q, m = project_onto(spline, start, ISO, 30, 1e-9)
+    np.testing.assert_array_equal(p, q)
+    np.testing.assert_array_equal(n, m)
