@@ -14,8 +14,14 @@ vertices or edges at once:
   triangle turned over), valence flips and tangential relaxation
   (:func:`splineviz.pointcloud.relaxation.optimize`), every moved vertex projected onto the
   spline itself, not onto the start mesh.
-* Finish: triangles that join two sheets dropped, clip planes cut exactly, vertices still off
-  the surface get more Newton steps, exact normals (the front's own last steps).
+* One sheet (optional): triangles that leave the surface (flying edges' own, where two sheets
+  are about a grid step apart; the front's one-sheet test
+  :func:`.spline_mesh.triangles_on_surface`) are dropped and their holes closed on the
+  surface (:func:`.spline_mesh.fill_holes`) where rings can; the rest stay open, which costs
+  Hausdorff distance (the tooth: 1.4-1.9 grid steps against 0.7 closed), so by default the
+  surface stays closed as flying edges' is.
+* Finish: clip planes cut exactly, vertices still off the surface get more Newton steps,
+  exact normals (the front's own last steps).
 
 Conventions: ``vertices (V, 3)`` float64, ``faces (F, 3)`` int64 counter-clockwise seen from the
 normals, ``normals (V, 3)`` unit.
@@ -30,12 +36,15 @@ from splineviz.pointcloud import spline_kernels
 from splineviz.pointcloud.relaxation import border_vertices, optimize
 from splineviz.pointcloud.spline_mesh import (
     DEFAULT_MIN_LENGTH,
+    HOLE_SLACK,
     SNAP,
     VALUE_TOL,
     SplineMeshError,
     _finish,
     _stage,
+    fill_holes,
     project_onto,
+    triangles_on_surface,
 )
 
 #: default target edge length in grid steps
@@ -335,7 +344,8 @@ class _SplineSurface:
 
 
 def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = None,
-                  rounds: int = ROUNDS, progress=None, timings: dict | None = None):
+                  rounds: int = ROUNDS, one_sheet: bool = False, progress=None,
+                  timings: dict | None = None):
     """Triangulate ``s = iso`` by flying edges and isotropic remeshing on the spline.
 
     Parameters
@@ -348,12 +358,17 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
         Target edge length (default ``DEFAULT_EDGE_LENGTH`` grid steps, at least
         ``DEFAULT_MIN_LENGTH`` of one).
     rounds : int, rounds of collapses, flips and relaxation
+    one_sheet : bool
+        Drop the triangles that leave the surface by the front's one-sheet test (flying
+        edges' own where two sheets are about a grid step apart, as on thin leaves) and close
+        their holes where rings on the surface can (else they stay open). Off (default): the
+        surface stays closed as flying edges' is, such triangles bridging the sheets.
     progress : callable, optional
         ``progress(fraction, message)``; returning False cancels (raises
         :class:`~splineviz.pointcloud.spline_mesh.SplineMeshError`).
     timings : dict, optional
         Receives the seconds of the stages ``start`` (samples, flying edges, projection),
-        ``remesh`` and ``finish``.
+        ``remesh``, ``holes`` (``one_sheet`` only) and ``finish``.
 
     Returns
     -------
@@ -391,8 +406,26 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
             report(0.1 + 0.8 * r / rounds, f"remeshing (round {r + 1} of {rounds})")
             v, f, _k = collapse_short_edges(spline, iso, v, f, length, tol)
             v, f, _flips = optimize(v, f, surface, rounds=1)
+    if one_sheet:
+        report(0.85, "closing holes")
+        with _stage(timings, "holes"):
+            # flying edges' own triangles can leave the surface where two sheets are about a
+            # grid step apart (the front's one-sheet test): they go, and their holes are
+            # closed on the surface as the front's are where the rings stay on it; borders at
+            # the data box and past the planes stay open
+            v, f = _compact(v, f[triangles_on_surface(spline, iso, v[f], HOLE_SLACK)])
+            box_lo = np.array([b[0] for b in spline.bounds]) + 1.5 * step
+            box_hi = np.array([b[1] for b in spline.bounds]) - 1.5 * step
+
+            def keep_open(p):
+                if np.any((p <= box_lo) | (p >= box_hi)):
+                    return True
+                return any(np.any((p - o) @ n < 0) for o, n in planes)
+
+            v, f, _filled = fill_holes(spline, iso, v, f, keep_open)
+            v, f, _flips = optimize(v, f, surface, rounds=1)
     report(0.9, "finishing")
     with _stage(timings, "finish"):
-        out = _finish(spline, iso, v, f, planes, tol, SNAP * length)
+        out = _finish(spline, iso, v, f, planes, tol, SNAP * length, one_sheet)
     report(1.0, "done")
     return out

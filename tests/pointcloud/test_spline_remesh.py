@@ -118,3 +118,10 @@ def test_parallel_kernels_agree_with_the_spline(spline):
     q, m = project_onto(spline, start, ISO, 30, 1e-9)
     np.testing.assert_array_equal(p, q)
     np.testing.assert_array_equal(n, m)
+
+
+def test_one_sheet_keeps_a_closed_sphere_closed(spline):
+    v, f, _n = spline_remesh(spline, ISO, edge_length=1.5, one_sheet=True)
+    edges, counts = edge_face_counts(f)
+    assert (counts == 2).all() and len(v) - len(edges) + len(f) == 2
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 10.0, rtol=1e-8)
