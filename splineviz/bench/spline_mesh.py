@@ -1,4 +1,14 @@
-"""Benchmark: spline-isosurface meshes by the advancing front against flying edges (issue 14).
+"""Benchmark: spline-isosurface meshes by isotropic remeshing on the spline (issue 31) and by
+the advancing front (issue 14) against flying edges.
+
+:func:`run` (``splineviz bench spline-mesh``): per set (the whole tooth at 100.5 and the whole
+bonsai at 40.5 by default), in one run: :func:`splineviz.pointcloud.spline_remesh.spline_remesh`
+(time, CPU time, stages, peak RSS of the process after it), "Export mesh"'s flying edges,
+flying edges + pymeshlab's isotropic remeshing (10 iterations) to the remeshed mesh's vertex
+count (the time reference), and flying edges of the spline at twice the remeshed mesh's
+triangle count (the Hausdorff reference); measures as below.
+
+:func:`run_front` (``--front-rho``):
 
 For each data set (a 40^3 crop of the bonsai's crown and the whole bonsai at 40.5, tooth at
 100.5; cubic-c1 by default) it builds "Export mesh"'s flying-edges mesh (spline samples on the
@@ -17,9 +27,9 @@ points within 1.5 grid steps of the data box: the front stops about one sample s
 box faces (flying edges reaches them), and Newton steps keep a point on a box face within that
 face, so its distance there is not the distance to the surface.
 
-Run: ``python -m splineviz.bench.spline_mesh [--data DIR] [--rho 0.3 0.45]
-[--sets bonsai-crop bonsai tooth] [--model cubic-c1] [--save DIR]`` (the whole bonsai: ~20 min
-of one core and ~8 GB of memory for the three meshes and their measures)
+Run: ``python -m splineviz.bench.spline_mesh [--data DIR] [--sets bonsai-crop bonsai tooth]
+[--model cubic-c1] [--edge-length L] [--front-rho 0.3 0.45] [--save DIR]`` (the front on the
+whole bonsai: ~20 min of one core and ~8 GB of memory for the three meshes and their measures)
 """
 
 from __future__ import annotations
@@ -129,7 +139,107 @@ def measure(spline, iso, vertices, faces, other_vertices):
             "off_surface": int(np.sum(~triangles_on_surface(spline, iso, vertices[faces])))}
 
 
-def run(data_dir: Path, name: str, model: str, rhos, save: Path | None = None):
+def _peak_rss_gib() -> float:
+    """Peak resident memory of this process so far (GiB)."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+
+
+def _timed(fn, *args, **kwargs):
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = fn(*args, **kwargs)
+    return out, time.perf_counter() - t0, time.process_time() - c0
+
+
+def pymeshlab_remesh(vertices, faces, n_vertices: int, iterations: int = 10):
+    """pymeshlab's isotropic remeshing of a mesh to about ``n_vertices`` vertices (the target
+    edge length from the area: an equilateral mesh of A / V has about twice as many faces as
+    vertices, each of area sqrt(3)/4 L^2); ``None`` without pymeshlab."""
+    try:
+        import pymeshlab
+    except ImportError:
+        return None
+    tri = vertices[faces]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]),
+                                axis=1).sum()
+    length = np.sqrt(area / n_vertices * 2.0 / np.sqrt(3.0))
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertices, faces))
+    ms.meshing_isotropic_explicit_remeshing(iterations=iterations,
+                                            targetlen=pymeshlab.PureValue(length))
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix())
+
+
+def run(data_dir: Path, name: str, model: str, edge_length: float | None = None,
+        save: Path | None = None):
+    """Mesh one set with :func:`~splineviz.pointcloud.spline_remesh.spline_remesh` (first,
+    so that the peak RSS after it is the mesher's on top of the loaded data), flying edges of
+    the export, flying edges + pymeshlab's isotropic remeshing to the same vertex count, and
+    flying edges at twice the remeshed mesh's triangle count (the Hausdorff reference); print
+    the table and return its rows ``[(label, seconds, measures)]``."""
+    import splineviz as sv
+    from splineviz.core.isosurface import project_to_isosurface
+    from splineviz.pointcloud.spline_remesh import GRID_FRACTION, flying_edges_start, spline_remesh
+    from splineviz.render.extract import spline_isosurface
+
+    vol, iso = load(data_dir, name)
+    spline = sv.build_spline(vol, model)
+    spline.evaluate(np.zeros((1, 3)))  # build the padded data before timing
+    step = float(np.min(vol.spacing))
+    rss0 = _peak_rss_gib()
+    stages = {}
+    (v, f, _n), t_ours, c_ours = _timed(spline_remesh, spline, iso, edge_length=edge_length,
+                                        timings=stages)
+    rss = _peak_rss_gib()
+    print(f"{name}: remeshed on the spline, {len(f)} triangles in {t_ours:.1f} s "
+          f"(CPU {c_ours:.1f} s; stages " + ", ".join(f"{k} {t:.1f} s" for k, t in stages.items())
+          + f"); peak RSS {rss:.2f} GiB (after loading {rss0:.2f} GiB)", flush=True)
+    fe, t_fe, c_fe = _timed(spline_isosurface, spline, iso)
+    fe_v = np.asarray(fe.points, dtype=np.float64)
+    fe_f = fe.faces.reshape(-1, 4)[:, 1:]
+    rows = [("remesh on the spline", t_ours, c_ours, (v, f)),
+            ("flying edges (export)", t_fe, c_fe, (fe_v, fe_f))]
+    pml, t_pml, c_pml = _timed(pymeshlab_remesh, fe_v, fe_f, len(v))
+    if pml is None:
+        print("pymeshlab is not installed: no flying edges + isotropic remeshing row")
+    else:
+        rows.append(("flying edges + pymeshlab remeshing", t_fe + t_pml, c_fe + c_pml, pml))
+    # flying edges with twice our triangles: triangle counts go as the grid step^-2
+    length = step if edge_length is None else edge_length
+    v0, f0 = flying_edges_start(spline, iso, GRID_FRACTION * length)
+    h = GRID_FRACTION * length * np.sqrt(len(f0) / (2.0 * len(f)))
+    (v2, f2), t2, c2 = _timed(flying_edges_start, spline, iso, h)
+    # its vertices onto the spline, as the export's
+    (v2, _n2), t_p, c_p = _timed(project_to_isosurface, spline, v2, iso)
+    t2, c2 = t2 + t_p, c2 + c_p
+    rows.append((f"flying edges at 2x triangles (step {h / step:.2f})", t2, c2, (v2, f2)))
+    if save is not None:
+        for label, *_r, (mv, mf) in rows:
+            np.savez(save / f"{name}-{label.split(' (')[0].replace(' ', '-')}.npz",
+                     vertices=mv, faces=mf)
+    print(f"\n{name} {vol.shape} ({model}, iso {iso:g}); Hausdorff in grid steps; surface ->"
+          " mesh samples: the vertices of flying edges at 2x (for it: the remeshed mesh's)")
+    print("| mesh | vertices | triangles | time s | CPU s | x FE+pymeshlab | "
+          "max abs(s-iso)/range | mean radius ratio | valence-6 | Hausdorff | "
+          "mesh->surface | surface->mesh | off-surface triangles |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    t_ref = t_fe + t_pml if pml is not None else float("nan")
+    out = []
+    for label, t, c, (mv, mf) in rows:
+        other = v if label.startswith("flying edges at 2x") else v2
+        m = measure(spline, iso, mv, mf, other)
+        out.append((label, t, m))
+        print(f"| {label} | {len(mv)} | {m['triangles']} | {t:.1f} | {c:.1f} | "
+              f"{t / t_ref:.2f} | {m['on_surface']:.1e} | {m['radius_ratio']:.3f} | "
+              f"{m['valence6']:.1%} | {m['hausdorff']:.4f} | {m['to_surface_max']:.4f} | "
+              f"{m['from_surface_max']:.4f} | {m['off_surface']} |", flush=True)
+    print(f"peak RSS of the remeshing on the spline: {rss:.2f} GiB", flush=True)
+    return out
+
+
+def run_front(data_dir: Path, name: str, model: str, rhos, save: Path | None = None):
     """Mesh one set with flying edges and the front (one per ``rho``), print the table (and
     the front's stage times) and return its rows ``[(label, seconds, measures)]``, flying
     edges first; ``save``: a folder for the meshes (``.npz``)."""
@@ -200,15 +310,18 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path.cwd() / ".." / "shared" / "data" / "volumes",
                     help="volumes folder (default ../shared/data/volumes)")
-    ap.add_argument("--sets", nargs="+", default=["bonsai-crop", "tooth"], choices=list(SETS))
+    ap.add_argument("--sets", nargs="+", default=["tooth", "bonsai"], choices=list(SETS))
     ap.add_argument("--model", default="cubic-c1")
-    from splineviz.pointcloud.spline_mesh import DEFAULT_RHO
-
-    ap.add_argument("--rho", nargs="+", type=float, default=[DEFAULT_RHO])
+    ap.add_argument("--edge-length", type=float, default=None,
+                    help="target edge length of the remeshing (default one grid step)")
+    ap.add_argument("--front-rho", nargs="*", type=float, default=[],
+                    help="also run the advancing front with these rho (slow: minutes)")
     ap.add_argument("--save", type=Path, help="folder for the meshes (.npz)")
     args = ap.parse_args(argv)
     for name in args.sets:
-        run(args.data, name, args.model, args.rho, args.save)
+        run(args.data, name, args.model, args.edge_length, args.save)
+        if args.front_rho:
+            run_front(args.data, name, args.model, args.front_rho, args.save)
 
 
 if __name__ == "__main__":

@@ -5,13 +5,15 @@ flying edges + an offscreen render of its mesh for ``isovalue``; 1 against 2 das
 the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render of each step
 for ``time``; VTK's volume mappers and an analytic reference for ``dvr``; one still
 ``render_scene`` picture and the renderer and encoder alone for ``movie``; cell projection
-against the ray caster over surface sizes for ``renderers``)."""
+against the ray caster over surface sizes for ``renderers``; flying edges and flying edges +
+pymeshlab remeshing for ``spline-mesh``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from splineviz.cli.render import finite_float
+from splineviz.core.errors import SplinevizError
 
 
 def _run(args) -> int:
@@ -66,6 +68,17 @@ def _run(args) -> int:
         model = args.models.split(",")[0] if args.models else "cubic-c1"
         run_renderers_bench(sizes=sizes, model=model, size=(w, h), repeats=args.repeats,
                             device=args.device)
+    elif args.which == "spline-mesh":
+        from splineviz.bench.spline_mesh import SETS, run
+
+        sets = args.sets.split(",") if args.sets else ["tooth", "bonsai"]
+        unknown = [name for name in sets if name not in SETS]
+        if unknown:
+            raise SplinevizError(f"unknown spline-mesh set {unknown[0]!r}; choose from "
+                                 f"{', '.join(SETS)}")
+        model = args.models.split(",")[0] if args.models else "cubic-c1"
+        for name in sets:
+            run(Path(data), name, model)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -84,7 +97,7 @@ def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
     p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time",
-                                     "dvr", "movie", "renderers"],
+                                     "dvr", "movie", "renderers", "spline-mesh"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
@@ -118,6 +131,8 @@ def register(subparsers) -> None:
     p.add_argument("--volume", default=None,
                    help="gui: volume file in the data folder's volumes/ (default: the embedded "
                         "default data)")
+    p.add_argument("--sets", default=None,
+                   help="spline-mesh: comma-separated sets (tooth,bonsai; bonsai-crop: 40^3)")
     p.add_argument("--iso", type=finite_float, default=None, help="gui: isovalue of --volume")
     p.add_argument("--step", type=finite_float, default=0.5,
                    help="dvr: sample distance along the rays in voxels")

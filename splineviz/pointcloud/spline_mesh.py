@@ -713,12 +713,13 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
                        SNAP * float(np.median(guide.lengths)))
 
 
-def _finish(spline, iso, vertices, faces, planes, tol, snap):
-    """The last steps of :func:`spline_front_mesh`: drop triangles off the surface, cut by the
-    clip planes, vertices onto the surface, normals."""
-    # a flip or a relaxed vertex may still join two sheets: such triangles leave a hole (the
-    # closed holes' slack: their triangles passed with it)
-    faces = faces[triangles_on_surface(spline, iso, vertices[faces], HOLE_SLACK)]
+def _finish(spline, iso, vertices, faces, planes, tol, snap, one_sheet=True):
+    """The last steps of :func:`spline_front_mesh`: drop triangles off the surface (if
+    ``one_sheet``), cut by the clip planes, vertices onto the surface, normals."""
+    if one_sheet:
+        # a flip or a relaxed vertex may still join two sheets: such triangles leave a hole
+        # (the closed holes' slack: their triangles passed with it)
+        faces = faces[triangles_on_surface(spline, iso, vertices[faces], HOLE_SLACK)]
     used = np.unique(faces)
     remap = np.full(len(vertices), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))

@@ -1,0 +1,127 @@
+"""Meshes of spline isosurfaces by flying edges and isotropic remeshing on the spline: every
+vertex on s = iso, near-equilateral triangles of valence 6, a closed manifold where the
+isosurface is closed, exact cuts by clip planes."""
+
+import numpy as np
+import pytest
+
+import splineviz as sv
+from splineviz.core.isosurface import project_to_isosurface
+from splineviz.pointcloud.quality import edge_face_counts, radius_ratios, valences
+from splineviz.pointcloud.spline_mesh import SplineMeshError
+from splineviz.pointcloud.spline_remesh import collapse_short_edges, spline_remesh
+
+# cubic-c1 of x^2 + y^2 + z^2 is that field + 3/4 (h = 1): an exact sphere of radius 10
+SPHERE = sv.Volume.from_function(lambda x, y, z: x * x + y * y + z * z, (32, 32, 32),
+                                 ((-15.5, 15.5),) * 3)
+ISO = 100.75
+
+
+@pytest.fixture(scope="module")
+def spline():
+    return sv.build_spline(SPHERE, "cubic-c1")
+
+
+@pytest.fixture(scope="module")
+def closed(spline):
+    return spline_remesh(spline, ISO)
+
+
+def test_closed_sphere(spline, closed):
+    v, f, n = closed
+    lo, hi = SPHERE.finite_range
+    assert np.abs(spline.evaluate(v) - ISO).max() < 1e-6 * (hi - lo)
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 10.0, rtol=1e-8)
+    edges, counts = edge_face_counts(f)
+    assert (counts == 2).all()  # closed, manifold
+    assert len(v) - len(edges) + len(f) == 2  # a sphere
+    assert len(np.unique(np.sort(f, axis=1), axis=0)) == len(f)
+    assert radius_ratios(v, f).mean() >= 0.9
+    assert np.mean(valences(len(v), edges) == 6) >= 0.7
+    # edges near the target (one grid step)
+    lengths = np.linalg.norm(v[edges[:, 0]] - v[edges[:, 1]], axis=1)
+    assert 0.8 < np.median(lengths) < 4 / 3
+    # outward triangles (CCW seen from the normals), normals to lower values: inwards here
+    tri = v[f]
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    assert np.all(np.einsum("fc,fc->f", fn, tri.mean(axis=1)) < 0)
+    np.testing.assert_allclose(n, -v / 10.0, atol=1e-6)
+
+
+def test_clip_plane_cut_is_exact(spline):
+    origin, normal = np.array([0.0, 0.0, 2.0]), np.array([0.0, 0.3, 1.0])
+    v, f, _n = spline_remesh(spline, ISO, planes=[(origin, normal)])
+    d = (v - origin) @ (normal / np.linalg.norm(normal))
+    assert d.min() > -1e-9
+    edges, counts = edge_face_counts(f)
+    assert set(np.unique(counts)) == {1, 2}
+    rim = np.unique(edges[counts == 1])
+    assert len(rim) > 20
+    np.testing.assert_allclose(d[rim], 0.0, atol=1e-9)  # border vertices on the plane ...
+    np.testing.assert_allclose(np.linalg.norm(v[rim], axis=1), 10.0, rtol=1e-8)  # and sphere
+    lo, hi = SPHERE.finite_range
+    assert np.abs(spline.evaluate(v) - ISO).max() < 1e-6 * (hi - lo)
+
+
+def test_collapses_keep_the_mesh_manifold(spline):
+    from splineviz.pointcloud.spline_remesh import flying_edges_start
+
+    v, f = flying_edges_start(spline, ISO, 0.5)
+    v, _ = project_to_isosurface(spline, v, ISO, steps=10)
+    before = len(v)
+    v2, f2, k = collapse_short_edges(spline, ISO, v, f, 1.0, 1e-9)
+    assert k > 0 and len(v2) == before - k
+    edges, counts = edge_face_counts(f2)
+    assert (counts == 2).all()
+    assert len(v2) - len(edges) + len(f2) == 2
+    np.testing.assert_allclose(np.linalg.norm(v2, axis=1), 10.0, rtol=1e-8)
+
+
+def test_refusals(spline):
+    with pytest.raises(SplineMeshError):
+        spline_remesh(spline, 5000.0)  # not crossed
+    with pytest.raises(SplineMeshError):
+        spline_remesh(spline, ISO, edge_length=0.01)
+    with pytest.raises(SplineMeshError):
+        spline_remesh(spline, ISO, planes=[((0, 0, 12.0), (0, 0, 1))])
+    with pytest.raises(SplineMeshError, match="cancelled"):
+        spline_remesh(spline, ISO, progress=lambda fraction, message: False)
+
+
+def test_export_mesh_by_remeshing(tmp_path):
+    from splineviz.model import Scene
+    from splineviz.render.extract import export_mesh
+
+    scene = Scene()
+    vol = scene.add_volume(SPHERE, "sphere", isosurface=False)
+    iso = scene.add_isosurface(vol, isovalue=ISO, model="cubic-c1")
+    scene.add_clip_plane((0, 0, 0), (1, 0, 0), volume=vol)
+    mesh = sv.read_mesh(export_mesh(scene, iso, tmp_path / "remesh.vtp", method="remesh"))
+    pts = np.asarray(mesh.points)
+    assert pts[:, 0].min() > -1e-6 and mesh.point_data.active_normals is not None
+    np.testing.assert_allclose(np.linalg.norm(pts, axis=1), 10.0, rtol=1e-6)
+
+
+def test_parallel_kernels_agree_with_the_spline(spline):
+    from splineviz.pointcloud.spline_mesh import project_onto
+    from splineviz.pointcloud.spline_remesh import _grid_values, _project
+
+    values, origin, spacing = _grid_values(spline, 0.7)
+    k, j, i = np.indices(values.shape).reshape(3, -1)[:, ::97]
+    pts = origin + spacing * np.stack([i, j, k], axis=1)
+    np.testing.assert_allclose(values[k, j, i], spline.evaluate(pts), rtol=1e-12, atol=1e-9)
+    rng = np.random.default_rng(3)
+    start = rng.normal(size=(20000, 3))
+    start *= (10.0 + rng.uniform(-0.3, 0.3, len(start)))[:, None] / np.linalg.norm(
+        start, axis=1)[:, None]
+    p, n = _project(spline, start, ISO, 30, 1e-9)
+    q, m = project_onto(spline, start, ISO, 30, 1e-9)
+    np.testing.assert_array_equal(p, q)
+    np.testing.assert_array_equal(n, m)
+
+
+def test_one_sheet_keeps_a_closed_sphere_closed(spline):
+    v, f, _n = spline_remesh(spline, ISO, edge_length=1.5, one_sheet=True)
+    edges, counts = edge_face_counts(f)
+    assert (counts == 2).all() and len(v) - len(edges) + len(f) == 2
+    np.testing.assert_allclose(np.linalg.norm(v, axis=1), 10.0, rtol=1e-8)
