@@ -16,11 +16,11 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QPushButton,
-    QWidget,
 )
 
+from splineviz.gui.panels.volume_panel import VolumePanel
 from splineviz.gui.undo import undo_stack
-from splineviz.model import MAX_SIGMA, IsosurfaceNode, Scene, VolumeNode
+from splineviz.model import MAX_SIGMA, Scene, VolumeNode
 
 #: delay before live smoothing runs after the last sigma change
 SMOOTH_DELAY_MS = 300
@@ -76,7 +76,7 @@ def smooth_volume(volume, sigma: float, device=None):
     return out
 
 
-class SmoothingPanel(QWidget):
+class SmoothingPanel(VolumePanel):
     """Sigma of the current volume, live or on Apply; "Original" goes back to sigma 0."""
 
     def __init__(self, scene: Scene, parent=None):
@@ -120,21 +120,6 @@ class SmoothingPanel(QWidget):
     @property
     def pending(self) -> bool:
         return self._timer.isActive()
-
-    def _selection_changed(self, node) -> None:
-        if isinstance(node, IsosurfaceNode):
-            node = self.scene.volume_of(node)
-        if isinstance(node, VolumeNode):
-            self.set_node(node)
-
-    def set_node(self, node: VolumeNode | None) -> None:
-        if self.node is not None:
-            self.node.events.disconnect(self._show)
-        self.node = node
-        self.setEnabled(node is not None)
-        if node is not None:
-            node.events.connect(self._show)
-        self._show()
 
     def _show(self, *_args) -> None:
         node = self.node

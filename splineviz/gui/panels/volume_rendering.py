@@ -21,20 +21,20 @@ from PySide6.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QPushButton,
-    QWidget,
 )
 
 from splineviz.core.errors import SplinevizError
 from splineviz.core.splines import MODELS
 from splineviz.core.transfer_function import PRESETS, write_paraview_json
+from splineviz.gui.panels.volume_panel import VolumePanel
 from splineviz.gui.undo import undo_stack
-from splineviz.model import IsosurfaceNode, Scene, VolumeNode
+from splineviz.model import Scene, VolumeNode
 
 #: file filter of the transfer function dialogs
 JSON_FILTER = "ParaView colour map preset (*.json)"
 
 
-class VolumeRenderingPanel(QWidget):
+class VolumeRenderingPanel(VolumePanel):
     """Volume rendering settings of the current volume (see module docstring).
 
     Signals of errors go to ``error`` (a callable taking one sentence), the main window's
@@ -90,21 +90,6 @@ class VolumeRenderingPanel(QWidget):
         scene.selection.connect(self._selection_changed)
         scene.removed.connect(lambda n: n is self.node and self.set_node(None))
         self.set_node(next(iter(scene.volumes), None))
-
-    def _selection_changed(self, node) -> None:
-        if isinstance(node, IsosurfaceNode):
-            node = self.scene.volume_of(node)
-        if isinstance(node, VolumeNode):
-            self.set_node(node)
-
-    def set_node(self, node: VolumeNode | None) -> None:
-        if self.node is not None:
-            self.node.events.disconnect(self._show)
-        self.node = node
-        self.setEnabled(node is not None)
-        if node is not None:
-            node.events.connect(self._show)
-        self._show()
 
     def _show(self, *_args) -> None:
         node = self.node
