@@ -8,8 +8,9 @@ from splineviz.model import IsosurfaceNode, VolumeNode
 
 
 class VolumePanel(QWidget):
-    """Base of the panels that show one :class:`~splineviz.model.VolumeNode` (``self.node``)
-    and redraw (``_show``) whenever one of its properties changes."""
+    """Base of the panels that show one :class:`~splineviz.model.VolumeNode` (``self.node``);
+    a panel defines ``_show(*args)``, its redraw whenever one of the node's properties
+    changes."""
 
     node: VolumeNode | None = None
 
@@ -27,6 +28,3 @@ class VolumePanel(QWidget):
         if node is not None:
             node.events.connect(self._show)
         self._show()
-
-    def _show(self, *_args) -> None:
-        raise NotImplementedError
