@@ -9,6 +9,7 @@ import warnings
 
 import numpy as np
 import pytest
+from oblique_phantom import CENTRE, RADIUS, rotation
 
 import splineviz as sv
 from splineviz.core.camera import Camera
@@ -18,21 +19,6 @@ from splineviz.io.errors import InvalidDataError
 from splineviz.io.geometry import affine_from, orientation
 
 nib = pytest.importorskip("nibabel")
-
-#: world centre and radius of the phantom sphere: off the grid's centre and origin, so a
-#: rotation about the wrong point or a missing rotation moves it by several voxels
-CENTRE = np.array([12.0, -4.0, 9.0])
-RADIUS = 6.0
-
-
-def rotation(ax, ay, az):
-    """A rotation by ``ax``, ``ay``, ``az`` degrees about x, then y, then z."""
-    a, b, c = np.radians([ax, ay, az])
-    rx = np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
-    ry = np.array([[np.cos(b), 0, np.sin(b)], [0, 1, 0], [-np.sin(b), 0, np.cos(b)]])
-    rz = np.array([[np.cos(c), -np.sin(c), 0], [np.sin(c), np.cos(c), 0], [0, 0, 1]])
-    return rz @ ry @ rx
-
 
 def sphere_file(path, rot, *, flip_x=True, shape=(28, 26, 24), spacing=(1.0, 1.1, 0.9)):
     """A NIfTI of ``|x - CENTRE|^2`` sampled on a grid turned by ``rot`` (and stored with its
