@@ -167,6 +167,7 @@ def test_ruler_labels_in_slice_and_3d_views():
     assert scene._ruler_label.GetInput() == "50 um"  # VTK's fonts draw ASCII
     marker = SlicePlanesMarker(renderer)
     marker.set_ruler(np.zeros(3), np.array([0.0, 0.0, 2500.0]), "mm")
-    assert marker._ruler_label.GetInput() == "2.5 m"
+    label = marker._props[renderer][2]  # the label the marker draws in this renderer
+    assert label.GetInput() == "2.5 m"
     marker.set_ruler(np.zeros(3), np.array([0.0, 0.0, 12.5]))
-    assert marker._ruler_label.GetInput() == "12.5"
+    assert label.GetInput() == "12.5"

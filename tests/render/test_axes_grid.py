@@ -24,7 +24,8 @@ def test_labels_and_titles_follow_each_data_set_in_each_view():
                                origin=(6e-29, -1.5, 0.0)), "first", isosurface=False)
     views = []
     for side in ("left", "right"):
-        pl = pv.Plotter(off_screen=True, window_size=(200, 150))
+        # big enough for every label (a narrow view thins them: test_drive_findings)
+        pl = pv.Plotter(off_screen=True, window_size=(800, 600))
         views.append((pl, SceneView(scene, pl, side=side)))
     scene.view.split = True
     try:
