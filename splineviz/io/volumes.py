@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import os
 import re
-import threading
 import warnings
 import zlib
 from dataclasses import replace
@@ -93,17 +92,7 @@ def _vtk_itemsize(reader) -> int:
     return 8
 
 
-#: one VTK file reader at a time: readers run in several threads (time-series read-ahead,
-#: slice and open jobs) and VTK's readers are not made to run side by side
-_VTK_READ = threading.RLock()
-
-
 def _read_with_vtk(reader, path: Path, fmt: str) -> VolumeData:
-    with _VTK_READ:
-        return _read_with_vtk_locked(reader, path, fmt)
-
-
-def _read_with_vtk_locked(reader, path: Path, fmt: str) -> VolumeData:
     from vtkmodules.vtkCommonExecutionModel import vtkStreamingDemandDrivenPipeline
 
     reader.SetFileName(str(path))
