@@ -206,7 +206,7 @@ def _fast_and_small(call, expected):
         _, peak = tracemalloc.get_traced_memory()
         tracemalloc.stop()
     seconds = time.perf_counter() - t
-    assert seconds < 1.0 and peak < 200 * 2**20, (seconds, peak)
+    assert seconds < 10.0 and peak < 200 * 2**20, (seconds, peak)
     return _one_sentence(info.value)
 
 

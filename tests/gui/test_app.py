@@ -330,13 +330,13 @@ def test_remesh_panel_runs_remesh_in_a_job_and_cancel_acts_at_once(window, share
     window.scene.remove(mesh)
     assert panel.stats.text() == ""
     # cancel: the window is idle again soon (the 1 s budget is asserted under -m slow, in
-    # test_responsiveness.py; here a guard of three times it), nothing is added
+    # test_responsiveness.py; here a generous guard for a busy machine), nothing is added
     job = panel.run()
     t0 = time.perf_counter()
     window.cancel_button.click()
     assert "cancelling" in window.statusBar().currentMessage()
-    window.wait_idle(5)
-    assert time.perf_counter() - t0 < 3.0 and job.state == "cancelled"
+    window.wait_idle(20)
+    assert time.perf_counter() - t0 < 15.0 and job.state == "cancelled"
     assert not window.scene.of_kind(MeshNode) and not window.cancel_button.isVisible()
 
 

@@ -14,7 +14,7 @@ from splineviz.core.volume import Volume
 from splineviz.render.isosurface import COARSE_TO_FINE, IsosurfaceLayer, ViewState
 
 #: a non-blocking call must return this soon (generous: a busy 2-core machine)
-NO_WAIT_S = 1.0
+NO_WAIT_S = 10.0
 
 
 @pytest.fixture
