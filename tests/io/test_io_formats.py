@@ -271,6 +271,29 @@ def test_metaimage_mha_written_by_vtk(tmp_path, field, compressed):
     assert vol.spacing == (0.5, 1.5, 2.5) and vol.origin == (-1, -2, -3)
 
 
+@pytest.mark.parametrize("etype, dtype, msb", [("MET_SHORT", ">i2", True),
+                                                ("MET_FLOAT", "<f4", False)])
+def test_metaimage_zraw_is_read_whole_whatever_its_compressed_size_says(tmp_path, etype,
+                                                                         dtype, msb):
+    """A header whose CompressedDataSize is short of its stream (MetaIO would inflate only
+    that much and leave the rest of the grid uninitialised) or absent: every sample is the
+    stream's, in the header's byte order, with VTK's spacing and origin."""
+    import zlib
+
+    data = (np.arange(7 * 6 * 5) % 97 - 40).astype(dtype).reshape(5, 6, 7)  # (z, y, x)
+    stream = zlib.compress(data.tobytes(), 9)
+    (tmp_path / "v.zraw").write_bytes(stream)
+    for size in (f"CompressedDataSize = {len(stream) // 2}\n", ""):
+        (tmp_path / "v.mhd").write_text(
+            "ObjectType = Image\nNDims = 3\nBinaryData = True\n"
+            f"BinaryDataByteOrderMSB = {msb}\nCompressedData = True\n{size}"
+            "Offset = 1 -2 3\nElementSpacing = 0.5 1 2\nDimSize = 7 6 5\n"
+            f"ElementType = {etype}\nElementDataFile = v.zraw\n")
+        vol = sv.read_volume(tmp_path / "v.mhd")
+        np.testing.assert_array_equal(vol.data, data.transpose(2, 1, 0).astype(np.float32))
+        assert vol.spacing == (0.5, 1, 2) and vol.origin == (1, -2, 3)
+
+
 def test_nrrd_detached_header_written_by_pynrrd(tmp_path, field):
     import nrrd
 

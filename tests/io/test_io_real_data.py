@@ -62,6 +62,17 @@ def test_frog_labels_are_the_26_tissue_labels():
     assert len(labels) == 26 and labels[0] == 0 and labels[-1] == 29
 
 
+def test_frog_samples_are_its_whole_compressed_stream():
+    """frogtissue.mhd's CompressedDataSize (260020) understates its .zraw (262087 bytes):
+    VTK's MetaIO inflates only that much and left the last 996,715 samples uninitialised
+    (labels 30..255 of freed memory in a busy test run). Every sample is the stream's."""
+    import zlib
+
+    stream = zlib.decompress((VOL / "frogtissue.zraw").read_bytes())
+    want = np.frombuffer(stream, np.uint8).reshape(136, 470, 500).transpose(2, 1, 0)
+    np.testing.assert_array_equal(_volume_data("frogtissue.mhd").data, want)
+
+
 def test_legacy_vtk_sample_order_is_x_fastest():
     """Read carotid.vtk's binary payload directly (big-endian float32 after the header) and
     compare a few samples at asymmetric indices with data[i, j, k]."""
