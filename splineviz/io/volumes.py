@@ -246,8 +246,13 @@ def _read_metaimage(path: Path) -> VolumeData:
         check_volume_size(dims, size, path.name)
     kind = datafile.split()[0].upper() if datafile.split() else ""
     inflated = None
+    compressed = keys.get("compresseddata", "false").strip().lower() == "true"
     if kind == "LOCAL":
-        pass
+        if len(dims) == 3 and size and compressed:
+            start = head.find(b"\n", m.end())
+            if start < 0:
+                raise CorruptFileError(f"{path.name} ends at its ElementDataFile line")
+            inflated = _inflate_payload(path, dims[0] * dims[1] * dims[2] * size, start + 1)
     elif kind == "LIST" or "%" in datafile:
         # one file per slice: every name is checked (count first, so a pattern bomb is
         # refused before any name is built) against the header's folder
@@ -264,7 +269,6 @@ def _read_metaimage(path: Path) -> VolumeData:
             regular_input(confined(name, path, what="slice file"))
     else:
         payload = regular_input(confined(datafile, path))
-        compressed = keys.get("compresseddata", "false").strip().lower() == "true"
         if len(dims) == 3 and size and compressed:
             inflated = _inflate_payload(payload, dims[0] * dims[1] * dims[2] * size)
         if len(dims) == 3 and size and not compressed:
@@ -319,10 +323,11 @@ def _metaimage_direction(keys: dict, name: str):
     return None if np.array_equal(direction, np.eye(3)) else direction
 
 
-def _inflate_payload(payload: Path, need: int) -> np.ndarray:
-    """The ``(need,)`` uint8 bytes of a MetaImage .zraw stream, inflated chunk by chunk into
-    one buffer; a damaged stream, or one that does not inflate to exactly DimSize's bytes,
-    is refused (VTK's MetaIO accepts both silently)."""
+def _inflate_payload(payload: Path, need: int, offset: int = 0) -> np.ndarray:
+    """The ``(need,)`` uint8 bytes of a MetaImage's zlib stream (a .zraw file, or what follows
+    ``ElementDataFile = LOCAL`` at ``offset``), inflated chunk by chunk into one buffer; a
+    damaged stream, or one that does not inflate to exactly DimSize's bytes, is refused (VTK's
+    MetaIO accepts both silently)."""
     out = np.empty(need, dtype=np.uint8)
     inflater = zlib.decompressobj()
     got = 0
@@ -337,6 +342,7 @@ def _inflate_payload(payload: Path, need: int) -> np.ndarray:
 
     try:
         with open(payload, "rb") as fh:
+            fh.seek(offset)
             while chunk := fh.read(1 << 20):
                 put(inflater.decompress(chunk))
         put(inflater.flush())

@@ -292,6 +292,10 @@ def test_metaimage_zraw_is_read_whole_whatever_its_compressed_size_says(tmp_path
         vol = sv.read_volume(tmp_path / "v.mhd")
         np.testing.assert_array_equal(vol.data, data.transpose(2, 1, 0).astype(np.float32))
         assert vol.spacing == (0.5, 1, 2) and vol.origin == (1, -2, 3)
+        # the same with the stream in the header's own file
+        head = (tmp_path / "v.mhd").read_text().replace("v.zraw", "LOCAL")
+        (tmp_path / "v.mha").write_bytes(head.encode() + stream)
+        np.testing.assert_array_equal(sv.read_volume(tmp_path / "v.mha").data, vol.data)
 
 
 def test_nrrd_detached_header_written_by_pynrrd(tmp_path, field):
