@@ -44,6 +44,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from splineviz.gui.dialogs import size_boxes
 from splineviz.model.animation import (
     SWEEP_AXES,
     TIME_TARGET,
@@ -415,12 +416,8 @@ class ExportAnimationDialog(QDialog):
         from splineviz.render.movie import DEFAULT_QUALITY
 
         self.setWindowTitle("Export animation")
-        self.width = QSpinBox()
-        self.height = QSpinBox()
-        for s, v in ((self.width, size[0]), (self.height, size[1])):
-            s.setRange(16, 16384)
-            s.setValue(v + v % 2)
-            s.setToolTip("Pixels of every frame (even for MP4); 3840x2160 for 4K")
+        self.width, self.height = size_boxes(
+            size, "Pixels of every frame (even for MP4); 3840x2160 for 4K", even=True)
         self.fps = _spin(1.0, 240.0, fps, " fps", "Frames per second of the movie")
         self.format = QComboBox()
         for label, suffix, _ in EXPORT_FORMATS:

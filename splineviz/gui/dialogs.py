@@ -36,18 +36,25 @@ Ctrl+1/2/3 look down +X/+Y/+Z (with Shift: -X/-Y/-Z), Ctrl+0 isometric, F7 split
 (two linked views), Esc cancel jobs and the exact frames being computed"""
 
 
+def size_boxes(size, tip: str, even: bool = False) -> tuple[QSpinBox, QSpinBox]:
+    """Width and height fields of an exported picture (16 to 16384 pixels), set to ``size``
+    (rounded up to even numbers with ``even``: H.264 frames)."""
+    boxes = (QSpinBox(), QSpinBox())
+    for box, v in zip(boxes, size, strict=True):
+        box.setRange(16, 16384)
+        box.setValue(v + v % 2 if even else v)
+        box.setToolTip(tip)
+    return boxes
+
+
 class ScreenshotDialog(QDialog):
     """Size and transparency of an exported screenshot."""
 
     def __init__(self, parent, size):
         super().__init__(parent)
         self.setWindowTitle("Export screenshot")
-        self.width = QSpinBox()
-        self.height = QSpinBox()
-        for s, v in ((self.width, size[0]), (self.height, size[1])):
-            s.setRange(16, 16384)
-            s.setValue(v)
-            s.setToolTip("Pixels; the view is rendered again at this size")
+        self.width, self.height = size_boxes(size, "Pixels; the view is rendered again at "
+                                                   "this size")
         self.transparent = QCheckBox("Transparent background")
         self.transparent.setToolTip("Alpha 0 where nothing was drawn")
         form = QFormLayout(self)

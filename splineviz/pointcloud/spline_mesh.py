@@ -488,6 +488,21 @@ def _zip(a: list[int], b: list[int]) -> list[list[int]]:
     return tris
 
 
+def true_border(spline, planes, margin: float):
+    """The ``keep_open(points)`` test of :func:`fill_holes`: a hole whose rim ``(k, 3)``
+    reaches within ``margin`` of the data box, or past a clip plane ``(origin, normal)``,
+    is a true border of the surface and stays open."""
+    box_lo = np.array([b[0] for b in spline.bounds]) + margin
+    box_hi = np.array([b[1] for b in spline.bounds]) - margin
+
+    def keep_open(p):
+        if np.any((p <= box_lo) | (p >= box_hi)):
+            return True
+        return any(np.any((p - o) @ n < 0) for o, n in planes)
+
+    return keep_open
+
+
 def fill_holes(spline, iso, vertices, faces, keep_open):
     """Close the border loops the front left inside the surface (edges it gave up).
 
@@ -695,14 +710,7 @@ def spline_front_mesh(spline, iso: float, planes=(), rho: float = DEFAULT_RHO,
         vertices, faces = front.run()
     # the front gives up a few edges where its point-cloud tests misjudge the surface (sharp
     # folds); those holes are closed, borders at the data box and past clip planes are not
-    box_lo = np.array([b[0] for b in spline.bounds]) + 1.5 * cell
-    box_hi = np.array([b[1] for b in spline.bounds]) - 1.5 * cell
-
-    def keep_open(p):
-        if np.any((p <= box_lo) | (p >= box_hi)):
-            return True
-        return any(np.any((p - o) @ n < 0) for o, n in planes)
-
+    keep_open = true_border(spline, planes, 1.5 * cell)
     with _stage(timings, "holes"):
         vertices, faces, _filled = fill_holes(spline, iso, vertices, faces, keep_open)
     # valence flips and tangential relaxation, every moved vertex put back onto the spline

@@ -45,6 +45,7 @@ from splineviz.pointcloud.spline_mesh import (
     fill_holes,
     project_onto,
     triangles_on_surface,
+    true_border,
 )
 
 #: default target edge length in grid steps
@@ -414,15 +415,8 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
             # closed on the surface as the front's are where the rings stay on it; borders at
             # the data box and past the planes stay open
             v, f = _compact(v, f[triangles_on_surface(spline, iso, v[f], HOLE_SLACK)])
-            box_lo = np.array([b[0] for b in spline.bounds]) + 1.5 * step
-            box_hi = np.array([b[1] for b in spline.bounds]) - 1.5 * step
-
-            def keep_open(p):
-                if np.any((p <= box_lo) | (p >= box_hi)):
-                    return True
-                return any(np.any((p - o) @ n < 0) for o, n in planes)
-
-            v, f, _filled = fill_holes(spline, iso, v, f, keep_open)
+            v, f, _filled = fill_holes(spline, iso, v, f,
+                                       true_border(spline, planes, 1.5 * step))
             v, f, _flips = optimize(v, f, surface, rounds=1)
     report(0.9, "finishing")
     with _stage(timings, "finish"):
