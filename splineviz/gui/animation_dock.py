@@ -28,7 +28,6 @@ from PySide6.QtWidgets import (
     QCheckBox,
     QComboBox,
     QDialog,
-    QDialogButtonBox,
     QDockWidget,
     QDoubleSpinBox,
     QFileDialog,
@@ -44,7 +43,7 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from splineviz.gui.dialogs import size_boxes
+from splineviz.gui.dialogs import ok_cancel, size_boxes
 from splineviz.model.animation import (
     SWEEP_AXES,
     TIME_TARGET,
@@ -434,11 +433,7 @@ class ExportAnimationDialog(QDialog):
         form.addRow("Format", self.format)
         form.addRow("Quality", self.quality)
         form.addRow(self.transparent)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok
-                                   | QDialogButtonBox.StandardButton.Cancel)
-        buttons.accepted.connect(self.accept)
-        buttons.rejected.connect(self.reject)
-        form.addRow(buttons)
+        form.addRow(ok_cancel(self))
         self._format_changed()
 
     def _format_changed(self, *_):

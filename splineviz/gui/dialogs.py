@@ -47,6 +47,15 @@ def size_boxes(size, tip: str, even: bool = False) -> tuple[QSpinBox, QSpinBox]:
     return boxes
 
 
+def ok_cancel(dialog: QDialog) -> QDialogButtonBox:
+    """OK and Cancel buttons that accept and reject ``dialog``."""
+    buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok
+                               | QDialogButtonBox.StandardButton.Cancel)
+    buttons.accepted.connect(dialog.accept)
+    buttons.rejected.connect(dialog.reject)
+    return buttons
+
+
 class ScreenshotDialog(QDialog):
     """Size and transparency of an exported screenshot."""
 
@@ -61,11 +70,7 @@ class ScreenshotDialog(QDialog):
         form.addRow("Width", self.width)
         form.addRow("Height", self.height)
         form.addRow(self.transparent)
-        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok
-                                   | QDialogButtonBox.StandardButton.Cancel)
-        buttons.accepted.connect(self.accept)
-        buttons.rejected.connect(self.reject)
-        form.addRow(buttons)
+        form.addRow(ok_cancel(self))
 
 
 def load_session(window) -> None:
