@@ -124,9 +124,10 @@ class VolumeLayer:
         self._renderers: dict[str, tuple] = {}
         self._tf = None
         self._range = None
-        #: casts so far of each (model, size): the device compiles the kernel anew for a new
-        #: frame size, which the GUI thread must not wait for
-        self.warm_sizes: set = set()
+        #: the models cast so far: the first cast of one builds its kernel (0.5 s and more
+        #: on PoCL), which the GUI thread must not wait for; later casts of any size reuse
+        #: it (the frame size is a kernel argument)
+        self.warm_models: set = set()
 
     @property
     def state(self) -> tuple:
@@ -175,11 +176,13 @@ class VolumeLayer:
         return vr
 
     def is_warm(self, view: ViewState, scale: float) -> bool:
-        """Whether a preview of this size was cast before by the current preview renderer
-        (no kernel compilation, no per-volume set-up in the caller's thread)."""
+        """Whether a preview (of any size: ``view`` and ``scale`` do not matter) needs no
+        kernel build and no per-volume set-up in the caller's thread: the current preview
+        renderer has cast before. Previews thus follow the preview scale down when they
+        run over their budget (a transfer function dragged on a busy machine)."""
         entry = self._renderers.get(PREVIEW_MODEL)
         return (entry is not None and entry[1] == (id(self.volume), self.shaded)
-                and (PREVIEW_MODEL, _scaled(view.size, scale)) in self.warm_sizes)
+                and PREVIEW_MODEL in self.warm_models)
 
     def compute(self, view: ViewState, depth: np.ndarray, depth_sig: int, scale: float = 1.0,
                 preview: bool = False, blocking: bool = True) -> VolumeFrame | None:
@@ -208,7 +211,7 @@ class VolumeLayer:
             with on_device:
                 vr = self._renderer(volume, state, model)
                 frame = vr.render(camera, (w, h), clip_planes=planes, stop=stop)
-            self.warm_sizes.add((model, (w, h)))
+            self.warm_models.add(model)
         finally:
             self._lock.release()
         final = not preview and (w, h) == tuple(view.size)[:2]

@@ -162,11 +162,14 @@ def test_dragging_an_opacity_point_changes_the_picture(window, tmp_path):
     steps_before = undo_stack(w.scene).stack.count()
     previews = []
 
+    def previewed() -> bool:
+        """The node holds the editor's points and the view shows a frame of them."""
+        points, shown = vol.transfer_function_points, w.spline_scene.shown_frame(layer)
+        return (points is not None and shown is not None and shown.state[2] == points
+                and np.array_equal(np.array(points.opacity_points), ed.opacity_points()))
+
     def between():
-        pump(0.15, lambda: False)
-        shown = w.spline_scene.shown_frame(layer)
-        previews.append(shown is not None and ed.dragging
-                        and shown.state[2] == vol.transfer_function_points)
+        previews.append(pump(10, previewed) and ed.dragging)
 
     with StallMeter() as stall:
         _drag(ed, start, end, n=8, between=between)
@@ -176,8 +179,8 @@ def test_dragging_an_opacity_point_changes_the_picture(window, tmp_path):
     assert points is not None, "the drag did not reach the model"
     assert np.array(points.opacity_points)[1, 1] > 0.95
     assert undo_stack(w.scene).stack.count() == steps_before + 1, "a drag is one undo step"
-    assert any(previews), "the view showed no frame of the dragged transfer function " \
-        "while the mouse moved"
+    assert previews and all(previews), "the view did not follow the dragged transfer " \
+        f"function while the mouse moved (steps shown: {previews})"
 
     # the overlay the window shows over the scene: more opacity everywhere the rays meet
     # values above the noise floor, none where they met none
