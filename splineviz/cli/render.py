@@ -134,6 +134,7 @@ def _volume_rendering(scene, args) -> None:
     for vol in scene.volumes:
         try:
             vol.update(volume_rendering=True, transfer_function=args.volume_rendering,
+                       transfer_function_points=None,  # a session's edit gives way
                        **({"rendering_model": args.model} if args.model else {}))
         except ModelError as exc:
             raise RenderArgumentError(f"bad --volume-rendering: {exc}") from None

@@ -121,6 +121,8 @@ class MainWindow(QMainWindow):
         # the first view tells a second one of the drag (LinkedViews)
         self.iso_panel.histogram.pressed.connect(self.view.begin_interaction)
         self.iso_panel.histogram.released.connect(self.view.end_interaction)
+        self.volume_panel.drag_started.connect(self.view.begin_interaction)
+        self.volume_panel.drag_ended.connect(self.view.end_interaction)
         self.commands.opened.connect(lambda p: opening.opened(self, p))
         self.commands.saved.connect(lambda p: self.statusBar().showMessage(f"saved {p}", 6000))
         self.commands.saved.connect(lambda p: self.log.add(f"saved {p}"))
@@ -144,7 +146,8 @@ class MainWindow(QMainWindow):
         self.iso_panel = IsosurfacePanel(self.scene, self.jobs)
         self.clip_panel = ClippingPanel(self.scene)
         self.smooth_panel = SmoothingPanel(self.scene)
-        self.volume_panel = VolumeRenderingPanel(self.scene, error=self.show_error)
+        self.volume_panel = VolumeRenderingPanel(self.scene, error=self.show_error,
+                                                 jobs=self.jobs)
         self.remesh_panel = RemeshPanel(self.scene, self.jobs)
         self.analysis_panel = AnalysisPanel(self.scene)
         self.quantities_panel = QuantitiesPanel(self.scene, self.jobs)

@@ -10,8 +10,11 @@ only. Here the work is cut so that the GUI thread never holds on to it:
 2. (job thread) their exact frames are ray cast (:meth:`SplineScene.refine`; the casters
    are built there too) — cancellable;
 3. (GUI thread, one view per turn of the event loop) the frames are shown and each view is
-   rendered and read back; a frame the scene changed meanwhile is cast again (step 2);
-4. (job thread) the PNG is written.
+   rendered and read back (its colour, and for the volume rendering its camera, window depth
+   and what its volumes cast); a frame the scene changed meanwhile is cast again (step 2);
+4. (job thread) the volume rendering is cast and composited over the picture as
+   :func:`~splineviz.render.volume_rendering.composite_volume_rendering` does for
+   ``render_scene``; the PNG is written.
 
 A cancel or an error closes the off-screen views once the job's thread has ended (its
 casters are theirs).
@@ -133,18 +136,16 @@ class ScreenshotExport(QObject):
             if what == "render":
                 view.render_exact()
             else:
-                self._images.append(pl.screenshot(
-                    None, transparent_background=self.transparent, return_img=True))
+                self._images.append(_read_view(pl, view, self.transparent))
         self._step += 1
         if self._step < len(self._steps):
             QTimer.singleShot(0, self, self._next_step)
             return
-        img = self._images[0] if len(self._images) == 1 else np.concatenate(self._images,
-                                                                           axis=1)
-        self._images = []
+        parts, self._images = self._images, []
         self._close_views()
-        self._job = self.window.jobs.run(f"Writing {self.path.name}", _write, self.path, img,
-                                         on_done=self._written, on_error=self._failed)
+        self._job = self.window.jobs.run(f"Writing {self.path.name}", _write, self.path, parts,
+                                         self.window.device, on_done=self._written,
+                                         on_error=self._failed)
         self._job.on_end = self._ended
 
     def _written(self, path) -> None:
@@ -212,9 +213,35 @@ def _cast_frames(requests, job=None) -> list:
     return out
 
 
-def _write(path, img):
-    from splineviz.io.meshes import write_screenshot
+def _read_view(pl, view, transparent: bool) -> tuple:
+    """(picture, camera, window depth, volume casts) of a rendered off-screen view (GUI
+    thread); no camera or depth when no volume is volume rendered."""
+    from splineviz.render.volume_rendering import volume_casts, vtk_camera, window_depth
 
+    img = pl.screenshot(None, transparent_background=transparent, return_img=True)
+    casts = volume_casts(view)
+    if not casts:
+        return img, None, None, casts
+    h, w = img.shape[:2]
+    return img, vtk_camera(pl), window_depth(pl, w, h), casts
+
+
+def _write(path, parts, device, job=None):
+    """Composite the volume rendering of each part (:func:`_read_view`), join the parts side
+    by side and write the PNG (job thread)."""
+    from splineviz.io.meshes import write_screenshot
+    from splineviz.render.volume_rendering import composite_casts
+
+    images = []
+    for img, camera, depth, casts in parts:
+        if casts:
+            if job is not None:
+                job.progress(len(images) / len(parts), "casting the volume rendering")
+            img = composite_casts(img, camera, depth, casts, device)
+            if job is not None:
+                job.check()
+        images.append(img)
+    img = images[0] if len(images) == 1 else np.concatenate(images, axis=1)
     return write_screenshot(path, img)
 
 

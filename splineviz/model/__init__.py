@@ -22,6 +22,7 @@ from splineviz.model.nodes import (
     Node,
     PointsNode,
     SectionNode,
+    TransferFunctionPoints,
     ViewNode,
     VolumeNode,
 )
@@ -30,4 +31,4 @@ from splineviz.model.scene import STANDARD_VIEWS, Scene
 __all__ = ["MATERIALS", "MAX_SIGMA", "PALETTE", "SIDES", "STANDARD_VIEWS", "CameraNode",
            "ClipPlaneNode", "IsosurfaceNode", "MeshNode", "ModelError", "Node", "PointsNode",
            "Scene",
-           "SectionNode", "ViewNode", "VolumeNode"]
+           "SectionNode", "TransferFunctionPoints", "ViewNode", "VolumeNode"]

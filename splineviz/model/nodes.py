@@ -26,7 +26,14 @@ from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 from psygnal import EventedModel
-from pydantic import AfterValidator, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    model_validator,
+)
 
 from splineviz.core.chunked import ChunkedVolume
 from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
@@ -79,6 +86,57 @@ def _transfer_function_name(spec: str) -> str:
 
 #: a transfer function preset name or a ParaView JSON preset file
 TransferFunctionName = Annotated[str, AfterValidator(_transfer_function_name)]
+
+
+def _ordered(points: tuple) -> tuple:
+    if any(b[0] < a[0] for a, b in zip(points[:-1], points[1:], strict=True)):
+        raise ValueError("transfer function points must be in non-decreasing value order")
+    return points
+
+
+class TransferFunctionPoints(BaseModel):
+    """A transfer function edited in the GUI: its colour and opacity points over data
+    values (as :class:`~splineviz.core.transfer_function.TransferFunction`'s), kept in
+    sessions as two lists of points.
+
+    Attributes
+    ----------
+    rgb_points : tuple of (value, r, g, b)
+        Colours in [0, 1], values non-decreasing.
+    opacity_points : tuple of (value, opacity)
+        Opacities in [0, 1] per unit step, values non-decreasing.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    rgb_points: Annotated[tuple[tuple[Finite, Unit, Unit, Unit], ...], Field(min_length=1),
+                          AfterValidator(_ordered)]
+    opacity_points: Annotated[tuple[tuple[Finite, Unit], ...], Field(min_length=1),
+                              AfterValidator(_ordered)]
+
+    @classmethod
+    def of(cls, tf) -> TransferFunctionPoints:
+        """The points of a :class:`~splineviz.core.transfer_function.TransferFunction`."""
+        return cls(rgb_points=tuple(tuple(float(v) for v in p) for p in tf.rgb_points),
+                   opacity_points=tuple(tuple(float(v) for v in p) for p in tf.opacity_points))
+
+    def transfer_function(self, name: str = "edited"):
+        """These points as a :class:`~splineviz.core.transfer_function.TransferFunction`."""
+        from splineviz.core.transfer_function import TransferFunction
+
+        return TransferFunction(np.array(self.rgb_points, np.float64),
+                                np.array(self.opacity_points, np.float64), name)
+
+
+def resolve_transfer_function(spec, value_range):
+    """The :class:`~splineviz.core.transfer_function.TransferFunction` of a volume node's
+    :attr:`VolumeNode.transfer_function_spec`: edited points as they are, a preset placed
+    on ``value_range`` (lo, hi) of the data, a ParaView JSON file with its own values."""
+    if isinstance(spec, TransferFunctionPoints):
+        return spec.transfer_function()
+    from splineviz.core.transfer_function import resolve
+
+    return resolve(spec, value_range)
 
 
 def reference(*types: str, alias: str | None = None) -> Any:
@@ -223,6 +281,9 @@ class VolumeNode(Node):
     #: its transfer function: a preset of splineviz.core.transfer_function (placed on the
     #: data range) or a ParaView JSON colour-map preset file
     transfer_function: TransferFunctionName = "ct-bone"
+    #: the transfer function edited in the GUI (it replaces ``transfer_function``, the one
+    #: it was edited from; None: that one as it is)
+    transfer_function_points: TransferFunctionPoints | None = None
     #: the spline model it samples, and whether it is shaded from the spline's gradient
     rendering_model: ModelName = "cubic-c1"
     rendering_shade: bool = True
@@ -274,6 +335,14 @@ class VolumeNode(Node):
     def time_unit(self) -> str:
         """The unit of :attr:`times` (``""`` when the data do not say)."""
         return self.series.unit if self.series is not None else ""
+
+    @property
+    def transfer_function_spec(self):
+        """What the renderers map values with (:func:`resolve_transfer_function`): the
+        edited points, else the preset name or JSON file."""
+        if self.transfer_function_points is not None:
+            return self.transfer_function_points
+        return self.transfer_function
 
     @property
     def active(self) -> Volume:

@@ -453,13 +453,14 @@ class OutlineView(NodeView):
                 self._remove_layer()
             return
         if layer is None:
-            layer = VolumeLayer(node.active, node.name, node.transfer_function,
+            layer = VolumeLayer(node.active, node.name, node.transfer_function_spec,
                                 node.rendering_model, node.rendering_shade, device=sv.device)
             sv.volume_layers[node.id] = layer
             sv.spline_scene.add_volume_layer(layer)
         elif layer.volume is not node.active:
             layer.set_volume(node.active)
-        layer.configure(node.transfer_function, node.rendering_model, node.rendering_shade)
+        layer.configure(node.transfer_function_spec, node.rendering_model,
+                        node.rendering_shade)
         layer.set_clip_planes(sv._volume_planes(node.id))
         layer.visible = bool(node.visible and sv.scene.shows(node, sv.side))
 
@@ -469,7 +470,8 @@ class OutlineView(NodeView):
         elif what in ("visible", "show_outline"):
             self._visibility()
         if what in ("visible", "smoothed", "sigma", "volume_rendering", "transfer_function",
-                    "rendering_model", "rendering_shade", "shown_in"):
+                    "transfer_function_points", "rendering_model", "rendering_shade",
+                    "shown_in"):
             self.volume_rendering()
 
     def sides_changed(self) -> None:

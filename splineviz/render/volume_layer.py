@@ -93,14 +93,23 @@ class VolumeLayer:
     ----------
     volume : Volume
     name : str
-    transfer_function : str
-        A preset name or a ParaView JSON file (:func:`~splineviz.core.transfer_function.resolve`).
+    transfer_function : str or TransferFunctionPoints
+        A volume node's :attr:`~splineviz.model.VolumeNode.transfer_function_spec`: a preset
+        name, a ParaView JSON file or edited points
+        (:func:`~splineviz.model.nodes.resolve_transfer_function`).
     model : str
     shaded : bool
     device : str or None
+
+    Notes
+    -----
+    :meth:`configure`, :meth:`set_volume` and :meth:`set_clip_planes` only record what the
+    next frame is of: a worker casting an exact frame holds the renderers for up to seconds,
+    and the GUI thread calls these on every edit (a transfer function dragged in its
+    editor). Each cast takes one snapshot of them and brings the renderer it uses up to it.
     """
 
-    def __init__(self, volume, name: str = "volume", transfer_function: str = "ct-bone",
+    def __init__(self, volume, name: str = "volume", transfer_function="ct-bone",
                  model: str = "cubic-c1", shaded: bool = True, device=None):
         self.volume = volume
         self.name = name
@@ -111,62 +120,69 @@ class VolumeLayer:
         self.visible = True
         self.clip_planes: tuple = ()
         self._lock = threading.Lock()
-        self._renderers: dict[str, object] = {}
+        #: model -> (renderer, (volume id, shaded) it was built for, tf spec it maps with)
+        self._renderers: dict[str, tuple] = {}
         self._tf = None
         self._range = None
-        #: casts so far of each (model, size): the device compiles the kernel anew for a new
-        #: frame size, which the GUI thread must not wait for
-        self.warm_sizes: set = set()
+        #: the models cast so far: the first cast of one builds its kernel (0.5 s and more
+        #: on PoCL), which the GUI thread must not wait for; later casts of any size reuse
+        #: it (the frame size is a kernel argument)
+        self.warm_models: set = set()
 
     @property
     def state(self) -> tuple:
         """What a frame depends on besides the view and the depth."""
-        return (id(self.volume), self.model, self.transfer_function, self.shaded,
-                self.clip_planes)
+        return self._snapshot()[1]
+
+    def _snapshot(self) -> tuple:
+        """(volume, :attr:`state`) read once each (another thread may set them meanwhile)."""
+        volume = self.volume
+        return volume, (id(volume), self.model, self.transfer_function, self.shaded,
+                        self.clip_planes)
 
     def set_volume(self, volume) -> None:
-        with self._lock:
-            self.volume = volume
-            self._renderers.clear()
-            self._tf = None
-            self._range = None
+        self.volume = volume
 
-    def configure(self, transfer_function: str, model: str, shaded: bool) -> None:
-        with self._lock:
-            if transfer_function != self.transfer_function:
-                self._tf = None
-            if bool(shaded) != self.shaded:
-                self._renderers.clear()
-            self.transfer_function = transfer_function
-            self.model = model
-            self.shaded = bool(shaded)
+    def configure(self, transfer_function, model: str, shaded: bool) -> None:
+        self.transfer_function = transfer_function
+        self.model = model
+        self.shaded = bool(shaded)
 
     def set_clip_planes(self, planes) -> None:
         self.clip_planes = tuple(tuple(map(tuple, p)) for p in planes)
 
-    def _renderer(self, model: str):
+    def _renderer(self, volume, state: tuple, model: str):
+        """The renderer of ``model`` for ``volume`` and ``state`` (a :meth:`_snapshot`),
+        made or brought up to it (caller holds the lock)."""
         from splineviz.compute.dvr import VolumeRenderer
-        from splineviz.core.transfer_function import resolve
+        from splineviz.model.nodes import resolve_transfer_function
 
-        if self._tf is None:
-            if self._range is None:
-                data = self.volume.data
-                self._range = (float(np.min(data)), float(np.max(data)))
-            self._tf = resolve(self.transfer_function, self._range)
-            for vr in self._renderers.values():
-                vr.set_transfer_function(self._tf)
-        vr = self._renderers.get(model)
-        if vr is None:
-            vr = VolumeRenderer(self.volume, model, self._tf, device=self.device,
-                                shaded=self.shaded)
-            self._renderers[model] = vr
+        spec, shaded = state[2], state[3]
+        built = (state[0], shaded)
+        if self._range is None or self._range[0] != state[0]:
+            data = volume.data
+            self._range = (state[0], (float(np.min(data)), float(np.max(data))))
+            self._tf = None
+        if self._tf is None or self._tf[0] != spec:
+            self._tf = (spec, resolve_transfer_function(spec, self._range[1]))
+        entry = self._renderers.get(model)
+        if entry is None or entry[1] != built:
+            vr = VolumeRenderer(volume, model, self._tf[1], device=self.device, shaded=shaded)
+        else:
+            vr = entry[0]
+            if entry[2] != spec:
+                vr.set_transfer_function(self._tf[1])
+        self._renderers[model] = (vr, built, spec)
         return vr
 
     def is_warm(self, view: ViewState, scale: float) -> bool:
-        """Whether a preview of this size was cast before by the current preview renderer
-        (no kernel compilation, no per-volume set-up in the caller's thread)."""
-        return (PREVIEW_MODEL in self._renderers
-                and (PREVIEW_MODEL, _scaled(view.size, scale)) in self.warm_sizes)
+        """Whether a preview (of any size: ``view`` and ``scale`` do not matter) needs no
+        kernel build and no per-volume set-up in the caller's thread: the current preview
+        renderer has cast before. Previews thus follow the preview scale down when they
+        run over their budget (a transfer function dragged on a busy machine)."""
+        entry = self._renderers.get(PREVIEW_MODEL)
+        return (entry is not None and entry[1] == (id(self.volume), self.shaded)
+                and PREVIEW_MODEL in self.warm_models)
 
     def compute(self, view: ViewState, depth: np.ndarray, depth_sig: int, scale: float = 1.0,
                 preview: bool = False, blocking: bool = True) -> VolumeFrame | None:
@@ -183,19 +199,19 @@ class VolumeLayer:
             return None
         on_device = _WORKERS_ON_DEVICE if blocking else contextlib.nullcontext()
         try:
-            state = self.state
-            model = PREVIEW_MODEL if preview else self.model
+            volume, state = self._snapshot()
+            model = PREVIEW_MODEL if preview else state[1]
             w, h = _scaled(view.size, scale)
             d = depth if (w, h) == tuple(view.size)[:2] else resample_nearest(depth, w, h)
             camera = view.camera
             stop = depth_stop(d, np.zeros((h, w, 3), np.uint8), camera,
                               camera.clipping_range)
             stop[1][..., 3] = 0.0  # the scene's colour is composited below, by blending
+            planes = list(view.clip_planes) + list(state[4])
             with on_device:
-                frame = self._renderer(model).render(camera, (w, h),
-                                                     clip_planes=list(view.clip_planes)
-                                                     + list(self.clip_planes), stop=stop)
-            self.warm_sizes.add((model, (w, h)))
+                vr = self._renderer(volume, state, model)
+                frame = vr.render(camera, (w, h), clip_planes=planes, stop=stop)
+            self.warm_models.add(model)
         finally:
             self._lock.release()
         final = not preview and (w, h) == tuple(view.size)[:2]

@@ -7,7 +7,8 @@ in the same camera, and they end at the scene's depth (opaque geometry, the isos
 written into the depth buffer by their quads), so everything drawn is embedded at its depth
 and hides what is behind it; the accumulated colour is composited over the scene's picture
 (``C + (1 - A) scene``). Clip planes of the volume and the scene-wide ones cut it. The
-transfer function is the node's preset (placed on the data's range) or ParaView JSON file.
+transfer function is the node's edited points, preset (placed on the data's range) or
+ParaView JSON file.
 Several volume-rendered volumes are composited one after the other in scene order (their
 overlap is not interleaved).
 """
@@ -25,11 +26,15 @@ log = logging.getLogger(__name__)
 
 
 def transfer_function_of(node):
-    """The node's :class:`~splineviz.core.transfer_function.TransferFunction`."""
-    from splineviz.core.transfer_function import resolve
+    """The node's :class:`~splineviz.core.transfer_function.TransferFunction` (its edited
+    points, or its preset placed on the data's range, or its JSON file)."""
+    from splineviz.model.nodes import resolve_transfer_function
 
+    spec = node.transfer_function_spec
+    if not isinstance(spec, str):
+        return resolve_transfer_function(spec, None)
     data = node.active.data
-    return resolve(node.transfer_function, (float(np.min(data)), float(np.max(data))))
+    return resolve_transfer_function(spec, (float(np.min(data)), float(np.max(data))))
 
 
 def vtk_camera(plotter) -> Camera:
@@ -53,29 +58,56 @@ def composite_volume_rendering(view, plotter, image: np.ndarray, device=None) ->
     """``image`` (the plotter's last screenshot, (H, W, 3 or 4) uint8) with the volume
     rendering of every visible volume node of ``view.scene`` whose ``volume_rendering`` is
     on; the image itself when there is none."""
-    from splineviz.compute.dvr import VolumeRenderer, depth_stop
-
-    scene = view.scene
-    nodes = [v for v in scene.volumes if v.volume_rendering and v.visible]
-    if not nodes:
+    casts = volume_casts(view)
+    if not casts:
         return image
     h, w = image.shape[:2]
-    camera = vtk_camera(plotter)
-    depth = window_depth(plotter, w, h)
-    out = image[..., :3].astype(np.float64) / 255.0
-    alpha = image[..., 3].astype(np.float64) / 255.0 if image.shape[2] == 4 else None
+    return composite_casts(image, vtk_camera(plotter), window_depth(plotter, w, h), casts,
+                           device)
+
+
+def volume_casts(view) -> list[tuple]:
+    """What :func:`composite_casts` casts for ``view`` (a :class:`SceneView`), read from its
+    scene now (in the thread that owns the scene): per visible volume node whose
+    ``volume_rendering`` is on, ``(volume, model, transfer function spec, shaded, clip
+    planes)``."""
+    scene = view.scene
     scene_planes = [p.as_pair() for p in scene.clip_planes if p.enabled and p.volume_id is None]
-    for node in nodes:
+    casts = []
+    for node in scene.volumes:
+        if not (node.volume_rendering and node.visible):
+            continue
         if not isinstance(node.active, Volume):
             log.warning("volume rendering of %s skipped: chunked volumes are not volume "
                         "rendered", node.name)
             continue
-        vr = VolumeRenderer(node.active, node.rendering_model, transfer_function_of(node),
-                            device=device, shaded=node.rendering_shade)
-        stop = depth_stop(depth, np.zeros((h, w, 3), np.uint8), camera, camera.clipping_range)
-        stop[1][..., 3] = 0.0  # the scene's colour is composited below, everywhere
-        frame = vr.render(camera, (w, h), clip_planes=scene_planes
-                          + view._volume_planes(node.id), stop=stop)
+        casts.append((node.active, node.rendering_model, node.transfer_function_spec,
+                      node.rendering_shade, scene_planes + view._volume_planes(node.id)))
+    return casts
+
+
+def composite_casts(image: np.ndarray, camera: Camera, depth: np.ndarray, casts,
+                    device=None) -> np.ndarray:
+    """``image`` ((H, W, 3 or 4) uint8, a picture of the scene without volume rendering)
+    with the :func:`volume_casts` ``casts`` cast in ``camera`` and composited over it, one
+    after the other; their rays end at ``depth`` ((H, W) window depth of ``image``, row 0
+    at the top). Any thread: the casts hold the device as the refine workers do."""
+    from splineviz.compute.dvr import VolumeRenderer, depth_stop
+    from splineviz.model.nodes import resolve_transfer_function
+    from splineviz.render.isosurface import _WORKERS_ON_DEVICE
+
+    h, w = image.shape[:2]
+    out = image[..., :3].astype(np.float64) / 255.0
+    alpha = image[..., 3].astype(np.float64) / 255.0 if image.shape[2] == 4 else None
+    for volume, model, spec, shaded, planes in casts:
+        data = volume.data
+        tf = resolve_transfer_function(spec, (float(np.min(data)), float(np.max(data))))
+        with _WORKERS_ON_DEVICE:
+            vr = VolumeRenderer(volume, model, tf, device=device, shaded=shaded)
+            stop = depth_stop(depth, np.zeros((h, w, 3), np.uint8), camera,
+                              camera.clipping_range)
+            stop[1][..., 3] = 0.0  # the scene's colour is composited below, everywhere
+            frame = vr.render(camera, (w, h), clip_planes=planes, stop=stop)
         a = frame.rgba[..., 3:].astype(np.float64)
         out = frame.rgba[..., :3] + (1.0 - a) * out
         if alpha is not None:

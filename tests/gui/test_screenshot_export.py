@@ -107,3 +107,39 @@ def test_cancel_stops_the_export(window, answers, tmp_path):
         assert pump(30, lambda: not export._views)
     assert not answers["path"].exists()
     assert w.last_error is None
+
+
+def test_the_screenshot_has_the_volume_rendering(window, answers, tmp_path, monkeypatch):
+    """Issue 30: a volume-rendered volume is in the exported picture, cast in the job's
+    thread, as render_scene composites it."""
+    from splineviz.io.meshes import read_image
+    from splineviz.render import volume_rendering
+    from splineviz.render.scene_view import render_scene
+
+    w = window
+    w.open_default()
+    assert pump(120, lambda: bool(w.scene.isosurfaces) and not w.jobs.jobs)
+    plain = render_scene(w.scene, SIZE)[..., :3]
+    vol = w.scene.volumes[0]
+    vol.update(volume_rendering=True, transfer_function="mri")
+    assert pump(120, lambda: not w.view.refining and not w.spline_scene.needs_refine())
+    composite, cast_in = volume_rendering.composite_casts, []
+
+    def recording(*args, **kwargs):
+        cast_in.append(threading.current_thread() is threading.main_thread())
+        return composite(*args, **kwargs)
+
+    monkeypatch.setattr(volume_rendering, "composite_casts", recording)
+    answers["path"] = tmp_path / "volume.png"
+    w.actions_by_name["screenshot"].trigger()
+    (export,) = _exports(w)
+    assert pump(120, lambda: export.state != "running")
+    assert export.state == "done", w.last_error
+    assert cast_in == [False], "the volume rendering was not cast in the export's job"
+    monkeypatch.undo()
+
+    img = read_image(answers["path"])[..., :3]
+    expected = render_scene(w.scene, SIZE)[..., :3]
+    assert np.array_equal(img, expected)
+    changed = np.abs(img.astype(int) - plain.astype(int)).max(axis=2) > 8
+    assert changed.mean() > 0.05, "the volume rendering is not in the screenshot"

@@ -115,3 +115,40 @@ def test_cli_volume_rendering(tmp_path, capsys):
                    str(tmp_path / "x.png")])
         err = capsys.readouterr().err
         assert rc == 2 and msg in err and len(err.strip().splitlines()) == 1
+
+
+def test_edited_transfer_function_points_render_and_round_trip(tmp_path):
+    """transfer_function_points replace the preset: the preset's own points give its
+    picture, other points another one; a session keeps them; bad points are one sentence."""
+    from splineviz.core.transfer_function import preset
+    from splineviz.io.errors import SessionError
+    from splineviz.model import ModelError, TransferFunctionPoints
+
+    scene, node = _scene()
+    node.update(volume_rendering=True, transfer_function="mri")
+    with_preset = render_scene(scene, SIZE, device="cpu")
+    tf = preset("mri", node.data.finite_range)
+    node.transfer_function_points = TransferFunctionPoints.of(tf)
+    assert np.array_equal(render_scene(scene, SIZE, device="cpu"), with_preset)
+    op = tf.opacity_points.copy()
+    op[1, 1] = 1.0  # the noise floor made opaque
+    edited = TransferFunctionPoints.of(type(tf)(tf.rgb_points, op))
+    node.transfer_function_points = edited
+    picture = render_scene(scene, SIZE, device="cpu")
+    assert np.abs(picture.astype(int) - with_preset).max(axis=2).mean() > 2
+
+    path = save_scene(scene, tmp_path / "edited.svs")
+    loaded = load_scene(path)
+    assert loaded.volumes[0].transfer_function_points == edited
+    assert np.array_equal(render_scene(loaded, SIZE, device="cpu"), picture)
+
+    with pytest.raises(ModelError):
+        node.transfer_function_points = {"rgb_points": [[0, 0, 0, 0]],
+                                         "opacity_points": [[1, 0], [0, 1]]}
+    text = path.read_text().replace('"opacity_points": [\n', '"opacity_points": [\n[2, 0.5],\n',
+                                    1)
+    bad = tmp_path / "bad.svs"
+    bad.write_text(text)
+    with pytest.raises(SessionError, match="non-decreasing") as err:
+        load_scene(bad)
+    assert "\n" not in str(err.value)
