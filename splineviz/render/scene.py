@@ -52,6 +52,11 @@ MIN_PREVIEW_SCALE = 1.0 / 16.0
 #: drag step a new size and stalled the window for that long. With these few levels each
 #: size of a window is compiled once (and PoCL keeps it in its disk cache).
 PREVIEW_LEVELS = tuple(2.0 ** (-k / 2.0) for k in range(9))
+#: the first preview's resolution factor of an isosurface and of a volume rendering (a ray
+#: of a volume rendering integrates the whole volume: its first previews at 1/4 took 110-210
+#: ms on 2 cores, at 1/8 about 20 ms; the budget then grows the scale)
+FIRST_PREVIEW_SCALE = 0.25
+FIRST_VOLUME_PREVIEW_SCALE = 0.125
 #: windows narrower than this many pixels get scalar bars with fewer labels across more width
 NARROW_BAR_PX = 480
 #: pixels of height of a scalar bar: the colour bar, its labels and its title above them
@@ -375,7 +380,8 @@ class SplineScene:
         return (lv.shown is not None and lv.shown.view.key() == view.key()
                 and lv.shown.state == layer.state)
 
-    def _preview_scale(self, layer, lv, view) -> tuple[float, bool]:
+    def _preview_scale(self, layer, lv, view,
+                       first: float = FIRST_PREVIEW_SCALE) -> tuple[float, bool]:
         """(scale, use fast caster) of a preview that fits :data:`PREVIEW_BUDGET_S`.
 
         The scale follows the time of the last preview (frames have fixed costs, so a
@@ -383,10 +389,11 @@ class SplineScene:
         budget ratio, at most by a factor two per frame; the time of a preview of a size not
         cast before is not counted (it includes the kernel's compilation). The frame is cast
         at the largest of :data:`PREVIEW_LEVELS` not above that scale, so a level is left
-        upwards only when a preview took at most half the budget.
+        upwards only when a preview took at most half the budget. A layer's first preview
+        is cast at ``first``.
         """
         if lv.shown is None or lv.preview_scale is None:
-            lv.preview_scale = 0.25
+            lv.preview_scale = first
         elif lv.preview_seconds:
             # the last *preview*: an exact frame shown since does not count, but a preview
             # at scale 1 does (else the scale would stay at 1 however slow those frames are)
@@ -476,7 +483,7 @@ class SplineScene:
         current = shown is not None and self._volume_current(layer, view, final=False)
         if not current and self._depth is not None \
                 and tuple(self._depth[1].shape) == (view.size[1], view.size[0]):
-            scale, _ = self._preview_scale(layer, vv, view)
+            scale, _ = self._preview_scale(layer, vv, view, FIRST_VOLUME_PREVIEW_SCALE)
             if layer.is_warm(view, scale):
                 t0 = time.perf_counter()
                 vf = layer.compute(view, self._depth[1], self._depth[2], scale=scale,
