@@ -9,7 +9,9 @@ The device samples and model tables are the isosurface ray caster's
 the point-evaluation pieces of ``raycast.cl``. Empty space: per block of
 :data:`BLOCK`\\ ^3 voxels the conservative value range of the model (samples a block's points
 read, widened by the family's negative weight mass), computed once per volume; a transfer
-function change only turns them into per-block "transparent" flags.
+function change only turns them into per-block leap distances (:func:`leap_distances`: how
+far around a block everything is transparent, so a ray crosses a large empty region in a few
+leaps, not one per block).
 
 Models whose kernel family has no point evaluation here (``to-quadratic``, plugin families)
 are rendered by the NumPy reference (slow; ``stats["path"] == "numpy"``).
@@ -87,6 +89,34 @@ def block_bounds(data: np.ndarray, negmass: float = 0.0) -> tuple[np.ndarray, np
     return lo - w, hi + w
 
 
+#: the largest leap distance stored (uint8)
+MAX_LEAP = 255
+
+
+def leap_distances(transparent: np.ndarray) -> np.ndarray:
+    """Per block, the Chebyshev distance to the nearest block that is not transparent.
+
+    A value ``k >= 1`` says that the cube of ``(2k - 1)^3`` blocks centred at the block is
+    transparent, so a ray in it may leap to where it leaves that cube; 0: the block itself is
+    not transparent. Blocks beyond the grid count as transparent (rays end at the box).
+
+    Parameters
+    ----------
+    transparent : (bx, by, bz) bool
+
+    Returns
+    -------
+    (bx, by, bz) uint8, capped at :data:`MAX_LEAP`
+    """
+    from scipy.ndimage import distance_transform_cdt
+
+    transparent = np.asarray(transparent, dtype=bool)
+    if transparent.all():
+        return np.full(transparent.shape, MAX_LEAP, np.uint8)
+    dist = distance_transform_cdt(transparent, metric="chessboard")
+    return np.minimum(dist, MAX_LEAP).astype(np.uint8)
+
+
 class VolumeRenderer:
     """Emission-absorption rendering of a spline model of a volume.
 
@@ -150,7 +180,7 @@ class VolumeRenderer:
         q = self._device.queue
         empty = tf.transparent_between(*self._bounds)
         self.stats["skipped_blocks"] = int(np.count_nonzero(empty))
-        self._empty = cla.to_device(q, np.ascontiguousarray(empty, dtype=np.uint8))
+        self._leap = cla.to_device(q, np.ascontiguousarray(leap_distances(empty)))
         self._table = cla.to_device(q, np.ascontiguousarray(tf.table(), np.float32))
         self._pre = None
 
@@ -243,12 +273,12 @@ class VolumeRenderer:
         depth = cla.empty(q, n, np.float32)
         color = cla.empty(q, (n, 4), np.uint8)
         nx, ny, nz = vol.shape
-        bx, by, bz = self._empty.shape
+        bx, by, bz = self._leap.shape
         gx, gy = 8, 8
         kernel(q, (-(-w // gx) * gx, -(-h // gy) * gy), (gx, gy), rc._data.data,
                np.int32(nx), np.int32(ny), np.int32(nz),
                np.int32(rc._strides[0]), np.int32(rc._strides[1]), *model_args,
-               self._empty.data, np.int32(bx), np.int32(by), np.int32(bz),
+               self._leap.data, np.int32(bx), np.int32(by), np.int32(bz),
                self._table.data, np.float32(lo), np.float32((TABLE_SIZE - 1) / (hi - lo)),
                np.int32(self.preintegrated), pre.data,
                np.float32((PREINT_SIZE - 1) / (hi - lo)),

@@ -13,9 +13,11 @@
 // this one from a PREINT_SIZE^2 table (front value x back value; thin features between two
 // samples count); optional headlight Phong on the normalised spline gradient;
 // front-to-back compositing until the opacity reaches ERT_ALPHA; the stop colour composited
-// behind. Blocks of BLOCK^3 voxels whose value range maps to zero opacity (flags from the host,
-// rebuilt when the transfer function changes) are leapt over along the sample lattice, so the
-// samples taken are those of a march without skipping. core/dvr_reference.py is the NumPy
+// behind. Blocks of BLOCK^3 voxels whose value range maps to zero opacity are leapt over along
+// the sample lattice, so the samples taken are those of a march without skipping: per block the
+// host gives the Chebyshev distance k to the nearest block that is not transparent (rebuilt
+// when the transfer function changes), so the ray leaps to where it leaves the (2k - 1)^3
+// blocks around it, many blocks at once in large empty regions. core/dvr_reference.py is the NumPy
 // reference of the same rules.
 
 #ifndef BLOCK
@@ -24,29 +26,31 @@
 
 #ifdef MODEL_TYPE6
 // Value and index-space gradient of the type-6 spline at p (relative to the centre of the cube
-// whose stencil starts at base): the tet of the cube holding p is the one whose smallest
-// barycentric coordinate is largest (points on shared faces pick either; the spline is
-// continuous there). The tet's B-coefficients are kept in acc between calls while the samples
-// stay in the same tet of the same cube (*last_base, *last_tet): consecutive samples along a
-// ray mostly do.
+// whose stencil starts at base): the tet of the cube holding p from the slicing planes (points
+// on shared faces pick either; the spline is continuous there). The tet's B-coefficients are
+// kept in acc between calls while the samples stay in the same tet of the same cube
+// (*last_base, *last_tet): consecutive samples along a ray mostly do.
 inline float type6_value(__global const DATA_T *pdata, offset_t base,
                          __constant const int *stencil, __global const float8 *tet_weights,
                          __constant const float4 *bary, __constant const int *red, float3 p,
                          float3 *grad, offset_t *last_base, int *last_tet, float8 *acc)
 {
-    int best = 0;
-    float best_min = -INFINITY;
-    float4 lam = (float4)(0.0f);
-    for (int t = 0; t < 24; ++t) {
-        const float4 r0 = bary[4 * t], r1 = bary[4 * t + 1], r2 = bary[4 * t + 2],
-                     r3 = bary[4 * t + 3];
-        const float4 l = (float4)(r0.x * p.x + r0.y * p.y + r0.z * p.z + r0.w,
-                                  r1.x * p.x + r1.y * p.y + r1.z * p.z + r1.w,
-                                  r2.x * p.x + r2.y * p.y + r2.z * p.z + r2.w,
-                                  r3.x * p.x + r3.y * p.y + r3.z * p.z + r3.w);
-        const float m = min_acc(min_acc(l.x, l.y), min_acc(l.z, l.w));
-        if (m > best_min) { best_min = m; best = t; lam = l; }
-    }
+    // the pyramid by the axis a of the largest |p_a| and its sign, the tet inside it by the
+    // larger of the two other |p_b| and its sign (core/partitions/type6.py locate and the
+    // numbering of its TET_LOOKUP: 8 a + 4 [p_a < 0] + 2 [b = a + 1 mod 3] + [p_b < 0])
+    const float pc[3] = {p.x, p.y, p.z};
+    const float3 m = fabs(p);
+    const int a = (m.x >= m.y && m.x >= m.z) ? 0 : (m.y >= m.z ? 1 : 2);
+    const int b1 = a == 2 ? 0 : a + 1, b2 = a == 0 ? 2 : a - 1;
+    const bool first = fabs(pc[b1]) >= fabs(pc[b2]);
+    const int b = first ? b1 : b2;
+    const int best = 8 * a + 4 * (pc[a] < 0.0f) + 2 * first + (pc[b] < 0.0f);
+    const float4 r0 = bary[4 * best], r1 = bary[4 * best + 1], r2 = bary[4 * best + 2],
+                 r3 = bary[4 * best + 3];
+    const float4 lam = (float4)(r0.x * p.x + r0.y * p.y + r0.z * p.z + r0.w,
+                                r1.x * p.x + r1.y * p.y + r1.z * p.z + r1.w,
+                                r2.x * p.x + r2.y * p.y + r2.z * p.z + r2.w,
+                                r3.x * p.x + r3.y * p.y + r3.z * p.z + r3.w);
     if (base != *last_base || best != *last_tet) {
         for (int h = 0; h < NCHUNK; ++h) acc[h] = (float8)(0.0f);
         __global const float8 *wt = tet_weights + best * 27 * NCHUNK;
@@ -59,8 +63,6 @@ inline float type6_value(__global const DATA_T *pdata, offset_t base,
     }
     const float *c = (const float *)acc;
     const float4 e = linear_part(c, red, lam);
-    const float4 r0 = bary[4 * best], r1 = bary[4 * best + 1], r2 = bary[4 * best + 2],
-                 r3 = bary[4 * best + 3];
     *grad = DEGREE * (e.x * r0.xyz + e.y * r1.xyz + e.z * r2.xyz + e.w * r3.xyz);
     return e.x * lam.x + e.y * lam.y + e.z * lam.z + e.w * lam.w;
 }
@@ -99,7 +101,7 @@ __kernel void dvr(__global const DATA_T *data,   // device samples of the ray ca
                   __constant const int *stencil, __global const float8 *tet_weights,
                   __constant const float4 *bary, __constant const int *red,
 #endif
-                  __global const uchar *empty,   // per block: 1 = transparent everywhere
+                  __global const uchar *leap,    // per block: Chebyshev distance to an opaque one
                   int BX, int BYB, int BZB,      // blocks per axis
                   __global const float4 *tf, float tf_lo, float tf_scale,
                   int preint,                    // 1: pre-integrated segments (`pre`)
@@ -169,8 +171,9 @@ __kernel void dvr(__global const DATA_T *data,   // device samples of the ray ca
             const float3 u = clamp(eye_u + t * d, (float3)(0.0f), hiB);
             const int3 blk = min(convert_int3_rtn(u) / BLOCK, (int3)(BX - 1, BYB - 1, BZB - 1));
             int kk = k;  // the last sample inside an empty block holding this one
-            if (!leapt && empty[(blk.x * BYB + blk.y) * BZB + blk.z]) {
-                const int3 lo = blk * BLOCK, hi = lo + BLOCK;
+            const int reach = leapt ? 0 : leap[(blk.x * BYB + blk.y) * BZB + blk.z];
+            if (reach > 0) {
+                const int3 lo = (blk - (reach - 1)) * BLOCK, hi = (blk + reach) * BLOCK;
                 const float3 te = exit_params(eye_u, d, inv_d, lo, hi);
                 const float t_exit = fmin(te.x, fmin(te.y, te.z));
                 kk = max(k, min((int)floor((t_exit - t0) / dt - 0.5f), n - 1));
