@@ -44,47 +44,41 @@ BLOCK = 4
 DEVICE_FAMILIES = ("trilinear", "type6")
 
 
-def block_bounds(data: np.ndarray, negmass: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def block_bounds(data: np.ndarray, negmass: float = 0.0,
+                 reach: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Conservative (min, max) of the spline over each block of :data:`BLOCK`^3 voxels.
 
     Block ``b`` holds the index-space points ``u`` with ``floor(u / BLOCK) = b`` (its closed
-    box ``[BLOCK b, BLOCK (b + 1)]``); there the trilinear cells and type-6 stencils read
-    samples ``BLOCK b - 1 .. BLOCK b + BLOCK + 1``; two ghost layers (linear extrapolation, as
-    the device samples) cover the boundary. The range is widened by ``negmass`` times its
-    width (the spline is an affine, not convex, combination of the samples there).
+    box ``[BLOCK b, BLOCK (b + 1)]``); there the model reads samples ``BLOCK b - reach ..
+    BLOCK b + BLOCK + reach``: ``reach`` 0 for trilinear cells, 1 for the type-6 stencils (27
+    samples around the cube centre nearest ``u``); a ghost layer (linear extrapolation, as
+    the device samples) covers the boundary. The range is widened by
+    ``negmass`` times its width (the spline is an affine, not convex, combination of the
+    samples there). The tighter the ranges, the more blocks a transfer function leaves
+    transparent.
 
     Parameters
     ----------
     data : (nx, ny, nz) array
     negmass : float
+    reach : {0, 1}
 
     Returns
     -------
     lo, hi : (bx, by, bz) float64 with ``b = (n - 1) // BLOCK + 1`` per axis
     """
-    g = 2
-    p = pad_linear(np.asarray(data), g)  # sample s is p[s + g]
-    nb = [(n - 1) // BLOCK + 1 for n in data.shape]
+    from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+    p = pad_linear(np.asarray(data), 1)  # sample s is p[s + 1]
     lo, hi = p, p
-    for axis, b in enumerate(nb):
-        # block b reads p[BLOCK b .. BLOCK b + 2 BLOCK] (within reach g + 1 of its box), the
-        # union of the groups of BLOCK entries b, b + 1, b + 2
-        want = BLOCK * (b + 2)
-        extra = want - lo.shape[axis]
-        widths = [(0, 0)] * 3
-        widths[axis] = (0, max(extra, 0))
-        lo = np.pad(lo, widths, mode="edge").take(np.arange(want), axis=axis)
-        hi = np.pad(hi, widths, mode="edge").take(np.arange(want), axis=axis)
-        shape = list(lo.shape)
-        shape[axis:axis + 1] = [b + 2, BLOCK]
-        g_lo = lo.reshape(shape).min(axis=axis + 1)
-        g_hi = hi.reshape(shape).max(axis=axis + 1)
-
-        def pick(a, s, axis=axis, b=b):
-            return a.take(np.arange(s, s + b), axis=axis)
-
-        lo = np.minimum(np.minimum(pick(g_lo, 0), pick(g_lo, 1)), pick(g_lo, 2))
-        hi = np.maximum(np.maximum(pick(g_hi, 0), pick(g_hi, 1)), pick(g_hi, 2))
+    for axis, n in enumerate(np.asarray(data).shape):
+        # the window p[BLOCK b + 1 - reach .. BLOCK b + 1 + BLOCK + reach] of block b, centred
+        # at BLOCK b + 1 + BLOCK / 2 (clipped at the end, where the box cuts the window anyway)
+        centres = np.minimum(BLOCK * np.arange((n - 1) // BLOCK + 1) + 1 + BLOCK // 2,
+                             p.shape[axis] - 1)
+        size = BLOCK + 1 + 2 * reach
+        lo = minimum_filter1d(lo, size, axis=axis, mode="nearest").take(centres, axis)
+        hi = maximum_filter1d(hi, size, axis=axis, mode="nearest").take(centres, axis)
     w = negmass * (hi - lo)
     return lo - w, hi + w
 
@@ -162,7 +156,8 @@ class VolumeRenderer:
                       "render_s": None, "skipped_blocks": None}
         self._bounds = None
         if self._device is not None:
-            self._bounds = block_bounds(volume.data, float(self.caster._negmass))
+            self._bounds = block_bounds(volume.data, float(self.caster._negmass),
+                                        0 if fam.name == "trilinear" else 1)
         self.set_transfer_function(tf)
 
     @property

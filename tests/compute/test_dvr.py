@@ -4,7 +4,14 @@ skipping, clip planes and the embedding of isosurfaces and opaque geometry (issu
 import numpy as np
 import pytest
 
-from splineviz.compute.dvr import VolumeRenderer, block_bounds, depth_stop, isosurface_stop
+from splineviz.compute.dvr import (
+    MAX_LEAP,
+    VolumeRenderer,
+    block_bounds,
+    depth_stop,
+    isosurface_stop,
+    leap_distances,
+)
 from splineviz.compute.raycast import RayCaster
 from splineviz.core.camera import default_camera
 from splineviz.core.dvr_reference import reference_dvr
@@ -79,17 +86,62 @@ def test_clip_planes_cut_the_rendering(volume, tf):
     assert not np.allclose(got.rgba, vr.render(cam, SIZE).rgba, atol=1e-3)
 
 
-def test_block_bounds_hold_the_spline():
-    rng = np.random.default_rng(3)
-    data = rng.normal(size=(11, 9, 14))
-    lo, hi = block_bounds(data)
-    assert lo.shape == (3, 3, 4)
-    u = rng.uniform(0, np.array(data.shape) - 1, size=(4000, 3))
+def test_leap_distances_are_chebyshev_distances_to_the_opaque_blocks():
+    rng = np.random.default_rng(5)
+    transparent = rng.random((9, 7, 11)) > 0.03
+    got = leap_distances(transparent)
+    opaque = np.argwhere(~transparent)
+    idx = np.indices(transparent.shape).reshape(3, -1).T
+    want = np.abs(idx[:, None, :] - opaque[None]).max(axis=2).min(axis=1)
+    np.testing.assert_array_equal(got.ravel(), want)
+    assert got.max() >= 3
+    assert np.all(leap_distances(np.ones((3, 4, 5), bool)) == MAX_LEAP)
+
+
+@needs_cl
+@pytest.mark.parametrize("model", ["trilinear", "cubic-c1"])
+def test_long_leaps_over_empty_space_keep_the_picture(model):
+    """A blob far from the eye in an otherwise empty volume: rays leap many blocks at once and
+    the picture is still the reference's (which marches every sample; a leap one block too
+    far misses opacity by 0.035)."""
+    x = np.linspace(0, 1, 41)
+    X, Y, Z = np.meshgrid(x, x, x, indexing="ij")
+    data = np.exp(-((X - 0.3) ** 2 + (Y - 0.7) ** 2 + (Z - 0.3) ** 2) / 0.05)
+    vol = Volume(data)
+    tf = TransferFunction([0, 1, 0.5, 0.2, 1, 0.9, 0.9, 0.9], [0, 0, 0.3, 0, 0.6, 0.8, 1, 1])
+    vr = VolumeRenderer(vol, model, tf, device="cpu", step=0.5)
+    assert vr._leap.get().max() >= 5  # long leaps happen
+    cam = default_camera(vol.bounds)
+    size = (96, 96)
+    got = vr.render(cam, size)
+    want = reference_dvr(vr.caster.spline.value_gradient, vol.bounds, vol.spacing, cam, size,
+                         tf, vr.step, vr.shaded)
+    assert np.count_nonzero(want.rgba[..., 3] > 0.01) > 300
+    np.testing.assert_allclose(got.rgba, want.rgba, atol=1e-4)
+
+
+@pytest.mark.parametrize("model", [
+    "trilinear",
+    pytest.param("cubic-c1", marks=needs_cl),
+    pytest.param("super-quadratic", marks=needs_cl)])
+def test_block_bounds_hold_the_spline_and_are_tight(model):
     from splineviz.core.splines import build_spline
 
-    v = build_spline(Volume(data), "trilinear").evaluate(u)
+    rng = np.random.default_rng(3)
+    data = rng.normal(size=(11, 9, 14))
+    negmass = 0.0 if model == "trilinear" else RayCaster(
+        Volume(data), model=model, device="cpu")._negmass
+    lo, hi = block_bounds(data, negmass, 0 if model == "trilinear" else 1)
+    assert lo.shape == (3, 3, 4)
+    u = rng.uniform(0, np.array(data.shape) - 1, size=(20000, 3))
+    u[:2000] = np.array(data.shape) - 1 - rng.uniform(0, 0.6, size=(2000, 3))  # the far faces
+    v = build_spline(Volume(data), model).evaluate(u)
     b = np.minimum(np.floor(u).astype(int) // 4, np.array(lo.shape) - 1)
     assert np.all(lo[tuple(b.T)] <= v + 1e-12) and np.all(v <= hi[tuple(b.T)] + 1e-12)
+    # tight: the trilinear bounds of an inner block are its samples' own min and max
+    if model == "trilinear":
+        assert lo[1, 1, 1] == data[4:9, 4:9, 4:9].min()
+        assert hi[1, 1, 1] == data[4:9, 4:9, 4:9].max()
 
 
 @needs_cl
