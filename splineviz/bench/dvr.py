@@ -6,8 +6,10 @@ points, not the table) along the same rays over the analytic function with a ste
 ``REF_FACTOR`` times finer; the RMSE of every image (RGB in [0, 1], composited on black)
 against it, for each spline model and for ``vtkFixedPointVolumeRayCastMapper`` and
 ``vtkGPUVolumeRayCastMapper`` (same transfer function, camera, sample distance and opacity
-unit distance; offscreen through EGL). Speed: bonsai 256^3 at the same frame size, trilinear
-and cubic-c1 against the faster VTK mapper (median of ``repeats`` frames after a first one).
+unit distance; offscreen through EGL), and the RMSE of the reconstructions themselves against
+the function (what bounds the images' errors). Speed: bonsai 256^3 and its 512^3 resample at
+the frame size and twice its side, trilinear and cubic-c1 against the faster VTK mapper
+(median of ``repeats`` frames after a first one), a preview while moving.
 Each model is also rendered with pre-integrated segments (``+pre``). Images are written to
 ``out_dir`` for looking at.
 """
@@ -254,18 +256,28 @@ def _quality_case(vol, cam, size, step, device, out_dir, models, log, shaded, re
     return rows
 
 
-def speed(path, size=(512, 512), step: float = 0.5, repeats: int = 3, device=None,
-          out_dir=None, log=print) -> list[dict]:
-    """Frame times on a real volume (bonsai), shaded, CT-bone-like preset on its range."""
-    import pyvista as pv
+def speed(data, spacing, size=(512, 512), step: float = 0.5, repeats: int = 3, device=None,
+          out_dir=None, label: str = "bonsai", log=print) -> list[dict]:
+    """Frame times of one volume (bonsai or its resample), shaded, CT-bone preset on its range.
 
+    Parameters
+    ----------
+    data : (nx, ny, nz) array
+    spacing : (3,) float
+    size : (width, height) of the frames
+
+    Returns
+    -------
+    list of dict: ``renderer``, ``first_s``, ``frame_s`` (median of ``repeats`` after the
+    first), ``note`` ("preview" for the preview row)
+    """
     from splineviz.core.transfer_function import preset
 
-    img = pv.read(str(path))
-    data = np.asarray(img.point_data.active_scalars).reshape(img.dimensions, order="F")
-    vol = Volume(data, spacing=img.spacing, origin=img.origin)
-    tf = preset("ct-bone", (float(data.min()), float(data.max())))
+    vol = Volume(data, spacing=spacing)
+    tf = preset("ct-bone", (float(np.min(data)), float(np.max(data))))
     cam = default_camera(vol.bounds)
+    w, h = size
+    tag = f"{label}_{w}x{h}"
     rows = []
     for model, pre in (("trilinear", False), ("cubic-c1", False), ("cubic-c1", True)):
         vr = VolumeRenderer(vol, model, tf, device=device, step=step, shaded=True,
@@ -274,14 +286,15 @@ def speed(path, size=(512, 512), step: float = 0.5, repeats: int = 3, device=Non
         name = model + ("+pre" if pre else "")
         rows.append({"renderer": name, "first_s": first, "frame_s": median})
         if out_dir:
-            _save(Path(out_dir) / f"bonsai_{name}.png", frame.color[..., :3] / 255.0)
-    # a preview while moving: a quarter of the frame's side, the trilinear model
-    w, h = size
-    preview = (max(w // 4, 1), max(h // 4, 1))
-    vr = VolumeRenderer(vol, "trilinear", tf, device=device, step=step, shaded=True)
-    _, first, median = _timed(lambda: vr.render(cam, preview), repeats)
-    rows.append({"renderer": f"trilinear preview {preview[0]}x{preview[1]}", "first_s": first,
-                 "frame_s": median, "note": "preview"})
+            _save(Path(out_dir) / f"{tag}_{name}.png", frame.color[..., :3] / 255.0)
+        if model == "trilinear":
+            # a preview while moving as the live view casts one: its model is trilinear
+            # (render/volume_layer.py PREVIEW_MODEL), a quarter of the side
+            preview = (max(w // 4, 1), max(h // 4, 1))
+            _, first, median = _timed(lambda vr=vr, p=preview: vr.render(cam, p), repeats)
+            rows.append({"renderer": f"trilinear preview {preview[0]}x{preview[1]}",
+                         "first_s": first, "frame_s": median, "note": "preview"})
+        del vr
     for mapper in VTK_MAPPERS:
         try:
             vv = VTKVolume(vol, tf, mapper, size, step, True)
@@ -293,14 +306,53 @@ def speed(path, size=(512, 512), step: float = 0.5, repeats: int = 3, device=Non
         rows.append({"renderer": f"vtk-{mapper}", "first_s": first, "frame_s": median,
                      "note": "blank image" if image.max() == 0 else ""})
         if out_dir:
-            _save(Path(out_dir) / f"bonsai_vtk-{mapper}.png", image)
+            _save(Path(out_dir) / f"{tag}_vtk-{mapper}.png", image)
+        del vv
+    return rows
+
+
+def field_errors(ns=(41, 81), models=MODELS + ("to-quadratic",), points: int = 100_000,
+                 seed: int = 0) -> list[dict]:
+    """RMSE of each model's value and gradient against Marschner-Lobb at random points of
+    the inner region (r <= :data:`ML_INNER`), for the sample counts ``ns`` per axis: what the
+    reconstruction itself gives the images (trilinear is VTK's mappers' reconstruction).
+    Rows ``bspline-3`` and ``bspline-5`` (values only): scipy's prefiltered cubic and quintic
+    B-spline interpolation of the same samples, what a near-ideal reconstruction reaches."""
+    from scipy.ndimage import map_coordinates
+
+    from splineviz.core.splines import build_spline
+
+    rng = np.random.default_rng(seed)
+    rows = []
+    for n in ns:
+        vol = Volume.from_function(ml, (n, n, n), ml.domain)
+        lo, hi = np.array(vol.bounds).T
+        p = lo + (hi - lo) * rng.random((points, 3))
+        p = p[np.hypot(p[:, 0], p[:, 1]) <= ML_INNER]
+        v, g = ml_value_gradient(p)
+        for model in models:
+            sv, sg = build_spline(vol, model).value_gradient(p)
+            rows.append({"n": n, "model": model, "value_rmse": rmse(sv, v),
+                         "gradient_rmse": float(np.sqrt(np.mean(np.sum((sg - g) ** 2,
+                                                                        axis=1))))})
+        index = ((p - lo) / np.asarray(vol.spacing)).T
+        for order in (3, 5):
+            sv = map_coordinates(np.asarray(vol.data, np.float64), index, order=order,
+                                 mode="nearest")
+            rows.append({"n": n, "model": f"bspline-{order}", "value_rmse": rmse(sv, v),
+                         "gradient_rmse": None})
     return rows
 
 
 def run_dvr_bench(data_dir, size=(512, 512), step: float = 0.5, repeats: int = 3,
-                  device=None, out_dir=None) -> dict:
-    """Both parts, printed as tables; returns their rows."""
+                  device=None, out_dir=None, volume_sizes=(256, 512)) -> dict:
+    """Both parts, printed as tables; returns their rows.
+
+    Quality at ``size``; speed on bonsai at each of ``volume_sizes`` (256: the file, larger:
+    its linear resample) at ``size`` and twice its side."""
     import resource
+
+    from splineviz.bench.isovalue import bonsai_volume
 
     if out_dir:
         Path(out_dir).mkdir(parents=True, exist_ok=True)
@@ -317,23 +369,42 @@ def run_dvr_bench(data_dir, size=(512, 512), step: float = 0.5, repeats: int = 3
         c1 = [r["rmse"] for r in q if r["case"] == case and r["renderer"] == "cubic-c1"]
         if vtk and c1:
             print(f"{case}: cubic-c1 / best VTK = {c1[0] / min(vtk):.3f} (target <= 0.333)")
+    fe = field_errors()
+    print("\nthe reconstruction alone: RMSE against Marschner-Lobb, r <= "
+          f"{ML_INNER} (trilinear = VTK's)")
+    print(f"{'n':>4} {'model':<16} {'value':>9} {'gradient':>9}")
+    for r in fe:
+        grad = "-" if r["gradient_rmse"] is None else f"{r['gradient_rmse']:.2e}"
+        print(f"{r['n']:>4} {r['model']:<16} {r['value_rmse']:>9.2e} {grad:>9}")
     s = []
     bonsai = Path(data_dir) / "bonsai.vti"
-    if bonsai.exists():
-        print(f"\nbonsai 256^3, {w}x{h}, shaded, ct-bone preset (median of {repeats})")
-        s = speed(bonsai, size, step, repeats, device, out_dir)
-        print(f"{'renderer':<18} {'first s':>8} {'frame s':>8}  note")
-        for r in s:
-            f = "-" if r["frame_s"] is None else f"{r['frame_s']:.3f}"
-            f0 = "-" if r["first_s"] is None else f"{r['first_s']:.3f}"
-            print(f"{r['renderer']:<18} {f0:>8} {f:>8}  {r.get('note', '')}")
-        vtk = [r["frame_s"] for r in s if r["renderer"].startswith("vtk")
-               and r["frame_s"] is not None and not r.get("note")]
-        if vtk:
-            for r in s:
-                if not r["renderer"].startswith("vtk") and not r.get("note"):
-                    print(f"{r['renderer']} / fastest VTK = {r['frame_s'] / min(vtk):.2f}x")
-    else:
+    if not bonsai.exists():
         print(f"\n{bonsai} not found: speed part skipped")
-    print(f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
-    return {"quality": q, "speed": s}
+    for n in volume_sizes if bonsai.exists() else ():
+        data, spacing = bonsai_volume(data_dir, n)
+        for fw, fh in ((w, h), (2 * w, 2 * h)):
+            print(f"\nbonsai {n}^3{'' if n == 256 else ' (resampled)'}, {fw}x{fh}, shaded, "
+                  f"ct-bone preset (median of {repeats})")
+            rows = speed(data, spacing, (fw, fh), step, repeats, device, out_dir,
+                         label=f"bonsai{n}")
+            print(f"{'renderer':<26} {'first s':>8} {'frame s':>8}  note")
+            for r in rows:
+                f = "-" if r["frame_s"] is None else f"{r['frame_s']:.3f}"
+                f0 = "-" if r["first_s"] is None else f"{r['first_s']:.3f}"
+                print(f"{r['renderer']:<26} {f0:>8} {f:>8}  {r.get('note', '')}")
+            vtk = [r["frame_s"] for r in rows if r["renderer"].startswith("vtk")
+                   and r["frame_s"] is not None and not r.get("note")]
+            if vtk:
+                for r in rows:
+                    if not r["renderer"].startswith("vtk") and not r.get("note"):
+                        target = {"trilinear": " (target <= 1.0)",
+                                  "cubic-c1": " (target <= 2.0)"}.get(r["renderer"], "")
+                        print(f"{r['renderer']} / fastest VTK = "
+                              f"{r['frame_s'] / min(vtk):.2f}x{target}")
+            for r in rows:
+                if r.get("note") == "preview":
+                    print(f"preview while moving: {r['frame_s'] * 1000:.0f} ms (target <= 100)")
+            s += [{**r, "n": n, "size": (fw, fh)} for r in rows]
+        del data
+    print(f"\npeak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+    return {"quality": q, "field": fe, "speed": s}

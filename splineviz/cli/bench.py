@@ -48,8 +48,9 @@ def _run(args) -> int:
     elif args.which == "dvr":
         from splineviz.bench.dvr import run_dvr_bench
 
+        sizes = tuple(int(n) for n in (args.sizes or "256,512").split(","))
         run_dvr_bench(data, size=(w, h), step=args.step, repeats=args.repeats,
-                      device=args.device, out_dir=args.out)
+                      device=args.device, out_dir=args.out, volume_sizes=sizes)
     elif args.which == "movie":
         from splineviz.bench.movie import SIZES, run_movie_bench
 
@@ -102,11 +103,12 @@ def register(subparsers) -> None:
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
                         "gui: ../shared/data)")
-    p.add_argument("--size", default="512x512", help="raycast, isovalue: image size WxH")
+    p.add_argument("--size", default="512x512",
+                   help="raycast, isovalue: image size WxH; dvr: that and twice its side")
     p.add_argument("--preview", default="128x128", help="isovalue: preview frame size WxH")
     p.add_argument("--sizes", default=None,
-                   help="isovalue: volume sizes n (bonsai resampled to n^3), comma-separated "
-                        "(256,512); "
+                   help="isovalue, dvr: volume sizes n (bonsai resampled to n^3), "
+                        "comma-separated (256,512); "
                         "movie: frame sizes among 720p,1080p,4K (default all); "
                         "renderers: sphere volume sizes n (16,32,64,128)")
     p.add_argument("--frames", type=int, default=4, help="movie: frames per size")
