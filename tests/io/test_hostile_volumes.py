@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from peak_memory import PEAK_RSS_SOURCE
 
 import splineviz as sv
 from splineviz.io import read_volume_sequence
@@ -21,13 +22,13 @@ from splineviz.io.errors import DataSizeError, InvalidDataError
 ROOT = Path(__file__).resolve().parents[2]
 
 #: the measurement, in a fresh interpreter: seconds and peak RSS growth of one read
-PROBE = """
-import json, resource, sys, time
+PROBE = PEAK_RSS_SOURCE + """
+import json, sys, time
 import splineviz.io as sio
 from splineviz.core.errors import SplinevizError
 from splineviz.plugins import ensure_loaded
 ensure_loaded()
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+before = peak_rss_bytes()
 start = time.perf_counter()
 try:
     sio.read_volume(sys.argv[1])
@@ -35,7 +36,7 @@ try:
 except SplinevizError as exc:
     error = [type(exc).__name__, str(exc)]
 seconds = time.perf_counter() - start
-grown = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) * 1024
+grown = peak_rss_bytes() - before
 print(json.dumps({"error": error, "seconds": seconds, "grown": grown}))
 """
 
