@@ -92,20 +92,32 @@ class TruncatedOctahedraFamily(KernelFamily):
         self._nunion = int(np.diff(pts["union_start"]).max())
         self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
         self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
+        # the data of a level-1 octree node (classify.cl brick_bounds)
+        node_points = to_tables.node_union(k, TO_WORDS)
+        self._node_offsets = cla.to_device(q, (node_points @ strides).astype(np.int32))
         self.prelude = (to_program.relevance_source(k, TO_WORDS)
                         + to_program.subcell_source(TO_WORDS))
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
         return {"MODEL_TO": 1, "NCOEF": 10, "GHOST": ghost, "NWORDS": TO_WORDS,
-                "NUNION": self._nunion, "SKIP_ACTIVE": SKIP_ACTIVE}
+                "NUNION": self._nunion, "NODE_UNION": len(node_points),
+                "SKIP_ACTIVE": SKIP_ACTIVE}
+
+    def upload_samples(self, rc) -> None:
+        """The new samples only: the tables and the generated source depend on ``k`` and
+        the padded shape alone."""
+        rc._data = padded_device_samples(rc._device, rc.volume.data, self.ghost_layers,
+                                         rc._sample_type[0], out=rc._data)
 
     def allocate(self, rc) -> None:
         import pyopencl.array as cla
 
         # isovalue-independent cell ranges (raycast.cl), all (0, 255): "not known yet"
         q = rc._device.queue
-        self._ranges = cla.empty(q, 8 * int(np.prod(rc._levels[0][1:])), np.uint16)
+        size = 8 * int(np.prod(rc._levels[0][1:]))
+        if getattr(self, "_ranges", None) is None or self._ranges.size != size:
+            self._ranges = cla.empty(q, size, np.uint16)
         self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
 
     def defines(self, rc) -> dict:
@@ -113,7 +125,7 @@ class TruncatedOctahedraFamily(KernelFamily):
                 "NWORDS": TO_WORDS, "NUNION": self._nunion, "TO_STENCIL": self._to_stencil}
 
     def cell_args(self) -> list:
-        return [self._cls_start.data, self._cls_offsets.data]
+        return [self._cls_start.data, self._cls_offsets.data, self._node_offsets.data]
 
     def ray_args(self, rc) -> list:
         e = self._ent

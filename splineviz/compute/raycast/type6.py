@@ -78,6 +78,12 @@ class Type6Family(KernelFamily):
         return {"MODEL_TYPE6": 1, "NCOEF": bform.n_coefficients(scheme.degree),
                 "NPOINTS": len(scheme.cube_points), "SKIP_ACTIVE": SKIP_ACTIVE}
 
+    def upload_samples(self, rc) -> None:
+        """The new samples only: the tables come from the model, the stencil offsets from
+        the padded shape, both unchanged."""
+        rc._data = padded_device_samples(rc._device, rc.volume.data, self.ghost_layers,
+                                         rc._sample_type[0], out=rc._data)
+
     def defines(self, rc) -> dict:
         return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK, "NPOINTS": self.npoints}
 
