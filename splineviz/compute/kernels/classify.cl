@@ -31,17 +31,27 @@
 inline float min_acc(float acc, float x) { return x < acc ? x : acc; }
 inline float max_acc(float acc, float x) { return x > acc ? x : acc; }
 
+// the (lo, hi) vector of the sample type (DATA_T2: uchar2, short2, ..., float2)
+#define PAIR_OF(t) t##2
+#define PAIR(t) PAIR_OF(t)
+#define DATA_T2 PAIR(DATA_T)
+
 #ifdef MODEL_TO
-// the TO bounds read the data offsets of the cell's parity class; the kernels also take the
-// data a level-1 node reads, each point once (NODE_UNION offsets from its first cell's
-// corner, splineviz/compute/raycast/to_tables.py node_union)
+// the TO bounds read the data offsets of the cell's parity class; brick_bounds reads the data
+// a level-1 node reads, each point once (NODE_UNION offsets from its first cell's corner,
+// splineviz/compute/raycast/to_tables.py node_union)
 #define CLASS_ARGS , __constant const int *cls_start, __constant const int *cls_offsets
 #define CLASS_PASS , cls_start, cls_offsets
-#define KERNEL_CLASS_ARGS CLASS_ARGS, __constant const int *node_offsets
+#define NODE_ARGS , __constant const int *node_offsets
+#elif defined(MODEL_TYPE6)
+// type-6 brick_bounds reads the (min, max) of 2 x 2 x 2 blocks of samples (sample_blocks)
+#define CLASS_ARGS
+#define CLASS_PASS
+#define NODE_ARGS , __global const DATA_T2 *blocks, int BX, int BY, int BZ
 #else
 #define CLASS_ARGS
 #define CLASS_PASS
-#define KERNEL_CLASS_ARGS
+#define NODE_ARGS
 #endif
 
 // Conservative value bounds of the model on cell (i, j, k).
@@ -93,7 +103,7 @@ inline float2 cell_bounds(__global const DATA_T *data, int SY, int SZ, int i, in
 
 // Level 1 of the octree: the bounds of the (up to) 8 cells of each node.
 __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, int CY, int CZ,
-                           float negmass KERNEL_CLASS_ARGS, __global float2 *bounds)
+                           float negmass CLASS_ARGS NODE_ARGS, __global float2 *bounds)
 {
     const int c = get_global_id(0), b = get_global_id(1), a = get_global_id(2);
     const int dx = (CX + 1) / 2, dy = (CY + 1) / 2, dz = (CZ + 1) / 2;
@@ -115,13 +125,26 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
     const float w = negmass * (hi - lo);
     lo -= w;
     hi += w;
+#elif defined(MODEL_TYPE6)
+    // the node's cubes read the padded samples 2a..min(2a + 1, CX - 1) + 2 per axis (a cube
+    // i the samples i..i+2): the blocks a and a + 1, the last one cut at the samples' end
+    // (sample_blocks) hold exactly these, so their range, widened as in cell_bounds, is the
+    // box's from 8 loads instead of 64
+    for (int i = a; i <= min(a + 1, BX - 1); ++i)
+        for (int j = b; j <= min(b + 1, BY - 1); ++j)
+            for (int k = c; k <= min(c + 1, BZ - 1); ++k) {
+                const DATA_T2 v = blocks[(i * BY + j) * BZ + k];
+                lo = min_acc(lo, (float)v.x);
+                hi = max_acc(hi, (float)v.y);
+            }
+    const float w = negmass * (hi - lo);
+    lo -= w;
+    hi += w;
 #else
-    // the node's cells read one box of samples (a trilinear cell i the samples i..i+1, a
-    // type-6 cube the padded samples i..i+2): its range, widened as in cell_bounds, holds
-    // the union of the cells' bounds (the same bounds when negmass is 0), from far fewer loads
-#ifdef MODEL_TYPE6
-    const int reach = 2;
-#elif defined(MODEL_CUSTOM)
+    // the node's cells read one box of samples (a trilinear cell i the samples i..i+1): its
+    // range, widened as in cell_bounds, holds the union of the cells' bounds (the same
+    // bounds when negmass is 0), from far fewer loads
+#if defined(MODEL_CUSTOM)
     const int reach = CELL_REACH;
 #else
     const int reach = 1;
@@ -139,6 +162,30 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
 #endif
     bounds[(a * dy + b) * dz + c] = (float2)(lo, hi);
 }
+
+#ifdef MODEL_TYPE6
+// (min, max) of the 2 x 2 x 2 blocks of the PX x PY x PZ (padded) samples: block (p, q, r)
+// holds the samples 2p..2p+1 x 2q..2q+1 x 2r..2r+1 that exist; read once per time step by
+// brick_bounds (a node's 64 samples are 8 blocks)
+__kernel void sample_blocks(__global const DATA_T *data, int PX, int PY, int PZ,
+                            __global DATA_T2 *blocks)
+{
+    const int r = get_global_id(0), q = get_global_id(1), p = get_global_id(2);
+    const int BX = (PX + 1) / 2, BY = (PY + 1) / 2, BZ = (PZ + 1) / 2;
+    if (p >= BX || q >= BY || r >= BZ) return;
+    float lo = INFINITY, hi = -INFINITY;
+    for (int i = 2 * p; i < min(2 * p + 2, PX); ++i)
+        for (int j = 2 * q; j < min(2 * q + 2, PY); ++j)
+            for (int k = 2 * r; k < min(2 * r + 2, PZ); ++k) {
+                const float v = data[((offset_t)i * PY + j) * PZ + k];
+                lo = min_acc(lo, v);
+                hi = max_acc(hi, v);
+            }
+    // back in the samples' type, exactly: integer samples' extremes are integers (a block
+    // holds one sample at least), float blocks of NaNs alone keep (inf, -inf)
+    blocks[(p * BY + q) * BZ + r] = (DATA_T2)((DATA_T)lo, (DATA_T)hi);
+}
+#endif
 
 __kernel void reduce_level(__global float2 *bounds,
                            int src_off, int sx, int sy, int sz,
@@ -163,7 +210,7 @@ __kernel void reduce_level(__global float2 *bounds,
 // Classification of every cell at once (RayCaster.classify_all): flag of the candidate
 // cells, whose value bounds straddle the isovalue.
 __kernel void candidates(__global const DATA_T *data, int SY, int SZ, int CX, int CY, int CZ,
-                         float negmass KERNEL_CLASS_ARGS, float iso, __global int *flag)
+                         float negmass CLASS_ARGS, float iso, __global int *flag)
 {
     const int k = get_global_id(0), j = get_global_id(1), i = get_global_id(2);
     if (i >= CX || j >= CY || k >= CZ) return;

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from splineviz.compute.buffers import fill
 from splineviz.compute.device import try_get_device
 from splineviz.compute.program import get_kernel
 from splineviz.compute.raycast.errors import RayCastError
@@ -356,7 +357,8 @@ class RayCaster:
             # the classification cache (raycast.cl): per level-1 brick a slot, (epoch << 24) |
             # pool entry; counts: cells and tets classified at this epoch, entries asked for
             bricks = int(np.prod(levels[0][1:]))
-            self._slots = cla.zeros(q, bricks, np.uint32)
+            self._slots = cla.empty(q, bricks, np.uint32)
+            fill(self._slots, 0, q)
             self._counts = cla.zeros(q, 3, np.int32)
             self._pool_cap = _initial_pool(bricks)
             self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
@@ -377,7 +379,8 @@ class RayCaster:
         """The min-max octree of the device samples, on the device (classify.cl)."""
         q, ctx, levels = self._device.queue, self._device.context, self._levels
         get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
-            q, levels[0][:0:-1], None, *self._cell_args(), self._bounds.data)
+            q, levels[0][:0:-1], None, *self._cell_args(), *self.family.node_args(self),
+            self._bounds.data)
         k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
         for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
             k_reduce(q, (dz, dy, dx), None, self._bounds.data,
@@ -422,7 +425,7 @@ class RayCaster:
             self._epoch += 1
             if self._epoch > MAX_EPOCH:
                 # the 8-bit stamp wraps: clear once every MAX_EPOCH isovalues
-                self._slots.fill(np.uint32(0), queue=q)
+                fill(self._slots, 0, q)
                 self._epoch = 1
             self._counts.fill(np.int32(0), queue=q)  # the pool is refilled from entry 0
         self.stats.update(active_cells=visible, active_tets=visible, classified="visible")

@@ -119,6 +119,11 @@ class KernelFamily(ABC):
         """Extra trailing arguments of the per-cell kernels of classify.cl."""
         return []
 
+    def node_args(self, rc) -> list:
+        """Extra trailing arguments of classify.cl's ``brick_bounds`` (level 1 of the
+        octree), after enqueueing any pass they need on ``rc``'s samples."""
+        return []
+
     def ray_args(self, rc) -> list:
         """Its arguments of the ray kernel (after the cache's, before the isovalue)."""
         return []

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from splineviz.compute.buffers import fill
 from splineviz.compute.raycast.errors import RayCastError
 from splineviz.compute.raycast.family import (
     SKIP_ACTIVE,
@@ -118,14 +119,17 @@ class TruncatedOctahedraFamily(KernelFamily):
         size = 8 * int(np.prod(rc._levels[0][1:]))
         if getattr(self, "_ranges", None) is None or self._ranges.size != size:
             self._ranges = cla.empty(q, size, np.uint16)
-        self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
+        fill(self._ranges, 0xFF00, q)  # uchar2 (lo 0, hi 255)
 
     def defines(self, rc) -> dict:
         return {"DEGREE": 2, "TET_SLACK": TET_SLACK, "GHOST": self.ghost_layers,
                 "NWORDS": TO_WORDS, "NUNION": self._nunion, "TO_STENCIL": self._to_stencil}
 
     def cell_args(self) -> list:
-        return [self._cls_start.data, self._cls_offsets.data, self._node_offsets.data]
+        return [self._cls_start.data, self._cls_offsets.data]
+
+    def node_args(self, rc) -> list:
+        return [self._node_offsets.data]
 
     def ray_args(self, rc) -> list:
         e = self._ent
