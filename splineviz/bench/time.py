@@ -6,13 +6,18 @@ step, so that a step change includes reading it. Per spline model, in a fresh pr
 
 * **step change + first exact frame**: read the next step
   (:class:`~splineviz.io.time_series.TimeSeries`), hand it to the ray caster
-  (:meth:`~splineviz.compute.raycast.RayCaster.set_volume`: the programs and tables stay, the
-  samples, octree and cell ranges are rebuilt) and cast one exact frame; the baseline, in
-  the same run, reads the step, runs ``vtkFlyingEdges3D`` and renders its mesh offscreen.
+  (:meth:`~splineviz.compute.raycast.RayCaster.set_volume`: the programs, tables and
+  buffers stay, the samples, octree and cell ranges are rewritten) and cast one exact
+  frame; the baseline, in the same run, reads the step, runs ``vtkFlyingEdges3D`` and
+  renders its mesh offscreen.
 * **preview playback**: steps per second of a player that reads ahead
   (:meth:`TimeSeries.read_ahead`) and casts each step at the preview size, at ``n``^3 and
   at the smaller ``preview_n``^3.
 * **peak RSS** of the process against the series' cache cap.
+
+Each row says whether it meets issue 27's targets: step change + first exact frame at most
+:data:`TARGET_VS_VTK` times VTK's (at :data:`TARGET_VS_VTK_N`^3), and at least
+:data:`TARGET_RATE` preview steps per second at :data:`TARGET_RATE_N`^3 on the 2-core CPU.
 
 Then the area and enclosed volume of a sphere field's isosurface from the spline surface
 (:func:`~splineviz.core.surface_measures.measure_isosurface`) and from a flying-edges mesh,
@@ -37,6 +42,13 @@ MODELS = ("trilinear", "super-quadratic", "cubic-c1", "to-quadratic")
 ISO = 128.0
 #: steps whose change is timed (after a warm-up step)
 TIMED_STEPS = 3
+#: issue 27's targets: step change + first exact frame against VTK's read + flying edges +
+#: render, per model, and the volume size they hold at
+TARGET_VS_VTK = {"trilinear": 0.5, "super-quadratic": 0.5, "cubic-c1": 0.5,
+                 "to-quadratic": 1.0}
+TARGET_VS_VTK_N = 256
+#: issue 27's target of the preview playback rate (steps/s) and the volume size it holds at
+TARGET_RATE, TARGET_RATE_N = 10.0, 128
 
 
 def make_series(folder, n: int, steps: int) -> str:
@@ -189,21 +201,32 @@ def run_time_bench(n: int = 256, steps: int = 20, preview_n: int = 128, models=M
     gib = 2.0**30
     out(f"time steps of a deforming gyroid, {steps} uint8 steps; step change + first exact "
         f"{size[0]}x{size[1]} frame against reading + vtkFlyingEdges3D + render in the same "
-        f"run; preview playback at {preview[0]}x{preview[1]}")
+        f"run; preview playback at {preview[0]}x{preview[1]} (reading ahead)")
     if "error" in vtk:
         out(f"VTK: {vtk['error']}")
     else:
         out(f"{n}^3 VTK read + FE + render: {vtk['step_s']:.3f} s per step, peak RSS "
             f"{vtk['rss'] / gib:.2f} GiB")
     out(f"| {'model':15} | {'n^3':>4} | {'step+exact s':>12} | {'/VTK':>5} | "
-        f"{'preview steps/s':>15} | {'RSS GiB':>7} | {'cap GiB':>7} |")
+        f"{'target':>11} | {'preview steps/s':>15} | {'target':>11} | {'RSS GiB':>7} | "
+        f"{'cap GiB':>7} |")
     for r in rows:
         if "error" in r:
             out(f"| {r['model']:15} | {r['n']:4d} | {r['error']}")
             continue
-        ratio = f"{r['vs_vtk']:.2f}" if "vs_vtk" in r else "-"
+        ratio, exact, rate = "-", "-", "-"
+        if "vs_vtk" in r:
+            ratio = f"{r['vs_vtk']:.2f}"
+            limit = TARGET_VS_VTK.get(r["model"])
+            if limit is not None and r["n"] == TARGET_VS_VTK_N:
+                r["meets_vs_vtk"] = r["vs_vtk"] <= limit
+                exact = f"<={limit:.1f} {'ok' if r['meets_vs_vtk'] else 'MISS'}"
+        if r["n"] == TARGET_RATE_N:
+            r["meets_rate"] = r["rate"] >= TARGET_RATE
+            rate = f">={TARGET_RATE:.0f} {'ok' if r['meets_rate'] else 'MISS'}"
         out(f"| {r['model']:15} | {r['n']:4d} | {r['change_s']:12.3f} | {ratio:>5} | "
-            f"{r['rate']:15.1f} | {r['rss'] / gib:7.2f} | {r['cap'] / gib:7.2f} |")
+            f"{exact:>11} | {r['rate']:15.1f} | {rate:>11} | {r['rss'] / gib:7.2f} | "
+            f"{r['cap'] / gib:7.2f} |")
     devices = {r["device"] for r in rows if "device" in r}
     if devices:
         out(f"device: {', '.join(sorted(devices))}")
