@@ -37,12 +37,14 @@ inline float max_acc(float acc, float x) { return x > acc ? x : acc; }
 #define DATA_T2 PAIR(DATA_T)
 
 #ifdef MODEL_TO
-// the TO bounds read the data offsets of the cell's parity class; brick_bounds reads the data
-// a level-1 node reads, each point once (NODE_UNION offsets from its first cell's corner,
-// splineviz/compute/raycast/to_tables.py node_union)
+// the TO bounds read the data offsets of the cell's parity class; brick_bounds reads the
+// NODE_BLOCKS sample blocks (sample_blocks) that hold the data a level-1 node reads
+// (node_blocks: offsets from block (a, b, c); splineviz/compute/raycast/to_tables.py
+// node_union)
 #define CLASS_ARGS , __constant const int *cls_start, __constant const int *cls_offsets
 #define CLASS_PASS , cls_start, cls_offsets
-#define NODE_ARGS , __constant const int *node_offsets
+#define NODE_ARGS , __global const DATA_T2 *blocks, int BX, int BY, int BZ, \
+                  __constant const int *node_blocks
 #elif defined(MODEL_TYPE6)
 // type-6 brick_bounds reads the (min, max) of 2 x 2 x 2 blocks of samples (sample_blocks)
 #define CLASS_ARGS
@@ -110,17 +112,18 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
     if (a >= dx || b >= dy || c >= dz) return;
     float lo = INFINITY, hi = -INFINITY;
 #ifdef MODEL_TO
-    // the node's 8 cells read 416 values, 125 of them distinct: their range, widened as in
-    // cell_bounds, holds the union of the cells' bounds (a little wider: 2 % more candidate
-    // nodes on the benchmark's gyroid) from 3.3x fewer loads, the octree's cost on a new
-    // time step. A node past the last cell reads inside the padded samples still (its
-    // phantom cells reach GHOST layers at most).
-    const offset_t base = (((offset_t)2 * a + GHOST) * SY + (2 * b + GHOST)) * SZ
-                          + (2 * c + GHOST);
-    for (int u = 0; u < NODE_UNION; ++u) {
-        const float v = data[base + node_offsets[u]];
-        lo = min_acc(lo, v);
-        hi = max_acc(hi, v);
+    // the node's 8 cells read 416 values, 125 of them distinct, held by 39 sample blocks:
+    // the blocks' range, widened as in cell_bounds, holds the union of the cells' bounds
+    // from 39 loads (312 samples: 1.4x the candidate nodes of the cells' own bounds on the
+    // benchmark's gyroid, the same frames; the octree of a new 256^3 time step took 2.5x
+    // longer from the 125 values, longer still from the cells' 416). A node past the last
+    // cell reads inside the padded samples still (its phantom cells reach GHOST layers at
+    // most).
+    const int base = (a * BY + b) * BZ + c;
+    for (int u = 0; u < NODE_BLOCKS; ++u) {
+        const DATA_T2 v = blocks[base + node_blocks[u]];
+        lo = min_acc(lo, (float)v.x);
+        hi = max_acc(hi, (float)v.y);
     }
     const float w = negmass * (hi - lo);
     lo -= w;
@@ -163,10 +166,10 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
     bounds[(a * dy + b) * dz + c] = (float2)(lo, hi);
 }
 
-#ifdef MODEL_TYPE6
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
 // (min, max) of the 2 x 2 x 2 blocks of the PX x PY x PZ (padded) samples: block (p, q, r)
-// holds the samples 2p..2p+1 x 2q..2q+1 x 2r..2r+1 that exist; read once per time step by
-// brick_bounds (a node's 64 samples are 8 blocks)
+// holds the samples 2p..2p+1 x 2q..2q+1 x 2r..2r+1 that exist; made once per data change for
+// brick_bounds (a type-6 node's 64 samples are 8 blocks, a TO node's 125 lie in 39)
 __kernel void sample_blocks(__global const DATA_T *data, int PX, int PY, int PZ,
                             __global DATA_T2 *blocks)
 {

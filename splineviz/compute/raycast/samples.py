@@ -132,3 +132,29 @@ def padded_device_samples(device, data: np.ndarray, ghost: int, dtype, out=None)
     pad_linear_into(data, ghost, host)
     host.base.release(q)
     return out
+
+
+def sample_blocks(rc) -> list:
+    """Enqueue classify.cl's ``sample_blocks`` on ``rc``'s device samples: the (min, max) of
+    their 2 x 2 x 2 blocks, in the samples' type (a quarter of their bytes), which the
+    octree's level-1 pass of the type-6 and TO families reads instead of the samples.
+
+    Returns
+    -------
+    list
+        The kernel arguments ``blocks`` ((bx, by, bz, 2) buffer), ``bx``, ``by``, ``bz``
+        (blocks per axis: half the padded samples, rounded up). OpenCL frees the buffer once
+        the kernels enqueued with it are done.
+    """
+    import pyopencl.array as cla
+
+    from splineviz.compute.program import get_kernel
+
+    q = rc._device.queue
+    px, py, pz = rc._data.shape
+    nb = tuple((n + 1) // 2 for n in (px, py, pz))
+    blocks = cla.empty(q, (*nb, 2), rc._sample_type[0])
+    get_kernel(rc._device.context, "classify", "sample_blocks", rc._cls_defines)(
+        q, nb[::-1], None, rc._data.data, np.int32(px), np.int32(py), np.int32(pz),
+        blocks.data)
+    return [blocks.data, *(np.int32(n) for n in nb)]

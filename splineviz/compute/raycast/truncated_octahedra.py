@@ -23,7 +23,7 @@ from splineviz.compute.raycast.family import (
     KernelFamily,
     register_kernel_family,
 )
-from splineviz.compute.raycast.samples import padded_device_samples
+from splineviz.compute.raycast.samples import padded_device_samples, sample_blocks
 from splineviz.compute.raycast.tables import padded_rows, reduction_table
 
 
@@ -93,16 +93,19 @@ class TruncatedOctahedraFamily(KernelFamily):
         self._nunion = int(np.diff(pts["union_start"]).max())
         self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
         self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
-        # the data of a level-1 octree node (classify.cl brick_bounds)
-        node_points = to_tables.node_union(k, TO_WORDS)
-        self._node_offsets = cla.to_device(q, (node_points @ strides).astype(np.int32))
+        # the 2 x 2 x 2 sample blocks that hold the data of a level-1 octree node (classify.cl
+        # brick_bounds; the node's first cell corner is padded sample 2a + ghost)
+        blocks = np.unique((to_tables.node_union(k, TO_WORDS) + ghost) >> 1, axis=0)
+        _, by, bz = ((n + 1) // 2 for n in rc._data.shape)
+        self._node_blocks = cla.to_device(q, (blocks @ [by * bz, bz, 1]).astype(np.int32))
+        self._nblocks = len(blocks)
         self.prelude = (to_program.relevance_source(k, TO_WORDS)
                         + to_program.subcell_source(TO_WORDS))
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
         return {"MODEL_TO": 1, "NCOEF": 10, "GHOST": ghost, "NWORDS": TO_WORDS,
-                "NUNION": self._nunion, "NODE_UNION": len(node_points),
+                "NUNION": self._nunion, "NODE_BLOCKS": self._nblocks,
                 "SKIP_ACTIVE": SKIP_ACTIVE}
 
     def upload_samples(self, rc) -> None:
@@ -129,7 +132,9 @@ class TruncatedOctahedraFamily(KernelFamily):
         return [self._cls_start.data, self._cls_offsets.data]
 
     def node_args(self, rc) -> list:
-        return [self._node_offsets.data]
+        """The (min, max) of the 2 x 2 x 2 sample blocks and the offsets of the blocks that
+        hold a node's data."""
+        return [*sample_blocks(rc), self._node_blocks.data]
 
     def ray_args(self, rc) -> list:
         e = self._ent

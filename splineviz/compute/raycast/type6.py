@@ -21,7 +21,7 @@ from splineviz.compute.raycast.family import (
     KernelFamily,
     register_kernel_family,
 )
-from splineviz.compute.raycast.samples import padded_device_samples
+from splineviz.compute.raycast.samples import padded_device_samples, sample_blocks
 from splineviz.compute.raycast.tables import padded_rows, reduction_table
 
 
@@ -85,21 +85,8 @@ class Type6Family(KernelFamily):
                                          rc._sample_type[0], out=rc._data)
 
     def node_args(self, rc) -> list:
-        """The (min, max) of the 2 x 2 x 2 sample blocks (classify.cl sample_blocks), in the
-        samples' type: a quarter of the samples' bytes, for the octree build only."""
-        import pyopencl.array as cla
-
-        from splineviz.compute.program import get_kernel
-
-        q = rc._device.queue
-        px, py, pz = rc._data.shape
-        nb = tuple((n + 1) // 2 for n in (px, py, pz))
-        blocks = cla.empty(q, (*nb, 2), rc._sample_type[0])
-        get_kernel(rc._device.context, "classify", "sample_blocks", rc._cls_defines)(
-            q, nb[::-1], None, rc._data.data, np.int32(px), np.int32(py), np.int32(pz),
-            blocks.data)
-        # OpenCL frees the buffer once the kernels enqueued with it are done
-        return [blocks.data, *(np.int32(n) for n in nb)]
+        """The (min, max) of the 2 x 2 x 2 sample blocks (a node's 4^3 samples are 8)."""
+        return sample_blocks(rc)
 
     def defines(self, rc) -> dict:
         return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK, "NPOINTS": self.npoints}
