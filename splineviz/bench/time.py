@@ -178,6 +178,55 @@ def sphere_measures(n: int = 64, models=("cubic-c1", "to-quadratic")) -> list[di
     return rows
 
 
+def time_table(rows: list[dict], vtk_runs: list[dict], n: int) -> list[str]:
+    """The benchmark's table: one line per row, after VTK's baseline.
+
+    Parameters
+    ----------
+    rows : one dict per (model, volume size ``n``): ``change_s``, ``rate``, ``rss``, ``cap``
+        (or ``error``); ``vs_vtk``, ``meets_vs_vtk`` and ``meets_rate`` are added where they
+        apply (:data:`TARGET_VS_VTK` at :data:`TARGET_VS_VTK_N`^3, :data:`TARGET_RATE` at
+        :data:`TARGET_RATE_N`^3)
+    vtk_runs : VTK's measurements of the ``n``^3 steps (``step_s``, ``rss``, or ``error``);
+        the faster is the baseline
+    n : the size of the steps VTK read
+    """
+    gib = 2.0**30
+    done = [v for v in vtk_runs if "error" not in v]
+    lines = []
+    if done:
+        vtk = min(done, key=lambda v: v["step_s"])
+        runs = ", ".join(f"{v['step_s']:.3f}" for v in done)
+        lines.append(f"{n}^3 VTK read + FE + render: {vtk['step_s']:.3f} s per step (the faster "
+                     f"of the runs before and after the models: {runs} s), peak RSS "
+                     f"{vtk['rss'] / gib:.2f} GiB")
+    else:
+        vtk = None
+        lines.append(f"VTK: {vtk_runs[0]['error']}")
+    lines.append(f"| {'model':15} | {'n^3':>4} | {'step+exact s':>12} | {'/VTK':>5} | "
+                 f"{'target':>11} | {'preview steps/s':>15} | {'target':>11} | "
+                 f"{'RSS GiB':>7} | {'cap GiB':>7} |")
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['model']:15} | {r['n']:4d} | {r['error']}")
+            continue
+        ratio, exact, rate = "-", "-", "-"
+        if vtk is not None and r["n"] == n:
+            r["vs_vtk"] = r["change_s"] / vtk["step_s"]
+            ratio = f"{r['vs_vtk']:.2f}"
+            limit = TARGET_VS_VTK.get(r["model"])
+            if limit is not None and n == TARGET_VS_VTK_N:
+                r["meets_vs_vtk"] = r["vs_vtk"] <= limit
+                exact = f"<={limit:.1f} {'ok' if r['meets_vs_vtk'] else 'MISS'}"
+        if r["n"] == TARGET_RATE_N:
+            r["meets_rate"] = r["rate"] >= TARGET_RATE
+            rate = f">={TARGET_RATE:.0f} {'ok' if r['meets_rate'] else 'MISS'}"
+        lines.append(f"| {r['model']:15} | {r['n']:4d} | {r['change_s']:12.3f} | {ratio:>5} | "
+                     f"{exact:>11} | {r['rate']:15.1f} | {rate:>11} | "
+                     f"{r['rss'] / gib:7.2f} | {r['cap'] / gib:7.2f} |")
+    return lines
+
+
 def run_time_bench(n: int = 256, steps: int = 20, preview_n: int = 128, models=MODELS,
                    size=(512, 512), preview=(128, 128), device=None, timeout=900.0,
                    out=print) -> list[dict]:
@@ -199,42 +248,11 @@ def run_time_bench(n: int = 256, steps: int = 20, preview_n: int = 128, models=M
         # the baseline again after the models: the faster run of the two, so that a busy
         # moment of the shared cores while VTK ran does not flatter the ratios
         vtk_runs.append(_in_process(_measure_vtk, (patterns[n], size), timeout))
-        done = [v for v in vtk_runs if "error" not in v]
-        vtk = min(done, key=lambda v: v["step_s"]) if done else vtk_runs[0]
-        for r in rows:
-            if "error" not in r and "error" not in vtk and r["n"] == n:
-                r["vs_vtk"] = r["change_s"] / vtk["step_s"]
-    gib = 2.0**30
     out(f"time steps of a deforming gyroid, {steps} uint8 steps; step change + first exact "
         f"{size[0]}x{size[1]} frame against reading + vtkFlyingEdges3D + render in the same "
         f"run; preview playback at {preview[0]}x{preview[1]} (reading ahead)")
-    if "error" in vtk:
-        out(f"VTK: {vtk['error']}")
-    else:
-        runs = ", ".join(f"{v['step_s']:.3f}" for v in vtk_runs if "error" not in v)
-        out(f"{n}^3 VTK read + FE + render: {vtk['step_s']:.3f} s per step (the faster of "
-            f"the runs before and after the models: {runs} s), peak RSS "
-            f"{vtk['rss'] / gib:.2f} GiB")
-    out(f"| {'model':15} | {'n^3':>4} | {'step+exact s':>12} | {'/VTK':>5} | "
-        f"{'target':>11} | {'preview steps/s':>15} | {'target':>11} | {'RSS GiB':>7} | "
-        f"{'cap GiB':>7} |")
-    for r in rows:
-        if "error" in r:
-            out(f"| {r['model']:15} | {r['n']:4d} | {r['error']}")
-            continue
-        ratio, exact, rate = "-", "-", "-"
-        if "vs_vtk" in r:
-            ratio = f"{r['vs_vtk']:.2f}"
-            limit = TARGET_VS_VTK.get(r["model"])
-            if limit is not None and r["n"] == TARGET_VS_VTK_N:
-                r["meets_vs_vtk"] = r["vs_vtk"] <= limit
-                exact = f"<={limit:.1f} {'ok' if r['meets_vs_vtk'] else 'MISS'}"
-        if r["n"] == TARGET_RATE_N:
-            r["meets_rate"] = r["rate"] >= TARGET_RATE
-            rate = f">={TARGET_RATE:.0f} {'ok' if r['meets_rate'] else 'MISS'}"
-        out(f"| {r['model']:15} | {r['n']:4d} | {r['change_s']:12.3f} | {ratio:>5} | "
-            f"{exact:>11} | {r['rate']:15.1f} | {rate:>11} | {r['rss'] / gib:7.2f} | "
-            f"{r['cap'] / gib:7.2f} |")
+    for line in time_table(rows, vtk_runs, n):
+        out(line)
     devices = {r["device"] for r in rows if "device" in r}
     if devices:
         out(f"device: {', '.join(sorted(devices))}")
