@@ -231,7 +231,10 @@ def run_time_bench(n: int = 256, steps: int = 20, preview_n: int = 128, models=M
                    size=(512, 512), preview=(128, 128), device=None, timeout=900.0,
                    out=print) -> list[dict]:
     """Run the benchmark and print its table; returns one dict per (model, volume size)."""
+    import os
+
     rows = []
+    load = [os.getloadavg()[0]]
     with tempfile.TemporaryDirectory(prefix="splineviz-bench-time-") as tmp:
         patterns = {}
         for m in dict.fromkeys((n, preview_n)):
@@ -248,9 +251,13 @@ def run_time_bench(n: int = 256, steps: int = 20, preview_n: int = 128, models=M
         # the baseline again after the models: the faster run of the two, so that a busy
         # moment of the shared cores while VTK ran does not flatter the ratios
         vtk_runs.append(_in_process(_measure_vtk, (patterns[n], size), timeout))
+    load.append(os.getloadavg()[0])
     out(f"time steps of a deforming gyroid, {steps} uint8 steps; step change + first exact "
         f"{size[0]}x{size[1]} frame against reading + vtkFlyingEdges3D + render in the same "
         f"run; preview playback at {preview[0]}x{preview[1]} (reading ahead)")
+    # the cores may be shared: what else ran says how far the figures are this code's
+    out(f"load average (1 min) {load[0]:.1f} at the start, {load[1]:.1f} at the end, on "
+        f"{os.cpu_count()} cores")
     for line in time_table(rows, vtk_runs, n):
         out(line)
     devices = {r["device"] for r in rows if "device" in r}
