@@ -184,6 +184,10 @@ class RayCaster:
     def set_volume(self, volume) -> None:
         """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt.
 
+        Data of the same shape and device sample type (the next step of a time series) are
+        written into the device buffers there are, the programs and tables kept; the frames
+        are those of a fresh caster of the new data.
+
         Raises
         ------
         RayCastError
