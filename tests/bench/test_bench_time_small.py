@@ -16,6 +16,38 @@ def test_series_is_written_and_read_back(tmp_path):
     assert a.dtype == b.dtype and 0 < (a > 128).mean() < 1 and np.any(a != b)
 
 
+def test_table_says_which_targets_each_row_meets():
+    from splineviz.bench.time import time_table
+
+    gib = 2**30
+
+    def row(model, n, change_s, rate):
+        return {"model": model, "n": n, "change_s": change_s, "rate": rate, "rss": gib,
+                "cap": 4 * gib}
+
+    rows = [row("cubic-c1", 256, 0.2, 6.0), row("cubic-c1", 128, 0.1, 11.0),
+            row("to-quadratic", 256, 0.45, 3.0), row("to-quadratic", 128, 0.3, 9.5),
+            {"model": "trilinear", "n": 256, "error": "timed out after 900 s"}]
+    vtk = [{"step_s": 0.5, "rss": gib}, {"step_s": 0.4, "rss": gib}]
+    lines = time_table(rows, vtk, 256)
+    assert "0.400 s per step" in lines[0] and "0.500, 0.400" in lines[0]
+    # the baseline is the faster VTK run: 0.2 / 0.4 meets cubic-c1's 0.5 (against the other
+    # run's 0.5 s it would flatter), 0.45 / 0.4 misses to-quadratic's 1.0; the preview
+    # rate's target holds at 128^3 only
+    assert [r.get("meets_vs_vtk") for r in rows[:4]] == [True, None, False, None]
+    assert rows[0]["vs_vtk"] == pytest.approx(0.5) and "vs_vtk" not in rows[1]
+    assert [r.get("meets_rate") for r in rows[:4]] == [None, True, None, False]
+    body = lines[2:]
+    assert "<=0.5 ok" in body[0] and ">=10 ok" in body[1]
+    assert "<=1.0 MISS" in body[2] and ">=10 MISS" in body[3]
+    assert "timed out after 900 s" in body[4]
+    # at another size the exact-frame target does not apply; without VTK no ratio
+    other = [row("cubic-c1", 128, 0.1, 11.0)]
+    assert "<=" not in time_table(other, vtk, 128)[2]
+    assert time_table([row("cubic-c1", 256, 0.1, 5.0)], [{"error": "no display"}], 256)[0] \
+        == "VTK: no display"
+
+
 @pytest.mark.bench
 def test_bench_time(monkeypatch):
     monkeypatch.setenv("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")

@@ -31,13 +31,29 @@
 inline float min_acc(float acc, float x) { return x < acc ? x : acc; }
 inline float max_acc(float acc, float x) { return x > acc ? x : acc; }
 
+// the (lo, hi) vector of the sample type (DATA_T2: uchar2, short2, ..., float2)
+#define PAIR_OF(t) t##2
+#define PAIR(t) PAIR_OF(t)
+#define DATA_T2 PAIR(DATA_T)
+
 #ifdef MODEL_TO
-// the TO bounds read the data offsets of the cell's parity class
+// the TO bounds read the data offsets of the cell's parity class; brick_bounds reads the
+// NODE_BLOCKS sample blocks (sample_blocks) that hold the data a level-1 node reads
+// (node_blocks: offsets from block (a, b, c); splineviz/compute/raycast/to_tables.py
+// node_union)
 #define CLASS_ARGS , __constant const int *cls_start, __constant const int *cls_offsets
 #define CLASS_PASS , cls_start, cls_offsets
+#define NODE_ARGS , __global const DATA_T2 *blocks, int BX, int BY, int BZ, \
+                  __constant const int *node_blocks
+#elif defined(MODEL_TYPE6)
+// type-6 brick_bounds reads the (min, max) of 2 x 2 x 2 blocks of samples (sample_blocks)
+#define CLASS_ARGS
+#define CLASS_PASS
+#define NODE_ARGS , __global const DATA_T2 *blocks, int BX, int BY, int BZ
 #else
 #define CLASS_ARGS
 #define CLASS_PASS
+#define NODE_ARGS
 #endif
 
 // Conservative value bounds of the model on cell (i, j, k).
@@ -89,27 +105,49 @@ inline float2 cell_bounds(__global const DATA_T *data, int SY, int SZ, int i, in
 
 // Level 1 of the octree: the bounds of the (up to) 8 cells of each node.
 __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, int CY, int CZ,
-                           float negmass CLASS_ARGS, __global float2 *bounds)
+                           float negmass CLASS_ARGS NODE_ARGS, __global float2 *bounds)
 {
     const int c = get_global_id(0), b = get_global_id(1), a = get_global_id(2);
     const int dx = (CX + 1) / 2, dy = (CY + 1) / 2, dz = (CZ + 1) / 2;
     if (a >= dx || b >= dy || c >= dz) return;
     float lo = INFINITY, hi = -INFINITY;
 #ifdef MODEL_TO
-    for (int i = 2 * a; i < min(2 * a + 2, CX); ++i)
-        for (int j = 2 * b; j < min(2 * b + 2, CY); ++j)
-            for (int k = 2 * c; k < min(2 * c + 2, CZ); ++k) {
-                const float2 v = cell_bounds(data, SY, SZ, i, j, k, negmass CLASS_PASS);
-                lo = min_acc(lo, v.x);
-                hi = max_acc(hi, v.y);
+    // the node's 8 cells read 416 values, 125 of them distinct, held by 39 sample blocks:
+    // the blocks' range, widened as in cell_bounds, holds the union of the cells' bounds
+    // from 39 loads (312 samples: 1.4x the candidate nodes of the cells' own bounds on the
+    // benchmark's gyroid, the same frames; the octree of a new 256^3 time step took 2.5x
+    // longer from the 125 values, longer still from the cells' 416). A node past the last
+    // cell reads inside the padded samples still (its phantom cells reach GHOST layers at
+    // most).
+    const int base = (a * BY + b) * BZ + c;
+    for (int u = 0; u < NODE_BLOCKS; ++u) {
+        const DATA_T2 v = blocks[base + node_blocks[u]];
+        lo = min_acc(lo, (float)v.x);
+        hi = max_acc(hi, (float)v.y);
+    }
+    const float w = negmass * (hi - lo);
+    lo -= w;
+    hi += w;
+#elif defined(MODEL_TYPE6)
+    // the node's cubes read the padded samples 2a..min(2a + 1, CX - 1) + 2 per axis (a cube
+    // i the samples i..i+2): the blocks a and a + 1, the last one cut at the samples' end
+    // (sample_blocks) hold exactly these, so their range, widened as in cell_bounds, is the
+    // box's from 8 loads instead of 64
+    for (int i = a; i <= min(a + 1, BX - 1); ++i)
+        for (int j = b; j <= min(b + 1, BY - 1); ++j)
+            for (int k = c; k <= min(c + 1, BZ - 1); ++k) {
+                const DATA_T2 v = blocks[(i * BY + j) * BZ + k];
+                lo = min_acc(lo, (float)v.x);
+                hi = max_acc(hi, (float)v.y);
             }
+    const float w = negmass * (hi - lo);
+    lo -= w;
+    hi += w;
 #else
-    // the node's cells read one box of samples (a trilinear cell i the samples i..i+1, a
-    // type-6 cube the padded samples i..i+2): its range, widened as in cell_bounds, holds
-    // the union of the cells' bounds (the same bounds when negmass is 0), from far fewer loads
-#ifdef MODEL_TYPE6
-    const int reach = 2;
-#elif defined(MODEL_CUSTOM)
+    // the node's cells read one box of samples (a trilinear cell i the samples i..i+1): its
+    // range, widened as in cell_bounds, holds the union of the cells' bounds (the same
+    // bounds when negmass is 0), from far fewer loads
+#if defined(MODEL_CUSTOM)
     const int reach = CELL_REACH;
 #else
     const int reach = 1;
@@ -127,6 +165,30 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
 #endif
     bounds[(a * dy + b) * dz + c] = (float2)(lo, hi);
 }
+
+#if defined(MODEL_TYPE6) || defined(MODEL_TO)
+// (min, max) of the 2 x 2 x 2 blocks of the PX x PY x PZ (padded) samples: block (p, q, r)
+// holds the samples 2p..2p+1 x 2q..2q+1 x 2r..2r+1 that exist; made once per data change for
+// brick_bounds (a type-6 node's 64 samples are 8 blocks, a TO node's 125 lie in 39)
+__kernel void sample_blocks(__global const DATA_T *data, int PX, int PY, int PZ,
+                            __global DATA_T2 *blocks)
+{
+    const int r = get_global_id(0), q = get_global_id(1), p = get_global_id(2);
+    const int BX = (PX + 1) / 2, BY = (PY + 1) / 2, BZ = (PZ + 1) / 2;
+    if (p >= BX || q >= BY || r >= BZ) return;
+    float lo = INFINITY, hi = -INFINITY;
+    for (int i = 2 * p; i < min(2 * p + 2, PX); ++i)
+        for (int j = 2 * q; j < min(2 * q + 2, PY); ++j)
+            for (int k = 2 * r; k < min(2 * r + 2, PZ); ++k) {
+                const float v = data[((offset_t)i * PY + j) * PZ + k];
+                lo = min_acc(lo, v);
+                hi = max_acc(hi, v);
+            }
+    // back in the samples' type, exactly: integer samples' extremes are integers (a block
+    // holds one sample at least), float blocks of NaNs alone keep (inf, -inf)
+    blocks[(p * BY + q) * BZ + r] = (DATA_T2)((DATA_T)lo, (DATA_T)hi);
+}
+#endif
 
 __kernel void reduce_level(__global float2 *bounds,
                            int src_off, int sx, int sy, int sz,

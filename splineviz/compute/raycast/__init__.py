@@ -5,6 +5,8 @@ Pipeline on the device, without a CPU round trip of the volume:
 * on a data change (isovalue-independent, thesis §6.1.1, §6.2.1): the samples (padded with
   ghost layers where the model needs them, written straight into a device buffer) and a
   min-max octree of conservative value bounds, stored from level 1 (bricks of 2^3 cells);
+  new data of the same shape and sample type (the next time step) are written into the
+  buffers there are, the programs and tables kept;
 * on an isovalue change: nothing but a new cache epoch (constant time, nothing uploaded).
   The work the picture needs is done by the rays that need it (§6.2.3): the skip index of a
   cell comes from the octree when a ray reaches the cell, and the relevance of a candidate

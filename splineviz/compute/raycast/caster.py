@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from splineviz.compute.buffers import fill
 from splineviz.compute.device import try_get_device
 from splineviz.compute.program import get_kernel
 from splineviz.compute.raycast.errors import RayCastError
@@ -183,6 +184,10 @@ class RayCaster:
     def set_volume(self, volume) -> None:
         """Replace the data (e.g. after smoothing); cell bounds and octree are rebuilt.
 
+        Data of the same shape and device sample type (the next step of a time series) are
+        written into the device buffers there are, the programs and tables kept; the frames
+        are those of a fresh caster of the new data.
+
         Raises
         ------
         RayCastError
@@ -193,16 +198,24 @@ class RayCaster:
         if min(volume.shape) < 2:
             raise RayCastError(f"ray casting needs at least 2 samples per axis, got {volume.shape}")
         cells = self._grid(volume.shape)
+        same = False
         if self._device is not None:
             sample_type = self.family.sample_type(volume.data)
             limits = self.limits(volume.shape, np.dtype(sample_type[0]).itemsize)
             self._check_limits(limits)
+            # the next step of a time series: programs, tables and buffers stay
+            same = (getattr(self, "_data", None) is not None and cells == self._cells
+                    and volume.shape == self._volume.shape
+                    and sample_type == self._sample_type
+                    and limits.offsets_64 == self._offsets_64)
             self._sample_type = sample_type
             self._offsets_64 = limits.offsets_64
         self._volume = volume
         self._spline = None
         self._cells = cells
-        if self._device is not None:
+        if same:
+            self._upload_samples()
+        elif self._device is not None:
             self._upload()
         if self._isovalue is not None:
             self._new_epoch()
@@ -333,7 +346,6 @@ class RayCaster:
 
         dev = self._device
         q = dev.queue
-        ctx = dev.context
         levels = octree_levels(self._cells)
         self._levels = levels
         self._levels_buf = cla.to_device(q, np.array(levels, dtype=np.int32).reshape(-1, 4))
@@ -343,23 +355,40 @@ class RayCaster:
         self._cls_defines = {**tables, "DATA_T": self._sample_type[1]}
         if self._offsets_64:
             self._cls_defines["OFFSET64"] = 1
-        get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
-            q, levels[0][:0:-1], None, *self._cell_args(), self._bounds.data)
-        k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
-        for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
-            k_reduce(q, (dz, dy, dx), None, self._bounds.data,
-                     *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
+        self._build_octree()
         self._epoch = 0
         if self._cached():
             # the classification cache (raycast.cl): per level-1 brick a slot, (epoch << 24) |
             # pool entry; counts: cells and tets classified at this epoch, entries asked for
             bricks = int(np.prod(levels[0][1:]))
-            self._slots = cla.zeros(q, bricks, np.uint32)
+            self._slots = cla.empty(q, bricks, np.uint32)
+            fill(self._slots, 0, q)
             self._counts = cla.zeros(q, 3, np.int32)
             self._pool_cap = _initial_pool(bricks)
             self._pool = cla.empty(q, self._pool_cap * self._entry_words(), np.uint32)
         self.family.allocate(self)
         q.finish()
+
+    def _upload_samples(self):
+        """New samples of the same shape and device type (a time step): the samples and the
+        octree are rewritten in their buffers, the family's per-data buffers cleared; the
+        programs, tables, the cache's slots and pool stay (the new epoch that follows
+        invalidates every cached classification)."""
+        self.family.upload_samples(self)
+        self._build_octree()
+        self.family.allocate(self)
+        self._device.queue.finish()
+
+    def _build_octree(self) -> None:
+        """The min-max octree of the device samples, on the device (classify.cl)."""
+        q, ctx, levels = self._device.queue, self._device.context, self._levels
+        get_kernel(ctx, "classify", "brick_bounds", self._cls_defines)(
+            q, levels[0][:0:-1], None, *self._cell_args(), *self.family.node_args(self),
+            self._bounds.data)
+        k_reduce = get_kernel(ctx, "classify", "reduce_level", self._cls_defines)
+        for (so, sx, sy, sz), (do, dx, dy, dz) in zip(levels[:-1], levels[1:], strict=True):
+            k_reduce(q, (dz, dy, dx), None, self._bounds.data,
+                     *(np.int32(v) for v in (so, sx, sy, sz, do, dx, dy, dz)))
 
     def _cell_args(self) -> list:
         """Leading arguments of the per-cell kernels of classify.cl: data, strides, cells,
@@ -400,7 +429,7 @@ class RayCaster:
             self._epoch += 1
             if self._epoch > MAX_EPOCH:
                 # the 8-bit stamp wraps: clear once every MAX_EPOCH isovalues
-                self._slots.fill(np.uint32(0), queue=q)
+                fill(self._slots, 0, q)
                 self._epoch = 1
             self._counts.fill(np.int32(0), queue=q)  # the pool is refilled from entry 0
         self.stats.update(active_cells=visible, active_tets=visible, classified="visible")

@@ -96,8 +96,20 @@ class KernelFamily(ABC):
         tables, and returns the defines of classify.cl.
         """
 
+    def upload_samples(self, rc) -> None:
+        """Put new samples of ``rc``'s volume on the device: the same shape and device type as
+        the last :meth:`upload` (the next step of a time series), so its tables, strides,
+        negative mass and defines stay; only what depends on the samples is redone.
+
+        The default uploads everything again; a family whose tables do not depend on the
+        samples writes only the samples (into the buffer it has, ``rc._data``).
+        """
+        self.upload(rc)
+
     def allocate(self, rc) -> None:  # noqa: B027  (most families keep no per-data buffers)
-        """Per-data buffers of its kernels, after the octree (``rc._levels``) exists."""
+        """Per-data buffers of its kernels, after the octree (``rc._levels``) exists; called
+        after every :meth:`upload` and :meth:`upload_samples` (a buffer of the right size
+        may be kept and cleared)."""
 
     def defines(self, rc) -> dict:
         """Extra ``-D`` options of raycast.cl (besides its define, DATA_T and shading)."""
@@ -105,6 +117,11 @@ class KernelFamily(ABC):
 
     def cell_args(self) -> list:
         """Extra trailing arguments of the per-cell kernels of classify.cl."""
+        return []
+
+    def node_args(self, rc) -> list:
+        """Extra trailing arguments of classify.cl's ``brick_bounds`` (level 1 of the
+        octree), after enqueueing any pass they need on ``rc``'s samples."""
         return []
 
     def ray_args(self, rc) -> list:

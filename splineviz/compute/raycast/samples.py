@@ -95,7 +95,7 @@ def numpy_cell_bounds(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 
-def padded_device_samples(device, data: np.ndarray, ghost: int, dtype):
+def padded_device_samples(device, data: np.ndarray, ghost: int, dtype, out=None):
     """The samples with ``ghost`` linearly extrapolated layers in their device type, written
     straight into a device buffer (no host copy of the padded volume).
 
@@ -105,6 +105,9 @@ def padded_device_samples(device, data: np.ndarray, ghost: int, dtype):
     data : (nx, ny, nz) array in the volume's type (integers are written as they are)
     ghost : int
     dtype : numpy type of the device samples (:func:`sample_type_for`)
+    out : pyopencl.array.Array, optional
+        A buffer of these padded samples' shape and type to write into (a new step of a
+        time series), instead of a new one.
 
     Returns
     -------
@@ -116,11 +119,42 @@ def padded_device_samples(device, data: np.ndarray, ghost: int, dtype):
     q = device.queue
     shape = tuple(n + 2 * ghost for n in data.shape)
     dtype = np.dtype(dtype)
-    mf = cl.mem_flags
-    buf = cl.Buffer(device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
-                    dtype.itemsize * int(np.prod(shape)))
-    host, _ = cl.enqueue_map_buffer(q, buf, cl.map_flags.WRITE_INVALIDATE_REGION, 0, shape,
-                                    dtype)
+    if out is not None and (out.shape != shape or out.dtype != dtype):
+        raise AssertionError("the device samples changed shape or type")  # a bug of the caller
+    if out is None:
+        mf = cl.mem_flags
+        buf = cl.Buffer(device.context, mf.READ_ONLY | mf.ALLOC_HOST_PTR,
+                        dtype.itemsize * int(np.prod(shape)))
+        out = cla.Array(q, shape, dtype, data=buf)
+    # the map waits for the kernels still reading the old samples (one in-order queue)
+    host, _ = cl.enqueue_map_buffer(q, out.data, cl.map_flags.WRITE_INVALIDATE_REGION, 0,
+                                    shape, dtype)
     pad_linear_into(data, ghost, host)
     host.base.release(q)
-    return cla.Array(q, shape, dtype, data=buf)
+    return out
+
+
+def sample_blocks(rc) -> list:
+    """Enqueue classify.cl's ``sample_blocks`` on ``rc``'s device samples: the (min, max) of
+    their 2 x 2 x 2 blocks, in the samples' type (a quarter of their bytes), which the
+    octree's level-1 pass of the type-6 and TO families reads instead of the samples.
+
+    Returns
+    -------
+    list
+        The kernel arguments ``blocks`` ((bx, by, bz, 2) buffer), ``bx``, ``by``, ``bz``
+        (blocks per axis: half the padded samples, rounded up). OpenCL frees the buffer once
+        the kernels enqueued with it are done.
+    """
+    import pyopencl.array as cla
+
+    from splineviz.compute.program import get_kernel
+
+    q = rc._device.queue
+    px, py, pz = rc._data.shape
+    nb = tuple((n + 1) // 2 for n in (px, py, pz))
+    blocks = cla.empty(q, (*nb, 2), rc._sample_type[0])
+    get_kernel(rc._device.context, "classify", "sample_blocks", rc._cls_defines)(
+        q, nb[::-1], None, rc._data.data, np.int32(px), np.int32(py), np.int32(pz),
+        blocks.data)
+    return [blocks.data, *(np.int32(n) for n in nb)]

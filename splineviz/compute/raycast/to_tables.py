@@ -230,6 +230,22 @@ def class_points(k: float = 2, words: int = 5) -> dict[str, np.ndarray]:
     return cached_arrays(f"to-class-points-k{k:g}-w{words}", _TABLE_SOURCES, make)
 
 
+def node_union(k: float = 2, words: int = 5) -> np.ndarray:
+    """The data a level-1 octree node (2 x 2 x 2 cells, one of each parity class: class
+    ``i << 2 | j << 1 | k`` is the node's cell ``(i, j, k)``) reads, each point once: 125
+    distinct points of the 416 that the 8 :func:`class_points` unions list.
+
+    Returns
+    -------
+    (N, 3) int data offsets from the corner of the node's first cell.
+    """
+    pts = class_points(k, words)
+    start = pts["union_start"]
+    return np.unique(np.concatenate([pts["union"][start[c]:start[c + 1]]
+                                     + [c >> 2, c >> 1 & 1, c & 1] for c in range(8)]),
+                     axis=0)
+
+
 #: subcells per axis of a cell for :func:`subcell_masks` (odd: the TO centre of the classes
 #: 0 and 7 lies inside one subcell, where all 144 pieces meet, instead of on the corners of 8)
 SUBCELLS = 5

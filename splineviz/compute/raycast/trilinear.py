@@ -26,6 +26,10 @@ class TrilinearFamily(KernelFamily):
         rc._negmass = 0.0
         return {}
 
+    def upload_samples(self, rc) -> None:
+        rc._data.set(np.ascontiguousarray(rc.volume.data, dtype=rc._sample_type[0]),
+                     queue=rc._device.queue)
+
     def numpy_candidates(self, volume, iso: float) -> int:
         vmin, vmax = numpy_cell_bounds(volume.data)
         iso = np.float32(iso)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from splineviz.compute.buffers import fill
 from splineviz.compute.raycast.errors import RayCastError
 from splineviz.compute.raycast.family import (
     SKIP_ACTIVE,
@@ -22,7 +23,7 @@ from splineviz.compute.raycast.family import (
     KernelFamily,
     register_kernel_family,
 )
-from splineviz.compute.raycast.samples import padded_device_samples
+from splineviz.compute.raycast.samples import padded_device_samples, sample_blocks
 from splineviz.compute.raycast.tables import padded_rows, reduction_table
 
 
@@ -92,21 +93,36 @@ class TruncatedOctahedraFamily(KernelFamily):
         self._nunion = int(np.diff(pts["union_start"]).max())
         self._cls_start = cla.to_device(q, pts["union_start"].astype(np.int32))
         self._cls_offsets = cla.to_device(q, (pts["union"] @ strides).astype(np.int32))
+        # the 2 x 2 x 2 sample blocks that hold the data of a level-1 octree node (classify.cl
+        # brick_bounds; the node's first cell corner is padded sample 2a + ghost)
+        blocks = np.unique((to_tables.node_union(k, TO_WORDS) + ghost) >> 1, axis=0)
+        _, by, bz = ((n + 1) // 2 for n in rc._data.shape)
+        self._node_blocks = cla.to_device(q, (blocks @ [by * bz, bz, 1]).astype(np.int32))
+        self._nblocks = len(blocks)
         self.prelude = (to_program.relevance_source(k, TO_WORDS)
                         + to_program.subcell_source(TO_WORDS))
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))
         return {"MODEL_TO": 1, "NCOEF": 10, "GHOST": ghost, "NWORDS": TO_WORDS,
-                "NUNION": self._nunion, "SKIP_ACTIVE": SKIP_ACTIVE}
+                "NUNION": self._nunion, "NODE_BLOCKS": self._nblocks,
+                "SKIP_ACTIVE": SKIP_ACTIVE}
+
+    def upload_samples(self, rc) -> None:
+        """The new samples only: the tables and the generated source depend on ``k`` and
+        the padded shape alone."""
+        rc._data = padded_device_samples(rc._device, rc.volume.data, self.ghost_layers,
+                                         rc._sample_type[0], out=rc._data)
 
     def allocate(self, rc) -> None:
         import pyopencl.array as cla
 
         # isovalue-independent cell ranges (raycast.cl), all (0, 255): "not known yet"
         q = rc._device.queue
-        self._ranges = cla.empty(q, 8 * int(np.prod(rc._levels[0][1:])), np.uint16)
-        self._ranges.fill(np.uint16(0xFF00), queue=q)  # uchar2 (lo 0, hi 255)
+        size = 8 * int(np.prod(rc._levels[0][1:]))
+        if getattr(self, "_ranges", None) is None or self._ranges.size != size:
+            self._ranges = cla.empty(q, size, np.uint16)
+        fill(self._ranges, 0xFF00, q)  # uchar2 (lo 0, hi 255)
 
     def defines(self, rc) -> dict:
         return {"DEGREE": 2, "TET_SLACK": TET_SLACK, "GHOST": self.ghost_layers,
@@ -114,6 +130,11 @@ class TruncatedOctahedraFamily(KernelFamily):
 
     def cell_args(self) -> list:
         return [self._cls_start.data, self._cls_offsets.data]
+
+    def node_args(self, rc) -> list:
+        """The (min, max) of the 2 x 2 x 2 sample blocks and the offsets of the blocks that
+        hold a node's data."""
+        return [*sample_blocks(rc), self._node_blocks.data]
 
     def ray_args(self, rc) -> list:
         e = self._ent

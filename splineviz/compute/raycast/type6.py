@@ -21,7 +21,7 @@ from splineviz.compute.raycast.family import (
     KernelFamily,
     register_kernel_family,
 )
-from splineviz.compute.raycast.samples import padded_device_samples
+from splineviz.compute.raycast.samples import padded_device_samples, sample_blocks
 from splineviz.compute.raycast.tables import padded_rows, reduction_table
 
 
@@ -77,6 +77,16 @@ class Type6Family(KernelFamily):
         rc._negmass = float(np.max(np.sum(np.clip(-scheme.cube_masks, 0, None), axis=1)))
         return {"MODEL_TYPE6": 1, "NCOEF": bform.n_coefficients(scheme.degree),
                 "NPOINTS": len(scheme.cube_points), "SKIP_ACTIVE": SKIP_ACTIVE}
+
+    def upload_samples(self, rc) -> None:
+        """The new samples only: the tables come from the model, the stencil offsets from
+        the padded shape, both unchanged."""
+        rc._data = padded_device_samples(rc._device, rc.volume.data, self.ghost_layers,
+                                         rc._sample_type[0], out=rc._data)
+
+    def node_args(self, rc) -> list:
+        """The (min, max) of the 2 x 2 x 2 sample blocks (a node's 4^3 samples are 8)."""
+        return sample_blocks(rc)
 
     def defines(self, rc) -> dict:
         return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK, "NPOINTS": self.npoints}
