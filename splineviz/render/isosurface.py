@@ -35,6 +35,7 @@ import threading
 import time
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,8 +44,13 @@ from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.core.frame import from_world
 from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
+from splineviz.compute.device import opencl_known, opencl_works
+from splineviz.core.renderers import AUTO, RendererChoice, choose_renderer
 from splineviz.core.volume import Volume
 from splineviz.model import nodes
+
+if TYPE_CHECKING:
+    from splineviz.render.cell_projection import CellGeometry
 
 #: default front colours of successive layers (a qualitative palette: tell surfaces apart)
 PALETTE = nodes.PALETTE
@@ -168,7 +174,7 @@ _WORKERS_ON_DEVICE = _DeviceUse()
 
 #: node properties whose change needs new frames (any other changes only the shading
 #: uniforms or the colouring of shown frames)
-FRAME_PROPERTIES = frozenset({"model", "k", "isovalue", "color_by"})
+FRAME_PROPERTIES = frozenset({"model", "k", "isovalue", "color_by", "renderer"})
 
 
 class IsosurfaceLayer:
@@ -237,6 +243,11 @@ class IsosurfaceLayer:
         self._color_volume: Volume | None = None
         self._color_reference: tuple | None = None  # (volume, model, options, isovalue)
         self._splines: dict = {}  # "own" / "other" -> Spline for the colour-by values
+        #: cell projection: ((volume id, model, options), spline) and (key, CellGeometry)
+        #: of the last geometry made, under their lock (made in a worker in the GUI)
+        self._cell_lock = threading.Lock()
+        self._cell_spline: tuple | None = None
+        self._cells: tuple | None = None
         node.events.connect(self._node_changed)
 
     def close(self) -> None:
@@ -339,6 +350,65 @@ class IsosurfaceLayer:
     def state(self) -> tuple:
         """Changes whenever frames of this layer must be recomputed."""
         return (self._version, self.node.model, self.node.isovalue)
+
+    # -- renderer (thesis ch. 6: ray casting or cell projection) ------------------------
+
+    def renderer_choice(self, probe: bool = True) -> RendererChoice | None:
+        """What draws this surface now (:func:`splineviz.core.renderers.choose_renderer`
+        of the node's ``renderer``, model and colour by, and whether OpenCL works here).
+
+        ``"auto"`` needs to know whether an OpenCL device works: ``probe=False`` (the GUI
+        thread: opening a device takes a context and a kernel build) returns None while
+        nobody has asked yet."""
+        node = self.node
+        opencl = True
+        if node.renderer == AUTO or self._device == "numpy":
+            opencl = opencl_works(self._device) if probe else opencl_known(self._device)
+            if opencl is None:
+                return None
+        return choose_renderer(node.renderer, node.model, node.color_by, opencl,
+                               _not_projectable(self._volume))
+
+    @property
+    def renderer(self) -> str:
+        """``"ray-casting"`` or ``"cell-projection"`` (:meth:`renderer_choice`)."""
+        return self.renderer_choice().renderer
+
+    def _cell_key(self) -> tuple:
+        return (id(self._volume), self.node.model, self.node.isovalue)
+
+    def cells_current(self, geometry: CellGeometry | None = None) -> bool:
+        """Whether the last cell geometry made (or ``geometry``) is of the layer as it is."""
+        cells = self._cells
+        return cells is not None and cells[0] == self._cell_key() and (
+            geometry is None or geometry is cells[1])
+
+    def cell_geometry(self, blocking: bool = True) -> CellGeometry | None:
+        """The relevant tets of the surface laid out for cell projection
+        (:func:`splineviz.render.cell_projection.cell_geometry`), made once per volume,
+        model and isovalue (thread safe). ``blocking=False`` (the GUI thread) makes
+        nothing: the last one if it is current, else None."""
+        from splineviz.plugins import build_spline
+        from splineviz.render.cell_projection import cell_geometry
+
+        key = self._cell_key()
+        cells = self._cells
+        if cells is not None and cells[0] == key:
+            return cells[1]
+        if not blocking:
+            return None
+        with self._cell_lock:
+            cells = self._cells
+            if cells is not None and cells[0] == key:
+                return cells[1]
+            spline_key = key[:2] + (tuple(sorted(self.node.model_options().items())),)
+            if self._cell_spline is None or self._cell_spline[0] != spline_key:
+                spline = build_spline(self._volume, self.node.model,
+                                      **self.node.model_options())
+                self._cell_spline = (spline_key, spline)
+            geometry = cell_geometry(self._cell_spline[1], key[2])
+            self._cells = (key, geometry)
+            return geometry
 
     def set_volume(self, volume: Volume) -> None:
         """New data (e.g. smoothed); keeps model and isovalue.
@@ -698,6 +768,19 @@ class IsosurfaceLayer:
             return self.hit_scalars(frame)
         finally:
             lock.release()
+
+
+def _not_projectable(volume) -> str:
+    """What of ``volume`` cell projection cannot draw (its tets are laid out on an
+    axis-aligned in-memory grid), "" when it can."""
+    from splineviz.core.chunked import ChunkedVolume
+    from splineviz.core.frame import rotation
+
+    if isinstance(volume, ChunkedVolume):
+        return "a chunked volume"
+    if rotation(volume) is not None:
+        return "an oblique scan"
+    return ""
 
 
 def _layer_call(write):

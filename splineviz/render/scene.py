@@ -35,6 +35,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.frame import world_bounds
 from splineviz.core.raycast_reference import normalize_clip_planes
+from splineviz.core.renderers import CELL_PROJECTION
 from splineviz.render.colormaps import colorize, lut
 from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
@@ -95,6 +96,10 @@ class _LayerView:
     scalar_bar: object = None
     #: the (lo, hi) the colour map spans in the shown frame
     color_range: tuple | None = None
+    #: the layer's cell-projection actors in this view (None: not drawn so yet), and
+    #: whether they draw it now (its quad is hidden then)
+    cells: object = None
+    by_cells: bool = False
 
 
 @dataclass
@@ -199,6 +204,7 @@ class SplineScene:
             self.range_link.forget(self, range_key(layer))
         self.renderer.RemoveActor(lv.quad.actor)
         self.renderer.RemoveActor(lv.scalar_bar)
+        self._drop_cells(lv)
 
     def add_volume_layer(self, layer: VolumeLayer) -> None:
         """Show ``layer``'s volume rendering over the picture."""
@@ -306,7 +312,11 @@ class SplineScene:
         q = lv.quad
         q.set_appearance(layer.color, layer.opacity)
         q.set_material(layer.material)
-        q.actor.SetVisibility(bool(layer.visible and q.has_image))
+        q.actor.SetVisibility(bool(layer.visible and q.has_image and not lv.by_cells))
+        if lv.cells is not None:
+            lv.cells.set_appearance(layer.color, layer.opacity)
+            lv.cells.set_material(layer.material)
+            lv.cells.set_visible(bool(layer.visible and lv.by_cells))
         self._apply_colors(layer, lv)
 
     def _apply_colors(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
@@ -357,6 +367,60 @@ class SplineScene:
         row = int(np.clip((h - 1 - y) * fh / h, 0, fh - 1))
         value = float(rf.scalars[row, col])
         return value if np.isfinite(value) else None
+
+    # -- cell projection (thesis §6.1) ----------------------------------------------------
+
+    def _drop_cells(self, lv: _LayerView) -> None:
+        if lv.cells is not None:
+            for actor in lv.cells.actors:
+                self.renderer.RemoveActor(actor)
+        lv.cells = None
+        lv.by_cells = False
+
+    def _draw_cells(self, layer: IsosurfaceLayer, lv: _LayerView, view: ViewState,
+                    blocking: bool) -> bool:
+        """Draw ``layer`` by cell projection in this view: its tets of the current
+        isovalue (made now when ``blocking``, else the last ones made until a worker made
+        those: :meth:`refine`), cut by the view's and the layer's clip planes. True when
+        the tets drawn are the current ones."""
+        from splineviz.render.cell_projection import CellProjectionLayer
+
+        geometry = layer.cell_geometry(blocking=blocking)
+        if geometry is not None and (lv.cells is None
+                                     or lv.cells.spline is not geometry.spline):
+            self._drop_cells(lv)
+            lv.cells = CellProjectionLayer(geometry.spline, None)
+            for actor in lv.cells.actors:
+                self.renderer.AddActor(actor)
+        if geometry is not None and lv.cells.geometry is not geometry:
+            lv.cells.set_geometry(geometry)
+        if not lv.by_cells:
+            # the quad's frame is of the ray caster: not shown, nor described, from now on
+            lv.by_cells = True
+            lv.shown = None
+            lv.quad.has_image = False
+        if lv.cells is not None:
+            lv.cells.set_clip_planes(tuple(view.clip_planes) + tuple(layer.clip_planes))
+            lv.mean_depth = _box_depth(layer, view)
+        self._apply_appearance(layer, lv)
+        return geometry is not None
+
+    def single_sample_for_cells(self) -> None:
+        """Turn the window's multisampling off when a layer is drawn by cell projection
+        (call before the window's first render; an off-screen picture's window). Its
+        shader then casts one ray per pixel, through the pixel's centre, as the ray caster
+        does: with 8 samples it cast 8 (one per sample, each tet's front face covering only
+        some of a pixel's samples) for twice the frame time on software OpenGL and a
+        picture antialiased where the ray caster's is not."""
+        if any(layer.visible and layer.renderer == CELL_PROJECTION for layer in self.layers):
+            self.plotter.render_window.SetMultiSamples(0)
+
+    def drawn_by_cells(self, layer: IsosurfaceLayer) -> bool:
+        """Whether this view draws ``layer`` by cell projection, its tets current (no
+        frame of it is due)."""
+        lv = self._views[id(layer)]
+        return lv.by_cells and lv.cells is not None and layer.cells_current(
+            lv.cells.geometry)
 
     def _show(self, layer: IsosurfaceLayer, rf: RenderedFrame) -> None:
         lv = self._views.get(id(layer))
@@ -412,11 +476,24 @@ class SplineScene:
         # read by refine() in a worker: a bricked frame of an older view is given up
         self._latest_key = view.key()
         stale = []
+        blocking = not self.progressive or self._force_exact
         for layer in self.layers:
             lv = self._views[id(layer)]
             if not layer.visible:
                 lv.quad.actor.VisibilityOff()
+                if lv.cells is not None:
+                    lv.cells.set_visible(False)
                 continue
+            choice = layer.renderer_choice(probe=blocking)
+            if choice is None:  # "auto" before anyone probed OpenCL: the worker does
+                stale.append(layer)
+                continue
+            if choice.renderer == CELL_PROJECTION:
+                if not self._draw_cells(layer, lv, view, blocking):
+                    stale.append(layer)
+                continue
+            if lv.by_cells:
+                self._drop_cells(lv)
             if self._is_current(layer, lv, view):
                 if self.progressive and not lv.shown.final:
                     # a preview of this very view (the last drag step's, or a wheel step's
@@ -572,22 +649,33 @@ class SplineScene:
                                                b[:, 3].max(), b[:, 4].min(), b[:, 5].max())
 
     def _order_quads(self) -> None:
-        """Quads after all other props: opaque, then translucent from far to near."""
+        """Quads (and cell-projection actors) after all other props: opaque, then
+        translucent from far to near."""
         quads = []
         for layer in self.layers:
             lv = self._views[id(layer)]
-            quads.append((layer.opacity < 1.0, -lv.mean_depth, lv.quad.actor))
-        for _, _, actor in quads:
-            self.renderer.RemoveActor(actor)
-        for _, _, actor in sorted(quads, key=lambda q: (q[0], q[1])):
-            self.renderer.AddActor(actor)
+            actors = lv.cells.actors if lv.by_cells else (lv.quad.actor,)
+            quads.append((layer.opacity < 1.0, -lv.mean_depth, actors))
+        for _, _, actors in quads:
+            for actor in actors:
+                self.renderer.RemoveActor(actor)
+        for _, _, actors in sorted(quads, key=lambda q: (q[0], q[1])):
+            for actor in actors:
+                self.renderer.AddActor(actor)
 
     def needs_refine(self) -> bool:
-        """Whether a visible layer shows a preview or a frame of another view."""
+        """Whether a visible layer shows a preview or a frame of another view (or waits
+        for its cell-projection tets, or for the OpenCL probe of its "auto" renderer)."""
         view = self.view_state()
         for layer in self.layers:
             lv = self._views[id(layer)]
-            if layer.visible and not (self._is_current(layer, lv, view) and lv.shown.final):
+            if not layer.visible:
+                continue
+            choice = layer.renderer_choice(probe=False)
+            if choice is not None and choice.renderer == CELL_PROJECTION:
+                if not layer.cells_current():
+                    return True
+            elif choice is None or not (self._is_current(layer, lv, view) and lv.shown.final):
                 return True
         return any(layer.visible and not self._volume_current(layer, view, final=True)
                    for layer in self.volume_layers)
@@ -631,6 +719,10 @@ class SplineScene:
                 break
             lv = self._views.get(id(layer))
             if lv is None or not layer.visible:
+                continue
+            if layer.renderer == CELL_PROJECTION:  # probes OpenCL here, for "auto"
+                if not layer.cells_current():
+                    out.append((layer, layer.cell_geometry()))
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
@@ -694,7 +786,12 @@ class SplineScene:
                     self._show_volume(layer, rf)
                     used = True
                 continue
-            if layer in self.layers and rf.view.key() == view.key() and rf.state == layer.state:
+            if layer not in self.layers:
+                continue
+            if not isinstance(rf, RenderedFrame):
+                # a cell geometry (refine): the next render draws it while it is current
+                used = used or layer.cells_current(rf)
+            elif rf.view.key() == view.key() and rf.state == layer.state:
                 self._show(layer, rf)
                 used = True
         return used
@@ -771,6 +868,14 @@ def _update_scalar_bar(bar, cmap: str, lo: float, hi: float, title: str) -> None
     bar.Modified()
 
 
+def _box_depth(layer: IsosurfaceLayer, view: ViewState) -> float:
+    """Window depth of the centre of the layer's data box (orders a translucent surface
+    drawn by cell projection among the others, as a frame's mean hit depth does)."""
+    centre = np.asarray(world_bounds(layer.volume), dtype=np.float64).mean(axis=1)
+    cam = view.camera
+    return float(np.clip(cam.window_depth(centre[None], cam.clipping_range)[0], 0.0, 1.0))
+
+
 def _prepare(rf: RenderedFrame) -> None:
     """Fill a frame's upload-ready textures and mean depth (thread safe: NumPy only)."""
     f = rf.frame
@@ -821,6 +926,7 @@ def offscreen_screenshot(scene: SplineScene, filename=None, size=None,
         for layer in scene.volume_layers:
             copy.add_volume_layer(layer)
         copy.set_clip_planes(scene.clip_planes)
+        copy.single_sample_for_cells()
         pl.renderer.GetActiveCamera().DeepCopy(scene.renderer.GetActiveCamera())
         pl.camera_set = True  # else pyvista resets the camera on the first render
         copy.render_exact()
