@@ -367,7 +367,7 @@ class IsosurfaceLayer:
             if opencl is None:
                 return None
         return choose_renderer(node.renderer, node.model, node.color_by, opencl,
-                               _not_projectable(self._volume))
+                               not_projectable(self._volume))
 
     @property
     def renderer(self) -> str:
@@ -770,7 +770,7 @@ class IsosurfaceLayer:
             lock.release()
 
 
-def _not_projectable(volume) -> str:
+def not_projectable(volume) -> str:
     """What of ``volume`` cell projection cannot draw (its tets are laid out on an
     axis-aligned in-memory grid), "" when it can."""
     from splineviz.core.chunked import ChunkedVolume

@@ -391,6 +391,11 @@ class SplineScene:
             self._drop_cells(lv)
             lv.cells = CellProjectionLayer(geometry.spline, None)
             for actor in lv.cells.actors:
+                # the near and far planes come from the data box (_reset_clipping_range),
+                # as for a ray-cast frame: the tets' own bounds reach half a cell beyond it
+                # (type-6 cubes are centred at the samples), and the window depths of the
+                # two renderers' pictures would differ by the other clipping range
+                actor.SetUseBounds(False)
                 self.renderer.AddActor(actor)
         if geometry is not None and lv.cells.geometry is not geometry:
             lv.cells.set_geometry(geometry)
