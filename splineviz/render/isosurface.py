@@ -39,12 +39,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from splineviz.compute.device import opencl_known, opencl_works
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.core.frame import from_world
 from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
-from splineviz.compute.device import opencl_known, opencl_works
 from splineviz.core.renderers import AUTO, RendererChoice, choose_renderer
 from splineviz.core.volume import Volume
 from splineviz.model import nodes

@@ -20,7 +20,6 @@ from splineviz.core.renderers import (
     CELL_PROJECTION,
     RAY_CASTING,
     RENDERERS,
-    RendererError,
     choose_renderer,
     renderer_name,
 )
