@@ -659,7 +659,8 @@ class SplineScene:
         quads = []
         for layer in self.layers:
             lv = self._views[id(layer)]
-            actors = lv.cells.actors if lv.by_cells else (lv.quad.actor,)
+            actors = lv.cells.actors if lv.by_cells and lv.cells is not None \
+                else (lv.quad.actor,)
             quads.append((layer.opacity < 1.0, -lv.mean_depth, actors))
         for _, _, actors in quads:
             for actor in actors:

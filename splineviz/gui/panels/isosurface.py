@@ -342,7 +342,9 @@ class IsosurfacePanel(QWidget):
         finally:
             self._syncing = False
         if field == "model":
-            self._sync_all()  # shows or hides the Q_k order
+            self._sync_all()  # shows or hides the Q_k order (and says what draws it)
+        elif field == "renderer":
+            self._show_renderer_note()
 
     def _iso_changed(self, v, mirror) -> None:
         """The slider or the spin box moved: show the value in the other one, write it."""
