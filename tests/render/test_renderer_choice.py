@@ -198,3 +198,34 @@ def test_a_translucent_surface_blends_its_first_hit_only():
     bad = agreement(ref, (without, ref[1]), bg)
     print("translucent with / without the depth pre-pass:", good, "/", bad)
     assert good.colour_share >= 0.995 > bad.colour_share
+
+
+def test_a_progressive_view_draws_the_tets_a_worker_made():
+    # the GUI's way: the render before the tets exist shows nothing of the surface and asks
+    # for a refine; refine (a worker) makes them, apply + the next render draws them
+    import pyvista as pv
+
+    from splineviz.render.scene_view import SceneView
+
+    scene = _bare_default_scene("cell-projection")
+    pl = pv.Plotter(off_screen=True, window_size=SIZE)
+    view = SceneView(scene, pl, progressive=True)
+    try:
+        asked = []
+        view.spline_scene.request_refine = lambda: asked.append(True)
+        layer = view.layers[scene.isosurfaces[0].id]
+        pl.render_window.Render()
+        assert asked and not view.spline_scene.drawn_by_cells(layer)
+        assert view.spline_scene.needs_refine()
+        results = view.spline_scene.refine()
+        assert view.spline_scene.apply(results)
+        pl.render_window.Render()
+        assert view.spline_scene.drawn_by_cells(layer)
+        assert not view.spline_scene.needs_refine()
+        scene.isosurfaces[0].isovalue = 0.45  # new tets: the old ones stay until made
+        pl.render_window.Render()
+        assert not view.spline_scene.drawn_by_cells(layer)
+        assert view.spline_scene.needs_refine()
+    finally:
+        view.close()
+        pl.close()
