@@ -1,4 +1,5 @@
-"""A VTK scene that shows ray-cast spline isosurfaces among ordinary props (thesis §6.3).
+"""A VTK scene that shows ray-cast (or cell-projected) spline isosurfaces among ordinary props
+(thesis §6.3, §6.1).
 
 :class:`SplineScene` wraps a pyvista plotter (an off-screen ``pyvista.Plotter`` or the Qt
 ``QtInteractor``). Before every render (the renderer's ``StartEvent``) it
