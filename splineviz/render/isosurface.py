@@ -45,7 +45,7 @@ from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.core.frame import from_world
 from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
-from splineviz.core.renderers import AUTO, RendererChoice, choose_renderer
+from splineviz.core.renderers import AUTO, CELL_PROJECTION, RendererChoice, choose_renderer
 from splineviz.core.volume import Volume
 from splineviz.model import nodes
 
@@ -406,8 +406,14 @@ class IsosurfaceLayer:
                 spline = build_spline(self._volume, self.node.model,
                                       **self.node.model_options())
                 self._cell_spline = (spline_key, spline)
+            t = time.perf_counter()
             geometry = cell_geometry(self._cell_spline[1], key[2])
             self._cells = (key, geometry)
+            # what the status bar lists of a layer: its tets, and what draws them
+            self.last_stats = {"active_tets": len(geometry.tets), "active_cells": None,
+                               "classify_s": time.perf_counter() - t, "render_s": None,
+                               "device": "OpenGL: cell projection", "path": CELL_PROJECTION,
+                               "classified": "all"}
             return geometry
 
     def set_volume(self, volume: Volume) -> None:

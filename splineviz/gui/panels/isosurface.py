@@ -11,7 +11,7 @@ The histogram of a big volume is computed in a worker and cached per volume.
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import Qt
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtGui import QPaintEvent
 from PySide6.QtWidgets import (
     QComboBox,
@@ -36,6 +36,10 @@ from splineviz.model.summaries import HISTOGRAM_BINS, cached_histogram
 
 #: volumes with at most this many samples get their histogram in the GUI thread
 INLINE_HISTOGRAM_SAMPLES = 2_000_000
+#: how soon the renderer note looks again whether OpenCL was probed (milliseconds), and
+#: how many times
+NOTE_RETRY_MS = 500
+NOTE_RETRIES = 20
 
 def model_label(name: str) -> str:
     spec = MODELS[name]
@@ -158,6 +162,7 @@ class IsosurfacePanel(QWidget):
         form.addRow("Shown in", self.shown_in)
         form.addRow(self.add_button)
         self._syncing = False
+        self._note_retries = 0
         self.fill_models()
         self.histogram.valueChanged.connect(lambda v: self._iso_changed(v, self.spin))
         self.spin.valueChanged.connect(lambda v: self._iso_changed(v, self.histogram))
@@ -305,9 +310,16 @@ class IsosurfacePanel(QWidget):
         from splineviz.render.isosurface import not_projectable
 
         n = self.node
+        if n is None:
+            return
         opencl = opencl_known()
         text = ""
-        if opencl is not None or n.renderer != AUTO:
+        if opencl is None and n.renderer == AUTO:
+            # the view's worker probes OpenCL for its first exact frame: look again then
+            if self._note_retries < NOTE_RETRIES:
+                self._note_retries += 1
+                QTimer.singleShot(NOTE_RETRY_MS, self, self._show_renderer_note)
+        else:
             choice = choose_renderer(n.renderer, n.model, n.color_by, opencl is not False,
                                      not_projectable(self._volume.active))
             text = choice.note
