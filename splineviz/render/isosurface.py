@@ -412,7 +412,7 @@ class IsosurfaceLayer:
             # what the status bar lists of a layer: its tets, and what draws them
             self.last_stats = {"active_tets": len(geometry.tets), "active_cells": None,
                                "classify_s": time.perf_counter() - t, "render_s": None,
-                               "device": "OpenGL: cell projection", "path": CELL_PROJECTION,
+                               "device": "OpenGL cell projection", "path": CELL_PROJECTION,
                                "classified": "all"}
             return geometry
 
