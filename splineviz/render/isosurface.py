@@ -22,6 +22,12 @@ downsample, in memory: :meth:`~splineviz.core.chunked.ChunkedVolume.preview_volu
 the trilinear kernel, at any size in milliseconds (:attr:`IsosurfaceLayer.coarse_preview`),
 while the exact frame is made in bricks on dask workers.
 
+Renderer (thesis ch. 6): :meth:`IsosurfaceLayer.renderer_choice` says whether the node's
+surface is ray cast or drawn by cell projection (:mod:`splineviz.core.renderers`); for cell
+projection the layer makes the relevant tets (:meth:`IsosurfaceLayer.cell_geometry`, once per
+volume, model and isovalue) and the views draw them with their own
+:class:`~splineviz.render.cell_projection.CellProjectionLayer` actors instead of frames.
+
 The GUI thread calls :meth:`compute` with ``blocking=False``: it takes no lock it would
 have to wait for, builds no caster and evaluates no spline of a model without a kernel
 (a plugin's evaluation may take any time); without a free caster it returns None and the

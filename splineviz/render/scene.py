@@ -16,6 +16,11 @@
    depth their rays end at, and their images are drawn over the picture by an overlay
    renderer (window layer 1), as ``render_scene`` composites them.
 
+A layer drawn by cell projection (:meth:`IsosurfaceLayer.renderer_choice`) casts no frame:
+its tets (made in step 2 for a picture, by :meth:`refine` in a worker for the GUI) are drawn
+by its :class:`~splineviz.render.cell_projection.CellProjectionLayer` actors, which write
+their depth per fragment as the quads do and are ordered with them in step 3.
+
 Modes: ``progressive=False`` (scripts, screenshots) casts exact frames synchronously at full
 size. ``progressive=True`` (the GUI) casts a reduced-resolution preview synchronously, sized
 to a time budget, and calls :attr:`SplineScene.request_refine` so that the owner can compute
