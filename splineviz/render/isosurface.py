@@ -178,6 +178,11 @@ class _DeviceUse:
 _WORKERS_ON_DEVICE = _DeviceUse()
 
 
+#: volumes of at most this many samples get the stand-in mesh of a cell-projected surface
+#: made in the GUI thread while the camera or the isovalue moves (flying edges took 1-2 ms
+#: for 41^3 samples)
+INLINE_PROXY_SAMPLES = 1_000_000
+
 #: node properties whose change needs new frames (any other changes only the shading
 #: uniforms or the colouring of shown frames)
 FRAME_PROPERTIES = frozenset({"model", "k", "isovalue", "color_by", "renderer"})
@@ -254,6 +259,8 @@ class IsosurfaceLayer:
         self._cell_lock = threading.Lock()
         self._cell_spline: tuple | None = None
         self._cells: tuple | None = None
+        #: ((volume id, isovalue), vtkPolyData) of the last stand-in mesh made
+        self._cell_proxy: tuple | None = None
         node.events.connect(self._node_changed)
 
     def close(self) -> None:
@@ -388,6 +395,24 @@ class IsosurfaceLayer:
         cells = self._cells
         return cells is not None and cells[0] == self._cell_key() and (
             geometry is None or geometry is cells[1])
+
+    def cell_proxy(self, blocking: bool = True):
+        """The :func:`~splineviz.render.cell_projection.trilinear_mesh` of the current
+        isovalue (a vtkPolyData), made once per volume and isovalue (thread safe);
+        ``blocking=False`` makes it only for a volume of at most
+        :data:`INLINE_PROXY_SAMPLES` samples (milliseconds), else returns the last one if
+        it is current, or None."""
+        from splineviz.render.cell_projection import trilinear_mesh
+
+        key = (id(self._volume), self.node.isovalue)
+        proxy = self._cell_proxy
+        if proxy is not None and proxy[0] == key:
+            return proxy[1]
+        if not blocking and self._volume.data.size > INLINE_PROXY_SAMPLES:
+            return None
+        mesh = trilinear_mesh(self._volume, key[1])
+        self._cell_proxy = (key, mesh)
+        return mesh
 
     def cell_geometry(self, blocking: bool = True) -> CellGeometry | None:
         """The relevant tets of the surface laid out for cell projection

@@ -106,6 +106,10 @@ class _LayerView:
     #: whether they draw it now (its quad is hidden then)
     cells: object = None
     by_cells: bool = False
+    #: its stand-in mesh while the camera moves (a ProxySurface, None: none yet), and
+    #: whether it shows instead of the cell-projection actors now
+    proxy: object = None
+    proxy_shown: bool = False
 
 
 @dataclass
@@ -179,6 +183,14 @@ class SplineScene:
         self._depth = None
         self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
         self._end_observer = self.renderer.AddObserver("EndEvent", self._after_render)
+        #: seconds of the last window frame that drew a surface by cell projection (its
+        #: GL work happens by the window's end, not the renderer's)
+        self.cells_seconds: float | None = None
+        self._cells_drawn = False
+        self._t_window = None
+        rw = plotter.render_window
+        self._window_observers = (rw.AddObserver("StartEvent", self._window_started),
+                                  rw.AddObserver("EndEvent", self._window_ended))
 
     # -- objects -------------------------------------------------------------------------
 
@@ -322,7 +334,11 @@ class SplineScene:
         if lv.cells is not None:
             lv.cells.set_appearance(layer.color, layer.opacity)
             lv.cells.set_material(layer.material)
-            lv.cells.set_visible(bool(layer.visible and lv.by_cells))
+            lv.cells.set_visible(bool(layer.visible and lv.by_cells and not lv.proxy_shown))
+        if lv.proxy is not None:
+            lv.proxy.set_appearance(layer.color, layer.opacity, layer.material)
+            lv.proxy.actor.SetVisibility(bool(layer.visible and lv.by_cells
+                                              and lv.proxy_shown))
         self._apply_colors(layer, lv)
 
     def _apply_colors(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
@@ -380,8 +396,19 @@ class SplineScene:
         if lv.cells is not None:
             for actor in lv.cells.actors:
                 self.renderer.RemoveActor(actor)
+        if lv.proxy is not None:
+            self.renderer.RemoveActor(lv.proxy.actor)
         lv.cells = None
+        lv.proxy = None
         lv.by_cells = False
+        lv.proxy_shown = False
+
+    def _window_started(self, *_args) -> None:
+        self._t_window = time.perf_counter()
+
+    def _window_ended(self, *_args) -> None:
+        if self._cells_drawn and self._t_window is not None:
+            self.cells_seconds = time.perf_counter() - self._t_window
 
     def _draw_cells(self, layer: IsosurfaceLayer, lv: _LayerView, view: ViewState,
                     blocking: bool) -> bool:
@@ -410,11 +437,28 @@ class SplineScene:
             lv.by_cells = True
             lv.shown = None
             lv.quad.has_image = False
+        planes = tuple(view.clip_planes) + tuple(layer.clip_planes)
         if lv.cells is not None:
-            lv.cells.set_clip_planes(tuple(view.clip_planes) + tuple(layer.clip_planes))
+            lv.cells.set_clip_planes(planes)
             lv.mean_depth = _box_depth(layer, view)
+        # while the camera (or the isovalue) moves: the trilinear stand-in when a cell-
+        # projected frame is over the preview budget, or its tets are not made yet
+        moving = self.progressive and self._interacting and not self._force_exact
+        slow = self.cells_seconds is not None and self.cells_seconds > PREVIEW_BUDGET_S
+        mesh = layer.cell_proxy(blocking=False) if moving and (slow or geometry is None) \
+            else None
+        if mesh is not None:
+            from splineviz.render.cell_projection import ProxySurface
+
+            if lv.proxy is None:
+                lv.proxy = ProxySurface()
+                self.renderer.AddActor(lv.proxy.actor)
+            if lv.proxy.mesh is not mesh:
+                lv.proxy.set_mesh(mesh)
+            lv.proxy.set_clip_planes(planes)
+        lv.proxy_shown = mesh is not None
         self._apply_appearance(layer, lv)
-        return geometry is not None
+        return geometry is not None and not lv.proxy_shown
 
     def single_sample_for_cells(self) -> None:
         """Turn the window's multisampling off when a layer is drawn by cell projection
@@ -494,6 +538,8 @@ class SplineScene:
                 lv.quad.actor.VisibilityOff()
                 if lv.cells is not None:
                     lv.cells.set_visible(False)
+                if lv.proxy is not None:
+                    lv.proxy.actor.VisibilityOff()
                 continue
             choice = layer.renderer_choice(probe=blocking)
             if choice is None:  # "auto" before anyone probed OpenCL: the worker does
@@ -538,6 +584,9 @@ class SplineScene:
             if self._volume_preview(layer, view):
                 stale.append(layer)
         self._resized = False
+        self._cells_drawn = any(
+            layer.visible and lv.by_cells and lv.cells is not None and not lv.proxy_shown
+            for layer, lv in ((la, self._views[id(la)]) for la in self.layers))
         self._order_quads()
         self._fit_scalar_bars()
         self.last_frame_s = time.perf_counter() - t0
@@ -820,6 +869,8 @@ class SplineScene:
     def close(self) -> None:
         self.renderer.RemoveObserver(self._observer)
         self.renderer.RemoveObserver(self._end_observer)
+        for tag in self._window_observers:
+            self.plotter.render_window.RemoveObserver(tag)
         for layer in list(self.layers):
             self.remove_layer(layer)
         for layer in list(self.volume_layers):

@@ -229,3 +229,47 @@ def test_a_progressive_view_draws_the_tets_a_worker_made():
     finally:
         view.close()
         pl.close()
+
+
+def test_while_the_camera_moves_a_slow_cell_projection_shows_its_trilinear_stand_in():
+    import pyvista as pv
+
+    from splineviz.render.scene import PREVIEW_BUDGET_S
+    from splineviz.render.scene_view import SceneView
+
+    scene = _bare_default_scene("cell-projection")
+    iso = scene.isosurfaces[0]
+    pl = pv.Plotter(off_screen=True, window_size=SIZE)
+    view = SceneView(scene, pl, progressive=True)
+    ss = view.spline_scene
+    try:
+        ss.request_refine = lambda: None
+        layer = view.layers[iso.id]
+        pl.render_window.Render()
+        ss.apply(ss.refine())
+        pl.render_window.Render()
+        assert ss.drawn_by_cells(layer) and ss.cells_seconds is not None
+        lv = ss._views[id(layer)]
+        ss.set_interacting(True)
+        ss.cells_seconds = 0.5 * PREVIEW_BUDGET_S  # fast enough: no stand-in
+        pl.camera.Azimuth(20)
+        pl.render_window.Render()
+        assert not lv.proxy_shown and lv.cells.actor.GetVisibility()
+        ss.cells_seconds = 3 * PREVIEW_BUDGET_S   # too slow while moving
+        pl.camera.Azimuth(20)
+        pl.render_window.Render()
+        assert lv.proxy_shown and lv.proxy.actor.GetVisibility()
+        assert not lv.cells.actor.GetVisibility()
+        moving = np.asarray(pl.screenshot(return_img=True))
+        assert (moving != moving[0, 0]).any(axis=2).mean() > 0.05  # the stand-in shows
+        iso.isovalue = 0.45  # dragged: its tets are not made, the stand-in is at once
+        pl.render_window.Render()
+        assert lv.proxy_shown and lv.proxy.mesh is layer.cell_proxy(blocking=False)
+        ss.set_interacting(False)                 # released: the exact surface again
+        ss.apply(ss.refine())
+        pl.render_window.Render()
+        assert not lv.proxy_shown and ss.drawn_by_cells(layer)
+        assert lv.cells.actor.GetVisibility() and not lv.proxy.actor.GetVisibility()
+    finally:
+        view.close()
+        pl.close()
