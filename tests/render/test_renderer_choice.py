@@ -110,17 +110,28 @@ def test_render_flag_and_its_one_sentence_error(tmp_path, capsys):
     assert "unknown renderer 'opengl'; choose one of auto, ray-casting, cell-projection" in err
 
 
-#: hides every OpenCL platform from this process before splineviz looks for one
-_NO_OPENCL = """
+#: hides every OpenCL platform from a process before splineviz looks for one: an ICD loader
+#: that lists none, or one that fails as without any ICD installed
+_NO_OPENCL = {
+    "no platform": """
 import pyopencl
 pyopencl.get_platforms = lambda: []
-"""
+""",
+    "loader fails": """
+import pyopencl
+
+def _no_icd():
+    raise pyopencl.LogicError("clGetPlatformIDs failed: PLATFORM_NOT_FOUND_KHR")
+
+pyopencl.get_platforms = _no_icd
+"""}
 
 
+@pytest.mark.parametrize("hidden", list(_NO_OPENCL))
 def test_without_opencl_the_default_data_is_cell_projected_as_the_ray_caster_draws_it(
-        tmp_path):
+        tmp_path, hidden):
     # a fresh interpreter: the device choice is cached per process
-    script = _NO_OPENCL + textwrap.dedent(f"""
+    script = _NO_OPENCL[hidden] + textwrap.dedent(f"""
         import sys, warnings
         import numpy as np
         sys.path.insert(0, {str(Path(__file__).parents[1])!r})
@@ -148,7 +159,7 @@ def test_without_opencl_the_default_data_is_cell_projected_as_the_ray_caster_dra
     cp = np.load(tmp_path / "cp.npz")
     ref = scene_picture(_bare_default_scene("ray-casting"), SIZE)
     figures = agreement(ref, (cp["colour"], cp["depth"]), ref[0][0, 0])
-    print("no OpenCL, default data:", figures)
+    print(f"no OpenCL ({hidden}), default data:", figures)
     assert figures.both > 1500 and figures.acceptable(), figures
 
 
