@@ -230,16 +230,26 @@ def _renderers(scene, device) -> list[str]:
     """The renderer that draws each isosurface (:func:`~splineviz.core.renderers.
     choose_renderer`); its note, when it has one, goes to stderr."""
     from splineviz.compute.device import opencl_works
-    from splineviz.core.renderers import choose_renderer
+    from splineviz.core.renderers import CELL_PROJECTION, RAY_CASTING, choose_renderer
     from splineviz.render.isosurface import not_projectable
+
+    from splineviz.render.cell_projection import MAX_CLIP_PLANES
 
     out = []
     for iso in scene.isosurfaces:
         choice = choose_renderer(iso.renderer, iso.model, iso.color_by, opencl_works(device),
                                  not_projectable(scene.volume_of(iso).active))
-        if choice.note:
-            print(f"splineviz: note: {iso.name}: {choice.note}", file=sys.stderr)
-        out.append(choice.renderer)
+        note, renderer = choice.note, choice.renderer
+        planes = [p for p in scene.clip_planes
+                  if p.enabled and p.volume_id in (None, iso.volume_id)]
+        if renderer == CELL_PROJECTION and len(planes) > MAX_CLIP_PLANES:
+            # as the view decides (SplineScene.renderer_of)
+            renderer = RAY_CASTING
+            note = (f"cell projection takes at most {MAX_CLIP_PLANES} clip planes; "
+                    f"{len(planes)} are ray cast")
+        if note:
+            print(f"splineviz: note: {iso.name}: {note}", file=sys.stderr)
+        out.append(renderer)
     return out
 
 

@@ -41,7 +41,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.frame import world_bounds
 from splineviz.core.raycast_reference import normalize_clip_planes
-from splineviz.core.renderers import CELL_PROJECTION
+from splineviz.core.renderers import CELL_PROJECTION, RAY_CASTING
 from splineviz.render.colormaps import colorize, lut
 from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
@@ -467,8 +467,24 @@ class SplineScene:
         does: with 8 samples it cast 8 (one per sample, each tet's front face covering only
         some of a pixel's samples) for twice the frame time on software OpenGL and a
         picture antialiased where the ray caster's is not."""
-        if any(layer.visible and layer.renderer == CELL_PROJECTION for layer in self.layers):
+        if any(layer.visible and self.renderer_of(layer) == CELL_PROJECTION
+               for layer in self.layers):
             self.plotter.render_window.SetMultiSamples(0)
+
+    def renderer_of(self, layer: IsosurfaceLayer, probe: bool = True) -> str | None:
+        """What draws ``layer`` in this view: its :meth:`IsosurfaceLayer.renderer_choice`,
+        except that a surface cut by more clip planes (the view's and its own) than cell
+        projection takes (:data:`~splineviz.render.cell_projection.MAX_CLIP_PLANES`) is ray
+        cast. None: ``"auto"`` before OpenCL was probed (``probe=False``)."""
+        from splineviz.render.cell_projection import MAX_CLIP_PLANES
+
+        choice = layer.renderer_choice(probe)
+        if choice is None:
+            return None
+        if choice.renderer == CELL_PROJECTION and \
+                len(self._clip_planes) + len(layer.clip_planes) > MAX_CLIP_PLANES:
+            return RAY_CASTING
+        return choice.renderer
 
     def drawn_by_cells(self, layer: IsosurfaceLayer) -> bool:
         """Whether this view draws ``layer`` by cell projection, its tets current (no
@@ -541,11 +557,11 @@ class SplineScene:
                 if lv.proxy is not None:
                     lv.proxy.actor.VisibilityOff()
                 continue
-            choice = layer.renderer_choice(probe=blocking)
-            if choice is None:  # "auto" before anyone probed OpenCL: the worker does
+            renderer = self.renderer_of(layer, probe=blocking)
+            if renderer is None:  # "auto" before anyone probed OpenCL: the worker does
                 stale.append(layer)
                 continue
-            if choice.renderer == CELL_PROJECTION:
+            if renderer == CELL_PROJECTION:
                 if not self._draw_cells(layer, lv, view, blocking):
                     stale.append(layer)
                 continue
@@ -732,11 +748,11 @@ class SplineScene:
             lv = self._views[id(layer)]
             if not layer.visible:
                 continue
-            choice = layer.renderer_choice(probe=False)
-            if choice is not None and choice.renderer == CELL_PROJECTION:
+            renderer = self.renderer_of(layer, probe=False)
+            if renderer == CELL_PROJECTION:
                 if not layer.cells_current():
                     return True
-            elif choice is None or not (self._is_current(layer, lv, view) and lv.shown.final):
+            elif renderer is None or not (self._is_current(layer, lv, view) and lv.shown.final):
                 return True
         return any(layer.visible and not self._volume_current(layer, view, final=True)
                    for layer in self.volume_layers)
@@ -781,7 +797,7 @@ class SplineScene:
             lv = self._views.get(id(layer))
             if lv is None or not layer.visible:
                 continue
-            if layer.renderer == CELL_PROJECTION:  # probes OpenCL here, for "auto"
+            if self.renderer_of(layer) == CELL_PROJECTION:  # probes OpenCL for "auto"
                 if not layer.cells_current():
                     out.append((layer, layer.cell_geometry()))
                 continue

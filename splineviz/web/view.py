@@ -195,7 +195,7 @@ class RemoteView:
         # a surface drawn by cell projection previews by its tets (made here when missing)
         # or their stand-in, not by a ray-cast frame
         cells = [layer for layer in scene.layers
-                 if layer.visible and layer.renderer == CELL_PROJECTION]
+                 if layer.visible and scene.renderer_of(layer) == CELL_PROJECTION]
         missing = [layer for layer in scene.layers if layer.visible and layer not in cells
                    and not _shows(scene.shown_frame(layer), layer, now)]
         if missing or not all(layer.cells_current() for layer in cells):

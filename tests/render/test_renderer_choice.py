@@ -284,3 +284,27 @@ def test_while_the_camera_moves_a_slow_cell_projection_shows_its_trilinear_stand
     finally:
         view.close()
         pl.close()
+
+
+def test_more_clip_planes_than_cell_projection_takes_are_ray_cast(tmp_path, capsys):
+    from splineviz.render.cell_projection import MAX_CLIP_PLANES
+    from splineviz.render.scene_view import OffscreenRenderer
+
+    scene = _bare_default_scene("cell-projection")
+    for i in range(MAX_CLIP_PLANES + 1):
+        scene.add_clip_plane((0.0, 0.0, -0.9 + 0.01 * i), (0.0, 0.0, 1.0))
+    with OffscreenRenderer(scene, (48, 36)) as r:
+        r.render()
+        (_pl, view), = r._views
+        layer = view.layers[scene.isosurfaces[0].id]
+        assert view.spline_scene.renderer_of(layer) == RAY_CASTING
+        assert not view.spline_scene.drawn_by_cells(layer)
+        assert view.spline_scene.shown_frame(layer).final
+    args = ["render", str(SESSION), "--size", "48x36", "--renderer", "cell-projection",
+            "-o", str(tmp_path / "x.png")]
+    for i in range(MAX_CLIP_PLANES + 1):
+        args += ["--clip", f"0,0,{-0.9 + 0.01 * i},0,0,1"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert captured.out.strip().endswith("ray-casting")
+    assert f"at most {MAX_CLIP_PLANES} clip planes" in captured.err
