@@ -231,9 +231,8 @@ def _renderers(scene, device) -> list[str]:
     choose_renderer`); its note, when it has one, goes to stderr."""
     from splineviz.compute.device import opencl_works
     from splineviz.core.renderers import CELL_PROJECTION, RAY_CASTING, choose_renderer
-    from splineviz.render.isosurface import not_projectable
-
     from splineviz.render.cell_projection import MAX_CLIP_PLANES
+    from splineviz.render.isosurface import not_projectable
 
     out = []
     for iso in scene.isosurfaces:
