@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from splineviz.core.errors import SplinevizError
+from splineviz.core.splines.registry import model_spec
 
 
 class RendererError(SplinevizError, ValueError):
@@ -69,7 +70,7 @@ def renderer_name(name: str) -> str:
     RendererError
         "unknown renderer 'x'; choose one of auto, ray-casting, cell-projection".
     """
-    key = ALIASES.get(name, name) if isinstance(name, str) else name
+    key = ALIASES.get(name, name) if isinstance(name, str) else None
     if key not in RENDERERS:
         raise RendererError(f"unknown renderer {name!r}; choose one of "
                             f"{', '.join(RENDERERS)}")
@@ -123,8 +124,6 @@ def choose_renderer(choice: str, model: str, color_by: str = "none",
         oblique scan"``: its tets are placed on an axis-aligned grid in memory), ``""``
         when it can.
     """
-    from splineviz.core.splines.registry import model_spec
-
     choice = renderer_name(choice)
     spec = model_spec(model)
     projectable = draws(CELL_PROJECTION, spec.family) and color_by == "none" and not data
