@@ -145,6 +145,7 @@ def _volume_rendering(scene, args) -> None:
 
 
 def run(args) -> int:
+    from splineviz.core.renderers import renderer_name
     from splineviz.core.splines import model_spec
     from splineviz.model.opening import scene_from_path
     from splineviz.render.scene_view import render_scene
@@ -182,11 +183,16 @@ def run(args) -> int:
     for text in args.clip or ():
         p = _floats(text, (6,), "--clip")
         scene.add_clip_plane(p[:3], p[3:])
+    if args.renderer is not None:
+        renderer = renderer_name(args.renderer)
+        for iso in scene.isosurfaces:
+            iso.renderer = renderer
     chunked = _configure_bricks(scene, args)
     spec = model_spec(scene.isosurfaces[0].model)
     if spec.family is None:
         print(f"splineviz: note: model {spec.name!r} renders on the NumPy reference path "
               "(slow): it has no OpenCL kernel", file=sys.stderr)
+    drawn_by = _renderers(scene, args.device)
     outputs = [(None, args.output)]
     if args.all_times:
         steps = scene.time_steps()
@@ -215,12 +221,40 @@ def run(args) -> int:
               f"{' at each step' if args.all_times else ''}")
     iso = scene.isosurfaces[0]
     what = f"{len(outputs)} steps" if args.all_times else args.output
-    print(f"{what}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}")
+    print(f"{what}: {size[0]}x{size[1]}, iso {iso.isovalue:g}, model {iso.model}, "
+          f"{drawn_by[0]}")
     return 0
+
+
+def _renderers(scene, device) -> list[str]:
+    """The renderer that draws each isosurface (:func:`~splineviz.core.renderers.
+    choose_renderer`); its note, when it has one, goes to stderr."""
+    from splineviz.compute.device import opencl_works
+    from splineviz.core.renderers import CELL_PROJECTION, RAY_CASTING, choose_renderer
+    from splineviz.render.cell_projection import MAX_CLIP_PLANES
+    from splineviz.render.isosurface import not_projectable
+
+    out = []
+    for iso in scene.isosurfaces:
+        choice = choose_renderer(iso.renderer, iso.model, iso.color_by, opencl_works(device),
+                                 not_projectable(scene.volume_of(iso).active))
+        note, renderer = choice.note, choice.renderer
+        planes = [p for p in scene.clip_planes
+                  if p.enabled and p.volume_id in (None, iso.volume_id)]
+        if renderer == CELL_PROJECTION and len(planes) > MAX_CLIP_PLANES:
+            # as the view decides (SplineScene.renderer_of)
+            renderer = RAY_CASTING
+            note = (f"cell projection takes at most {MAX_CLIP_PLANES} clip planes; "
+                    f"{len(planes)} are ray cast")
+        if note:
+            print(f"splineviz: note: {iso.name}: {note}", file=sys.stderr)
+        out.append(renderer)
+    return out
 
 
 def register(subparsers) -> None:
     """Add the ``render`` sub-command (see :mod:`splineviz.cli`)."""
+    from splineviz.core.renderers import RENDERERS
     from splineviz.core.splines import MODELS
 
     p = subparsers.add_parser("render", help="ray cast a spline isosurface into a PNG",
@@ -239,6 +273,11 @@ def register(subparsers) -> None:
     p.add_argument("--view-angle", type=float, default=30.0, help="vertical view angle, degrees")
     p.add_argument("--clip", action="append", metavar="OX,OY,OZ,NX,NY,NZ",
                    help="clip plane keeping the side its normal points to (repeatable)")
+    p.add_argument("--renderer", default=None, metavar="|".join(RENDERERS),
+                   help="what draws the isosurfaces: ray casting (OpenCL), cell projection "
+                   "(OpenGL; the type-6 models super-quadratic and cubic-c1), or auto: ray "
+                   "casting where an OpenCL device works, else cell projection (default: "
+                   "auto, or the session's)")
     p.add_argument("--device", default=None, help="gpu | cpu | numpy | device-name substring "
                    "(default: $SPLINEVIZ_DEVICE, else GPU before CPU)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",

@@ -158,3 +158,27 @@ def try_get_device(preference: str | None = None) -> Device | None:
                 stacklevel=2,
             )
         return None
+
+
+#: resolved preference -> whether a device of it works (:func:`opencl_works`)
+_works: dict[str, bool] = {}
+
+
+def opencl_works(preference: str | None = None) -> bool:
+    """Whether an OpenCL device for ``preference`` can be opened (``"numpy"``: False);
+    probed once per preference, without the warning of :func:`try_get_device`."""
+    pref = resolve_preference(preference)
+    if pref not in _works:
+        try:
+            _select(pref)
+            _works[pref] = True
+        except NoDeviceError:
+            _works[pref] = False
+    return _works[pref]
+
+
+def opencl_known(preference: str | None = None) -> bool | None:
+    """What :func:`opencl_works` found for ``preference``, None when it was not asked yet
+    (a caller that must not wait for the probe: it opens a context and builds a kernel)."""
+    pref = resolve_preference(preference)
+    return False if pref == "numpy" else _works.get(pref)

@@ -280,7 +280,8 @@ class TimeToolbar(QToolBar):
                 continue
             for layer in ss.layers:
                 rf = ss.shown_frame(layer)
-                if layer.visible and (rf is None or rf.state != layer.state):
+                if layer.visible and not ss.drawn_by_cells(layer) and (
+                        rf is None or rf.state != layer.state):
                     return False
         return True
 

@@ -40,6 +40,7 @@ from splineviz.core.colour_by import COLORMAPS, FIELDS, RANGE_MODES
 from splineviz.core.errors import SplinevizError
 from splineviz.core.material import FRONT_COLOR, MATERIALS
 from splineviz.core.points import PointCloud
+from splineviz.core.renderers import AUTO, renderer_name
 from splineviz.core.volume import Volume
 from splineviz.io.session import ID_PATTERN, MAX_MAGNITUDE
 from splineviz.io.time_series import TimeSeries
@@ -72,6 +73,8 @@ def _model_name(name: str) -> str:
 
 #: a key of the spline model registry (:data:`splineviz.core.splines.MODELS`)
 ModelName = Annotated[str, AfterValidator(_model_name)]
+#: a key of :data:`splineviz.core.renderers.RENDERERS` (an alias is stored as its key)
+RendererName = Annotated[str, AfterValidator(renderer_name)]
 Normal = Annotated[Vec3, AfterValidator(nonzero_normal)]
 
 
@@ -382,6 +385,9 @@ class IsosurfaceNode(Node):
     isovalue: Finite = Field(default=0.0, json_schema_extra={"required": True})
     model: ModelName = "to-quadratic"
     k: Annotated[int, Field(ge=1, le=16)] = 2
+    #: what draws it: ray casting, cell projection, or ``"auto"`` (by the machine:
+    #: :func:`splineviz.core.renderers.choose_renderer`)
+    renderer: RendererName = AUTO
     color: RGB = (0.9, 0.9, 0.9)
     opacity: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False)] = 1.0
     visible: bool = True

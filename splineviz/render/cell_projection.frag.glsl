@@ -75,6 +75,13 @@ float bisect(float b[DEGREE + 1], float lo, float hi)
 
 void main()
 {
+  // one ray per sample of a multisampled window (gl_FragCoord is then the sample's
+  // position): a fragment shaded once per pixel would leave the samples of a pixel that a
+  // neighbouring tet's front face covers, whose ray misses that tet, unwritten, and every
+  // tet edge would show as a line
+#ifdef GL_ARB_sample_shading
+  if (gl_SampleID < 0) { discard; }
+#endif
   float c[NCOEF];
 //CELLPROJ::CoefUnpack
   // The ray through the pixel centre from the camera, as the ray casters cast it (the

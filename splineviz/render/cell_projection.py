@@ -28,6 +28,7 @@ clipping range.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
@@ -86,7 +87,8 @@ def shader_sources(degree: int) -> tuple[str, str]:
     vert = vert.replace("//CELLPROJ::CoefCopy",
                         "\n".join(f"  coefVS{i} = coef{i};" for i in range(nv)))
     frag = frag.replace("//VTK::System::Dec",
-                        f"//VTK::System::Dec\n#define DEGREE {degree}\n#define NCOEF {ncoef}")
+                        f"//VTK::System::Dec\n#extension GL_ARB_sample_shading : enable\n"
+                        f"#define DEGREE {degree}\n#define NCOEF {ncoef}")
     frag = frag.replace("//CELLPROJ::CoefIn",
                         "\n".join(f"flat in vec4 coefVS{i};" for i in range(nv)))
     frag = frag.replace("//CELLPROJ::CoefUnpack", "\n".join(
@@ -165,51 +167,122 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
     return poly
 
 
+@dataclass(frozen=True, eq=False)
+class CellGeometry:
+    """The relevant tets of one isovalue of a spline as the shaders draw them.
+
+    Attributes
+    ----------
+    spline : Type6Spline
+    isovalue : float
+    tets : RelevantTets
+    polydata : vtkPolyData
+        :func:`tets_polydata` of ``tets`` (several views' actors may draw it).
+    """
+
+    spline: object
+    isovalue: float
+    tets: RelevantTets
+    polydata: vtk.vtkPolyData
+
+
+def cell_geometry(spline, isovalue: float) -> CellGeometry:
+    """Classify the tets of ``spline`` for ``isovalue`` and lay them out for the shaders
+    (NumPy and a new vtkPolyData only: may run in a worker thread)."""
+    isovalue = float(isovalue)
+    tets = relevant_tets(spline, isovalue)
+    vol = spline.volume
+    return CellGeometry(spline, isovalue, tets,
+                        tets_polydata(tets, vol.origin, vol.spacing, isovalue))
+
+
 class CellProjectionLayer:
     """A VTK actor that draws one isosurface of a type-6 spline by cell projection.
 
     Parameters
     ----------
     spline : Type6Spline (``"super-quadratic"`` or ``"cubic-c1"``)
-    isovalue : float
+    isovalue : float or None
+        None: nothing is drawn until :meth:`set_geometry`.
     """
 
-    def __init__(self, spline, isovalue: float):
+    def __init__(self, spline, isovalue: float | None):
         self.spline = spline
-        self.actor = vtk.vtkActor()
-        self._mapper = vtk.vtkOpenGLPolyDataMapper()
-        # positions reach the shaders as world coordinates: the fragment program projects
-        # the hit with MCDCMatrix, which a VBO shift and scale would not match
-        self._mapper.SetVBOShiftScaleMethod(vtk.vtkOpenGLPolyDataMapper.DISABLE_SHIFT_SCALE)
-        self._mapper.ScalarVisibilityOff()
-        self.actor.SetMapper(self._mapper)
-        self.actor.GetProperty().BackfaceCullingOn()
-        vert, frag = shader_sources(spline.degree)
-        sp = self.actor.GetShaderProperty()
-        sp.SetVertexShaderCode(vert)
-        sp.SetFragmentShaderCode(frag)
-        self._uniforms = sp.GetFragmentCustomUniforms()
+        self.actor, self._mapper, main = self._make_actor(spline)
+        #: the depth pre-pass of a translucent surface (drawn just before :attr:`actor`,
+        #: shown while the opacity is below 1): the same fragments with alpha 0 write only
+        #: the nearest hit's depth, so the colour pass blends that hit alone, as a ray
+        #: caster's frame does, instead of every fold of the surface in the order the tets
+        #: happen to be drawn
+        self.depth_actor, self._depth_mapper, depth = self._make_actor(spline)
+        self.depth_actor.VisibilityOff()
+        self._uniforms = main
+        self._both = (main, depth)
+        self._visible = True
+        self._opacity = 1.0
         lo, hi = np.asarray(spline.bounds, dtype=np.float64).T
-        self._uniforms.SetUniform3f("boxMin", tuple(float(v) for v in lo))
-        self._uniforms.SetUniform3f("boxMax", tuple(float(v) for v in hi))
-        assoc = vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS
-        names = ["lam", "gradx", "grady", "gradz"]
-        names += [f"coef{i}" for i in range(_vec4_count(spline.degree))]
-        for name in names:
-            self._mapper.MapDataArrayToVertexAttribute(name, name, assoc, -1)
+        for u in self._both:
+            u.SetUniform3f("boxMin", tuple(float(v) for v in lo))
+            u.SetUniform3f("boxMax", tuple(float(v) for v in hi))
         self.set_material()
         self.set_appearance(FRONT_COLOR, 1.0, BACK_COLOR)
         self.set_clip_planes(())
         self.tets: RelevantTets | None = None
-        self.set_isovalue(isovalue)
+        self.geometry: CellGeometry | None = None
+        self.isovalue = None
+        if isovalue is not None:
+            self.set_isovalue(isovalue)
+
+    @staticmethod
+    def _make_actor(spline):
+        """(actor, mapper, fragment uniforms) drawing the tets with the shaders."""
+        actor = vtk.vtkActor()
+        mapper = vtk.vtkOpenGLPolyDataMapper()
+        # positions reach the shaders as world coordinates: the fragment program projects
+        # the hit with MCDCMatrix, which a VBO shift and scale would not match
+        mapper.SetVBOShiftScaleMethod(vtk.vtkOpenGLPolyDataMapper.DISABLE_SHIFT_SCALE)
+        mapper.ScalarVisibilityOff()
+        actor.SetMapper(mapper)
+        actor.GetProperty().BackfaceCullingOn()
+        # drawn in the opaque pass whatever the opacity (VTK would leave a translucent
+        # prop to its translucent pass, unordered against the scene's other surfaces);
+        # the shader's alpha blends it over what is drawn before it
+        actor.ForceOpaqueOn()
+        actor.SetPickable(False)
+        vert, frag = shader_sources(spline.degree)
+        sp = actor.GetShaderProperty()
+        sp.SetVertexShaderCode(vert)
+        sp.SetFragmentShaderCode(frag)
+        assoc = vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS
+        names = ["lam", "gradx", "grady", "gradz"]
+        names += [f"coef{i}" for i in range(_vec4_count(spline.degree))]
+        for name in names:
+            mapper.MapDataArrayToVertexAttribute(name, name, assoc, -1)
+        return actor, mapper, sp.GetFragmentCustomUniforms()
+
+    @property
+    def actors(self) -> tuple:
+        """(depth pre-pass actor, colour actor), in the order they must be drawn."""
+        return self.depth_actor, self.actor
 
     def set_isovalue(self, isovalue: float) -> None:
         """Classify the tets for ``isovalue`` and upload them."""
-        self.isovalue = float(isovalue)
-        self.tets = relevant_tets(self.spline, self.isovalue)
-        vol = self.spline.volume
-        self._mapper.SetInputData(tets_polydata(self.tets, vol.origin, vol.spacing,
-                                                self.isovalue))
+        self.set_geometry(cell_geometry(self.spline, isovalue))
+
+    def set_geometry(self, geometry: CellGeometry) -> None:
+        """Draw the tets of ``geometry`` (made by :func:`cell_geometry` of this layer's
+        spline, e.g. in a worker)."""
+        self.geometry = geometry
+        self.isovalue = geometry.isovalue
+        self.tets = geometry.tets
+        self._mapper.SetInputData(geometry.polydata)
+        self._depth_mapper.SetInputData(geometry.polydata)
+
+    def set_visible(self, visible: bool) -> None:
+        """Show or hide the surface (both actors)."""
+        self._visible = bool(visible)
+        self.actor.SetVisibility(self._visible)
+        self.depth_actor.SetVisibility(self._visible and self._opacity < 1.0)
 
     def set_clip_planes(self, planes) -> None:
         """Cut the surface exactly at up to :data:`MAX_CLIP_PLANES` planes, each an (origin,
@@ -218,28 +291,106 @@ class CellProjectionLayer:
         if len(arr) > MAX_CLIP_PLANES:
             raise ClipPlaneError(f"cell projection takes at most {MAX_CLIP_PLANES} clip planes, "
                                  f"got {len(arr)}")
-        self._uniforms.SetUniformi("clipCount", len(arr))
-        for i in range(MAX_CLIP_PLANES):
-            if i < len(arr):
-                o, n = arr[i]
-                plane = (*(float(v) for v in n), -float(np.dot(o, n)))
-            else:
-                plane = (0.0, 0.0, 0.0, 0.0)
-            self._uniforms.SetUniform4f(f"clipPlane{i}", plane)
+        for u in self._both:
+            u.SetUniformi("clipCount", len(arr))
+            for i in range(MAX_CLIP_PLANES):
+                if i < len(arr):
+                    o, n = arr[i]
+                    plane = (*(float(v) for v in n), -float(np.dot(o, n)))
+                else:
+                    plane = (0.0, 0.0, 0.0, 0.0)
+                u.SetUniform4f(f"clipPlane{i}", plane)
 
     def set_material(self, material: Material = MATERIALS[DEFAULT_MATERIAL]) -> None:
         """Phong constants of the headlight model."""
-        u = self._uniforms
-        u.SetUniformf("ambientK", float(material.ambient))
-        u.SetUniformf("diffuseK", float(material.diffuse))
-        u.SetUniformf("specularK", float(material.specular))
-        u.SetUniformf("shininess", float(max(material.shininess, 1.0)))
+        for u in self._both:
+            u.SetUniformf("ambientK", float(material.ambient))
+            u.SetUniformf("diffuseK", float(material.diffuse))
+            u.SetUniformf("specularK", float(material.specular))
+            u.SetUniformf("shininess", float(max(material.shininess, 1.0)))
 
     def set_appearance(self, color, opacity: float, back_color=BACK_COLOR) -> None:
         """Front and back colours (RGB in [0, 1]) and opacity of the surface."""
-        self._uniforms.SetUniform3f("frontColor", tuple(float(c) for c in color))
-        self._uniforms.SetUniform3f("backColor", tuple(float(c) for c in back_color))
-        self._uniforms.SetUniformf("surfaceOpacity", float(opacity))
+        self._opacity = float(opacity)
+        for u, alpha in zip(self._both, (self._opacity, 0.0), strict=True):
+            u.SetUniform3f("frontColor", tuple(float(c) for c in color))
+            u.SetUniform3f("backColor", tuple(float(c) for c in back_color))
+            u.SetUniformf("surfaceOpacity", alpha)
+        self.set_visible(self._visible)
+
+
+def trilinear_mesh(volume, isovalue: float) -> vtk.vtkPolyData:
+    """Flying-edges triangles of the samples' trilinear isosurface at ``isovalue`` (world
+    coordinates of an axis-aligned volume, gradient normals): the stand-in of a cell-projected
+    surface while the camera moves (:class:`ProxySurface`), as the trilinear kernel previews
+    the ray caster's smooth models (thesis §6.3)."""
+    img = vtk.vtkImageData()
+    img.SetDimensions(*volume.data.shape)
+    img.SetSpacing(*(float(v) for v in volume.spacing))
+    img.SetOrigin(*(float(v) for v in volume.origin))
+    values = np.ascontiguousarray(np.asarray(volume.data, dtype=np.float32).ravel(order="F"))
+    img.GetPointData().SetScalars(numpy_support.numpy_to_vtk(values, deep=True))
+    fe = vtk.vtkFlyingEdges3D()
+    fe.SetInputData(img)
+    fe.SetValue(0, float(isovalue))
+    fe.ComputeNormalsOn()
+    fe.ComputeScalarsOff()
+    fe.Update()
+    out = vtk.vtkPolyData()
+    out.ShallowCopy(fe.GetOutput())
+    return out
+
+
+class ProxySurface:
+    """A plain VTK mesh actor that stands in for a cell-projected surface while the camera
+    moves and a cell-projected frame takes longer than the view's budget (software OpenGL:
+    0.3-1 s for the 41^3 default data): a :func:`trilinear_mesh`, in the surface's colour,
+    material and opacity, cut by its clip planes (VTK's clipping keeps the side a plane's
+    normal points to, as the ray casters)."""
+
+    def __init__(self):
+        self.actor = vtk.vtkActor()
+        self._mapper = vtk.vtkPolyDataMapper()
+        self._mapper.ScalarVisibilityOff()
+        self.actor.SetMapper(self._mapper)
+        self.actor.SetPickable(False)
+        self.actor.SetUseBounds(False)
+        self.actor.VisibilityOff()
+        self.mesh = None
+
+    def set_mesh(self, mesh: vtk.vtkPolyData) -> None:
+        self.mesh = mesh
+        self._mapper.SetInputData(mesh)
+
+    def set_appearance(self, color, opacity: float, material: Material) -> None:
+        prop = self.actor.GetProperty()
+        prop.SetColor(*(float(c) for c in color))
+        prop.SetOpacity(float(opacity))
+        prop.SetAmbient(float(material.ambient))
+        prop.SetDiffuse(float(material.diffuse))
+        prop.SetSpecular(float(material.specular))
+        prop.SetSpecularPower(float(max(material.shininess, 1.0)))
+        prop.SetBackfaceCulling(False)
+        self.actor.SetBackfaceProperty(_back_property(material))
+
+    def set_clip_planes(self, planes) -> None:
+        self._mapper.RemoveAllClippingPlanes()
+        for o, n in normalize_clip_planes(planes):
+            plane = vtk.vtkPlane()
+            plane.SetOrigin(*(float(v) for v in o))
+            plane.SetNormal(*(float(v) for v in n))
+            self._mapper.AddClippingPlane(plane)
+
+
+def _back_property(material: Material) -> vtk.vtkProperty:
+    """The inside of a proxy seen through a cut, in the back colour as the ray casters."""
+    back = vtk.vtkProperty()
+    back.SetColor(*BACK_COLOR)
+    back.SetAmbient(float(material.ambient))
+    back.SetDiffuse(float(material.diffuse))
+    back.SetSpecular(float(material.specular))
+    back.SetSpecularPower(float(max(material.shininess, 1.0)))
+    return back
 
 
 class OffscreenCellProjection:
@@ -256,7 +407,8 @@ class OffscreenCellProjection:
         self.size = parse_size(size)
         self._ren = vtk.vtkRenderer()
         self._ren.SetBackground(*BACKGROUND)
-        self._ren.AddActor(layer.actor)
+        for actor in layer.actors:
+            self._ren.AddActor(actor)
         #: the vtkRenderer, to add other props (they composite by depth with the surface)
         self.renderer = self._ren
         self._win = vtk.vtkRenderWindow()

@@ -22,6 +22,12 @@ downsample, in memory: :meth:`~splineviz.core.chunked.ChunkedVolume.preview_volu
 the trilinear kernel, at any size in milliseconds (:attr:`IsosurfaceLayer.coarse_preview`),
 while the exact frame is made in bricks on dask workers.
 
+Renderer (thesis ch. 6): :meth:`IsosurfaceLayer.renderer_choice` says whether the node's
+surface is ray cast or drawn by cell projection (:mod:`splineviz.core.renderers`); for cell
+projection the layer makes the relevant tets (:meth:`IsosurfaceLayer.cell_geometry`, once per
+volume, model and isovalue) and the views draw them with their own
+:class:`~splineviz.render.cell_projection.CellProjectionLayer` actors instead of frames.
+
 The GUI thread calls :meth:`compute` with ``blocking=False``: it takes no lock it would
 have to wait for, builds no caster and evaluates no spline of a model without a kernel
 (a plugin's evaluation may take any time); without a free caster it returns None and the
@@ -35,16 +41,22 @@ import threading
 import time
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from splineviz.compute.device import opencl_known, opencl_works
 from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError, SplinevizWarning
 from splineviz.core.frame import from_world
 from splineviz.core.material import MATERIALS, Material
 from splineviz.core.raycast_reference import Frame
+from splineviz.core.renderers import AUTO, CELL_PROJECTION, RendererChoice, choose_renderer
 from splineviz.core.volume import Volume
 from splineviz.model import nodes
+
+if TYPE_CHECKING:
+    from splineviz.render.cell_projection import CellGeometry
 
 #: default front colours of successive layers (a qualitative palette: tell surfaces apart)
 PALETTE = nodes.PALETTE
@@ -166,9 +178,14 @@ class _DeviceUse:
 _WORKERS_ON_DEVICE = _DeviceUse()
 
 
+#: volumes of at most this many samples get the stand-in mesh of a cell-projected surface
+#: made in the GUI thread while the camera or the isovalue moves (flying edges took 1-2 ms
+#: for 41^3 samples)
+INLINE_PROXY_SAMPLES = 1_000_000
+
 #: node properties whose change needs new frames (any other changes only the shading
 #: uniforms or the colouring of shown frames)
-FRAME_PROPERTIES = frozenset({"model", "k", "isovalue", "color_by"})
+FRAME_PROPERTIES = frozenset({"model", "k", "isovalue", "color_by", "renderer"})
 
 
 class IsosurfaceLayer:
@@ -237,6 +254,13 @@ class IsosurfaceLayer:
         self._color_volume: Volume | None = None
         self._color_reference: tuple | None = None  # (volume, model, options, isovalue)
         self._splines: dict = {}  # "own" / "other" -> Spline for the colour-by values
+        #: cell projection: ((volume id, model, options), spline) and (key, CellGeometry)
+        #: of the last geometry made, under their lock (made in a worker in the GUI)
+        self._cell_lock = threading.Lock()
+        self._cell_spline: tuple | None = None
+        self._cells: tuple | None = None
+        #: ((volume id, isovalue), vtkPolyData) of the last stand-in mesh made
+        self._cell_proxy: tuple | None = None
         node.events.connect(self._node_changed)
 
     def close(self) -> None:
@@ -339,6 +363,89 @@ class IsosurfaceLayer:
     def state(self) -> tuple:
         """Changes whenever frames of this layer must be recomputed."""
         return (self._version, self.node.model, self.node.isovalue)
+
+    # -- renderer (thesis ch. 6: ray casting or cell projection) ------------------------
+
+    def renderer_choice(self, probe: bool = True) -> RendererChoice | None:
+        """What draws this surface now (:func:`splineviz.core.renderers.choose_renderer`
+        of the node's ``renderer``, model and colour by, and whether OpenCL works here).
+
+        ``"auto"`` needs to know whether an OpenCL device works: ``probe=False`` (the GUI
+        thread: opening a device takes a context and a kernel build) returns None while
+        nobody has asked yet."""
+        node = self.node
+        opencl = True
+        if node.renderer == AUTO or self._device == "numpy":
+            opencl = opencl_works(self._device) if probe else opencl_known(self._device)
+            if opencl is None:
+                return None
+        return choose_renderer(node.renderer, node.model, node.color_by, opencl,
+                               not_projectable(self._volume))
+
+    @property
+    def renderer(self) -> str:
+        """``"ray-casting"`` or ``"cell-projection"`` (:meth:`renderer_choice`)."""
+        return self.renderer_choice().renderer
+
+    def _cell_key(self) -> tuple:
+        return (id(self._volume), self.node.model, self.node.isovalue)
+
+    def cells_current(self, geometry: CellGeometry | None = None) -> bool:
+        """Whether the last cell geometry made (or ``geometry``) is of the layer as it is."""
+        cells = self._cells
+        return cells is not None and cells[0] == self._cell_key() and (
+            geometry is None or geometry is cells[1])
+
+    def cell_proxy(self, blocking: bool = True):
+        """The :func:`~splineviz.render.cell_projection.trilinear_mesh` of the current
+        isovalue (a vtkPolyData), made once per volume and isovalue (thread safe);
+        ``blocking=False`` makes it only for a volume of at most
+        :data:`INLINE_PROXY_SAMPLES` samples (milliseconds), else returns the last one if
+        it is current, or None."""
+        from splineviz.render.cell_projection import trilinear_mesh
+
+        key = (id(self._volume), self.node.isovalue)
+        proxy = self._cell_proxy
+        if proxy is not None and proxy[0] == key:
+            return proxy[1]
+        if not blocking and self._volume.data.size > INLINE_PROXY_SAMPLES:
+            return None
+        mesh = trilinear_mesh(self._volume, key[1])
+        self._cell_proxy = (key, mesh)
+        return mesh
+
+    def cell_geometry(self, blocking: bool = True) -> CellGeometry | None:
+        """The relevant tets of the surface laid out for cell projection
+        (:func:`splineviz.render.cell_projection.cell_geometry`), made once per volume,
+        model and isovalue (thread safe). ``blocking=False`` (the GUI thread) makes
+        nothing: the last one if it is current, else None."""
+        from splineviz.plugins import build_spline
+        from splineviz.render.cell_projection import cell_geometry
+
+        key = self._cell_key()
+        cells = self._cells
+        if cells is not None and cells[0] == key:
+            return cells[1]
+        if not blocking:
+            return None
+        with self._cell_lock:
+            cells = self._cells
+            if cells is not None and cells[0] == key:
+                return cells[1]
+            spline_key = key[:2] + (tuple(sorted(self.node.model_options().items())),)
+            if self._cell_spline is None or self._cell_spline[0] != spline_key:
+                spline = build_spline(self._volume, self.node.model,
+                                      **self.node.model_options())
+                self._cell_spline = (spline_key, spline)
+            t = time.perf_counter()
+            geometry = cell_geometry(self._cell_spline[1], key[2])
+            self._cells = (key, geometry)
+            # what the status bar lists of a layer: its tets, and what draws them
+            self.last_stats = {"active_tets": len(geometry.tets), "active_cells": None,
+                               "classify_s": time.perf_counter() - t, "render_s": None,
+                               "device": "OpenGL cell projection", "path": CELL_PROJECTION,
+                               "classified": "all"}
+            return geometry
 
     def set_volume(self, volume: Volume) -> None:
         """New data (e.g. smoothed); keeps model and isovalue.
@@ -698,6 +805,19 @@ class IsosurfaceLayer:
             return self.hit_scalars(frame)
         finally:
             lock.release()
+
+
+def not_projectable(volume) -> str:
+    """What of ``volume`` cell projection cannot draw (its tets are laid out on an
+    axis-aligned in-memory grid), "" when it can."""
+    from splineviz.core.chunked import ChunkedVolume
+    from splineviz.core.frame import rotation
+
+    if isinstance(volume, ChunkedVolume):
+        return "a chunked volume"
+    if rotation(volume) is not None:
+        return "an oblique scan"
+    return ""
 
 
 def _layer_call(write):

@@ -1,4 +1,5 @@
-"""A VTK scene that shows ray-cast spline isosurfaces among ordinary props (thesis §6.3).
+"""A VTK scene that shows ray-cast (or cell-projected) spline isosurfaces among ordinary props
+(thesis §6.3, §6.1).
 
 :class:`SplineScene` wraps a pyvista plotter (an off-screen ``pyvista.Plotter`` or the Qt
 ``QtInteractor``). Before every render (the renderer's ``StartEvent``) it
@@ -14,6 +15,11 @@
    can cast within the budget; after the scene's pass (``EndEvent``) it reads the window
    depth their rays end at, and their images are drawn over the picture by an overlay
    renderer (window layer 1), as ``render_scene`` composites them.
+
+A layer drawn by cell projection (:meth:`IsosurfaceLayer.renderer_choice`) casts no frame:
+its tets (made in step 2 for a picture, by :meth:`refine` in a worker for the GUI) are drawn
+by its :class:`~splineviz.render.cell_projection.CellProjectionLayer` actors, which write
+their depth per fragment as the quads do and are ordered with them in step 3.
 
 Modes: ``progressive=False`` (scripts, screenshots) casts exact frames synchronously at full
 size. ``progressive=True`` (the GUI) casts a reduced-resolution preview synchronously, sized
@@ -35,6 +41,7 @@ from splineviz.core.camera import Camera
 from splineviz.core.errors import SplinevizError
 from splineviz.core.frame import world_bounds
 from splineviz.core.raycast_reference import normalize_clip_planes
+from splineviz.core.renderers import CELL_PROJECTION, RAY_CASTING
 from splineviz.render.colormaps import colorize, lut
 from splineviz.render.colour_ranges import ColourRangeLink, FixedRanges, range_key
 from splineviz.render.isosurface import IsosurfaceLayer, RenderedFrame, ViewState
@@ -95,6 +102,14 @@ class _LayerView:
     scalar_bar: object = None
     #: the (lo, hi) the colour map spans in the shown frame
     color_range: tuple | None = None
+    #: the layer's cell-projection actors in this view (None: not drawn so yet), and
+    #: whether they draw it now (its quad is hidden then)
+    cells: object = None
+    by_cells: bool = False
+    #: its stand-in mesh while the camera moves (a ProxySurface, None: none yet), and
+    #: whether it shows instead of the cell-projection actors now
+    proxy: object = None
+    proxy_shown: bool = False
 
 
 @dataclass
@@ -168,6 +183,14 @@ class SplineScene:
         self._depth = None
         self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
         self._end_observer = self.renderer.AddObserver("EndEvent", self._after_render)
+        #: seconds of the last window frame that drew a surface by cell projection (its
+        #: GL work happens by the window's end, not the renderer's)
+        self.cells_seconds: float | None = None
+        self._cells_drawn = False
+        self._t_window = None
+        rw = plotter.render_window
+        self._window_observers = (rw.AddObserver("StartEvent", self._window_started),
+                                  rw.AddObserver("EndEvent", self._window_ended))
 
     # -- objects -------------------------------------------------------------------------
 
@@ -199,6 +222,7 @@ class SplineScene:
             self.range_link.forget(self, range_key(layer))
         self.renderer.RemoveActor(lv.quad.actor)
         self.renderer.RemoveActor(lv.scalar_bar)
+        self._drop_cells(lv)
 
     def add_volume_layer(self, layer: VolumeLayer) -> None:
         """Show ``layer``'s volume rendering over the picture."""
@@ -306,7 +330,15 @@ class SplineScene:
         q = lv.quad
         q.set_appearance(layer.color, layer.opacity)
         q.set_material(layer.material)
-        q.actor.SetVisibility(bool(layer.visible and q.has_image))
+        q.actor.SetVisibility(bool(layer.visible and q.has_image and not lv.by_cells))
+        if lv.cells is not None:
+            lv.cells.set_appearance(layer.color, layer.opacity)
+            lv.cells.set_material(layer.material)
+            lv.cells.set_visible(bool(layer.visible and lv.by_cells and not lv.proxy_shown))
+        if lv.proxy is not None:
+            lv.proxy.set_appearance(layer.color, layer.opacity, layer.material)
+            lv.proxy.actor.SetVisibility(bool(layer.visible and lv.by_cells
+                                              and lv.proxy_shown))
         self._apply_colors(layer, lv)
 
     def _apply_colors(self, layer: IsosurfaceLayer, lv: _LayerView) -> None:
@@ -357,6 +389,109 @@ class SplineScene:
         row = int(np.clip((h - 1 - y) * fh / h, 0, fh - 1))
         value = float(rf.scalars[row, col])
         return value if np.isfinite(value) else None
+
+    # -- cell projection (thesis §6.1) ----------------------------------------------------
+
+    def _drop_cells(self, lv: _LayerView) -> None:
+        if lv.cells is not None:
+            for actor in lv.cells.actors:
+                self.renderer.RemoveActor(actor)
+        if lv.proxy is not None:
+            self.renderer.RemoveActor(lv.proxy.actor)
+        lv.cells = None
+        lv.proxy = None
+        lv.by_cells = False
+        lv.proxy_shown = False
+
+    def _window_started(self, *_args) -> None:
+        self._t_window = time.perf_counter()
+
+    def _window_ended(self, *_args) -> None:
+        if self._cells_drawn and self._t_window is not None:
+            self.cells_seconds = time.perf_counter() - self._t_window
+
+    def _draw_cells(self, layer: IsosurfaceLayer, lv: _LayerView, view: ViewState,
+                    blocking: bool) -> bool:
+        """Draw ``layer`` by cell projection in this view: its tets of the current
+        isovalue (made now when ``blocking``, else the last ones made until a worker made
+        those: :meth:`refine`), cut by the view's and the layer's clip planes. True when
+        the tets drawn are the current ones."""
+        from splineviz.render.cell_projection import CellProjectionLayer
+
+        geometry = layer.cell_geometry(blocking=blocking)
+        if geometry is not None and (lv.cells is None
+                                     or lv.cells.spline is not geometry.spline):
+            self._drop_cells(lv)
+            lv.cells = CellProjectionLayer(geometry.spline, None)
+            for actor in lv.cells.actors:
+                # the near and far planes come from the data box (_reset_clipping_range),
+                # as for a ray-cast frame: the tets' own bounds reach half a cell beyond it
+                # (type-6 cubes are centred at the samples), and the window depths of the
+                # two renderers' pictures would differ by the other clipping range
+                actor.SetUseBounds(False)
+                self.renderer.AddActor(actor)
+        if geometry is not None and lv.cells.geometry is not geometry:
+            lv.cells.set_geometry(geometry)
+        if not lv.by_cells:
+            # the quad's frame is of the ray caster: not shown, nor described, from now on
+            lv.by_cells = True
+            lv.shown = None
+            lv.quad.has_image = False
+        planes = tuple(view.clip_planes) + tuple(layer.clip_planes)
+        if lv.cells is not None:
+            lv.cells.set_clip_planes(planes)
+            lv.mean_depth = _box_depth(layer, view)
+        # while the camera (or the isovalue) moves: the trilinear stand-in when a cell-
+        # projected frame is over the preview budget, or its tets are not made yet
+        moving = self.progressive and self._interacting and not self._force_exact
+        slow = self.cells_seconds is not None and self.cells_seconds > PREVIEW_BUDGET_S
+        mesh = layer.cell_proxy(blocking=False) if moving and (slow or geometry is None) \
+            else None
+        if mesh is not None:
+            from splineviz.render.cell_projection import ProxySurface
+
+            if lv.proxy is None:
+                lv.proxy = ProxySurface()
+                self.renderer.AddActor(lv.proxy.actor)
+            if lv.proxy.mesh is not mesh:
+                lv.proxy.set_mesh(mesh)
+            lv.proxy.set_clip_planes(planes)
+        lv.proxy_shown = mesh is not None
+        self._apply_appearance(layer, lv)
+        return geometry is not None and not lv.proxy_shown
+
+    def single_sample_for_cells(self) -> None:
+        """Turn the window's multisampling off when a layer is drawn by cell projection
+        (call before the window's first render; an off-screen picture's window). Its
+        shader then casts one ray per pixel, through the pixel's centre, as the ray caster
+        does: with 8 samples it cast 8 (one per sample, each tet's front face covering only
+        some of a pixel's samples) for twice the frame time on software OpenGL and a
+        picture antialiased where the ray caster's is not."""
+        if any(layer.visible and self.renderer_of(layer) == CELL_PROJECTION
+               for layer in self.layers):
+            self.plotter.render_window.SetMultiSamples(0)
+
+    def renderer_of(self, layer: IsosurfaceLayer, probe: bool = True) -> str | None:
+        """What draws ``layer`` in this view: its :meth:`IsosurfaceLayer.renderer_choice`,
+        except that a surface cut by more clip planes (the view's and its own) than cell
+        projection takes (:data:`~splineviz.render.cell_projection.MAX_CLIP_PLANES`) is ray
+        cast. None: ``"auto"`` before OpenCL was probed (``probe=False``)."""
+        from splineviz.render.cell_projection import MAX_CLIP_PLANES
+
+        choice = layer.renderer_choice(probe)
+        if choice is None:
+            return None
+        if choice.renderer == CELL_PROJECTION and \
+                len(self._clip_planes) + len(layer.clip_planes) > MAX_CLIP_PLANES:
+            return RAY_CASTING
+        return choice.renderer
+
+    def drawn_by_cells(self, layer: IsosurfaceLayer) -> bool:
+        """Whether this view draws ``layer`` by cell projection, its tets current (no
+        frame of it is due)."""
+        lv = self._views[id(layer)]
+        return lv.by_cells and lv.cells is not None and layer.cells_current(
+            lv.cells.geometry)
 
     def _show(self, layer: IsosurfaceLayer, rf: RenderedFrame) -> None:
         lv = self._views.get(id(layer))
@@ -412,11 +547,26 @@ class SplineScene:
         # read by refine() in a worker: a bricked frame of an older view is given up
         self._latest_key = view.key()
         stale = []
+        blocking = not self.progressive or self._force_exact
         for layer in self.layers:
             lv = self._views[id(layer)]
             if not layer.visible:
                 lv.quad.actor.VisibilityOff()
+                if lv.cells is not None:
+                    lv.cells.set_visible(False)
+                if lv.proxy is not None:
+                    lv.proxy.actor.VisibilityOff()
                 continue
+            renderer = self.renderer_of(layer, probe=blocking)
+            if renderer is None:  # "auto" before anyone probed OpenCL: the worker does
+                stale.append(layer)
+                continue
+            if renderer == CELL_PROJECTION:
+                if not self._draw_cells(layer, lv, view, blocking):
+                    stale.append(layer)
+                continue
+            if lv.by_cells:
+                self._drop_cells(lv)
             if self._is_current(layer, lv, view):
                 if self.progressive and not lv.shown.final:
                     # a preview of this very view (the last drag step's, or a wheel step's
@@ -450,6 +600,9 @@ class SplineScene:
             if self._volume_preview(layer, view):
                 stale.append(layer)
         self._resized = False
+        self._cells_drawn = any(
+            layer.visible and lv.by_cells and lv.cells is not None and not lv.proxy_shown
+            for layer, lv in ((la, self._views[id(la)]) for la in self.layers))
         self._order_quads()
         self._fit_scalar_bars()
         self.last_frame_s = time.perf_counter() - t0
@@ -572,22 +725,34 @@ class SplineScene:
                                                b[:, 3].max(), b[:, 4].min(), b[:, 5].max())
 
     def _order_quads(self) -> None:
-        """Quads after all other props: opaque, then translucent from far to near."""
+        """Quads (and cell-projection actors) after all other props: opaque, then
+        translucent from far to near."""
         quads = []
         for layer in self.layers:
             lv = self._views[id(layer)]
-            quads.append((layer.opacity < 1.0, -lv.mean_depth, lv.quad.actor))
-        for _, _, actor in quads:
-            self.renderer.RemoveActor(actor)
-        for _, _, actor in sorted(quads, key=lambda q: (q[0], q[1])):
-            self.renderer.AddActor(actor)
+            actors = lv.cells.actors if lv.by_cells and lv.cells is not None \
+                else (lv.quad.actor,)
+            quads.append((layer.opacity < 1.0, -lv.mean_depth, actors))
+        for _, _, actors in quads:
+            for actor in actors:
+                self.renderer.RemoveActor(actor)
+        for _, _, actors in sorted(quads, key=lambda q: (q[0], q[1])):
+            for actor in actors:
+                self.renderer.AddActor(actor)
 
     def needs_refine(self) -> bool:
-        """Whether a visible layer shows a preview or a frame of another view."""
+        """Whether a visible layer shows a preview or a frame of another view (or waits
+        for its cell-projection tets, or for the OpenCL probe of its "auto" renderer)."""
         view = self.view_state()
         for layer in self.layers:
             lv = self._views[id(layer)]
-            if layer.visible and not (self._is_current(layer, lv, view) and lv.shown.final):
+            if not layer.visible:
+                continue
+            renderer = self.renderer_of(layer, probe=False)
+            if renderer == CELL_PROJECTION:
+                if not layer.cells_current():
+                    return True
+            elif renderer is None or not (self._is_current(layer, lv, view) and lv.shown.final):
                 return True
         return any(layer.visible and not self._volume_current(layer, view, final=True)
                    for layer in self.volume_layers)
@@ -631,6 +796,10 @@ class SplineScene:
                 break
             lv = self._views.get(id(layer))
             if lv is None or not layer.visible:
+                continue
+            if self.renderer_of(layer) == CELL_PROJECTION:  # probes OpenCL for "auto"
+                if not layer.cells_current():
+                    out.append((layer, layer.cell_geometry()))
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
@@ -694,7 +863,12 @@ class SplineScene:
                     self._show_volume(layer, rf)
                     used = True
                 continue
-            if layer in self.layers and rf.view.key() == view.key() and rf.state == layer.state:
+            if layer not in self.layers:
+                continue
+            if not isinstance(rf, RenderedFrame):
+                # a cell geometry (refine): the next render draws it while it is current
+                used = used or layer.cells_current(rf)
+            elif rf.view.key() == view.key() and rf.state == layer.state:
                 self._show(layer, rf)
                 used = True
         return used
@@ -711,6 +885,8 @@ class SplineScene:
     def close(self) -> None:
         self.renderer.RemoveObserver(self._observer)
         self.renderer.RemoveObserver(self._end_observer)
+        for tag in self._window_observers:
+            self.plotter.render_window.RemoveObserver(tag)
         for layer in list(self.layers):
             self.remove_layer(layer)
         for layer in list(self.volume_layers):
@@ -771,6 +947,14 @@ def _update_scalar_bar(bar, cmap: str, lo: float, hi: float, title: str) -> None
     bar.Modified()
 
 
+def _box_depth(layer: IsosurfaceLayer, view: ViewState) -> float:
+    """Window depth of the centre of the layer's data box (orders a translucent surface
+    drawn by cell projection among the others, as a frame's mean hit depth does)."""
+    centre = np.asarray(world_bounds(layer.volume), dtype=np.float64).mean(axis=1)
+    cam = view.camera
+    return float(np.clip(cam.window_depth(centre[None], cam.clipping_range)[0], 0.0, 1.0))
+
+
 def _prepare(rf: RenderedFrame) -> None:
     """Fill a frame's upload-ready textures and mean depth (thread safe: NumPy only)."""
     f = rf.frame
@@ -821,6 +1005,7 @@ def offscreen_screenshot(scene: SplineScene, filename=None, size=None,
         for layer in scene.volume_layers:
             copy.add_volume_layer(layer)
         copy.set_clip_planes(scene.clip_planes)
+        copy.single_sample_for_cells()
         pl.renderer.GetActiveCamera().DeepCopy(scene.renderer.GetActiveCamera())
         pl.camera_set = True  # else pyvista resets the camera on the first render
         copy.render_exact()

@@ -698,8 +698,9 @@ class OffscreenRenderer:
             try:
                 for side, width in parts:
                     pl = pv.Plotter(off_screen=True, window_size=(width, h))
-                    self._views.append((pl, SceneView(scene, pl, progressive=False,
-                                                      device=device, side=side)))
+                    view = SceneView(scene, pl, progressive=False, device=device, side=side)
+                    view.spline_scene.single_sample_for_cells()
+                    self._views.append((pl, view))
             except BaseException:
                 self.close()
                 raise

@@ -20,6 +20,7 @@ import numpy as np
 
 from splineviz.core.colour_by import FIELDS
 from splineviz.core.errors import SplinevizError
+from splineviz.core.renderers import CELL_PROJECTION
 from splineviz.model import ClipPlaneNode, IsosurfaceNode, Scene
 from splineviz.render.scene import PREVIEW_LEVELS
 
@@ -191,11 +192,16 @@ class RemoteView:
         # built for (never blocking the GUI thread): a new view, a new model or data gave no
         # frame above. This render thread may wait, so it casts those previews itself
         now = scene.view_state()
-        missing = [layer for layer in scene.layers if layer.visible
+        # a surface drawn by cell projection previews by its tets (made here when missing)
+        # or their stand-in, not by a ray-cast frame
+        cells = [layer for layer in scene.layers
+                 if layer.visible and scene.renderer_of(layer) == CELL_PROJECTION]
+        missing = [layer for layer in scene.layers if layer.visible and layer not in cells
                    and not _shows(scene.shown_frame(layer), layer, now)]
-        if missing:
+        if missing or not all(layer.cells_current() for layer in cells):
             frames = [(layer, layer.compute(now, scale=PREVIEW_SCALE, preview=True))
                       for layer in missing]
+            frames += [(layer, layer.cell_geometry()) for layer in cells]
             if scene.apply([(layer, rf) for layer, rf in frames if rf is not None]):
                 self._plotter.render_window.Render()
         return Shot(self._screenshot(), not scene.needs_refine(), self.state())

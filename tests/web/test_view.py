@@ -64,3 +64,18 @@ def test_controls_change_the_scene(view):
         view.set("opacity", 0.5)
     with pytest.raises(WebViewError, match="finite"):
         view.set("isovalue", float("nan"))
+
+
+def test_a_cell_projected_surface_previews_by_its_tets():
+    scene = default_scene()
+    scene.isosurfaces[0].renderer = "cell-projection"
+    v = RemoteView(scene, SIZE)
+    try:
+        shot = v.preview()
+        assert surface_share(shot.image) > 0.02
+        layer = v._view.layers[scene.isosurfaces[0].id]
+        assert layer.cells_current() and v._view.spline_scene.shown_frame(layer) is None
+        exact = v.exact()
+        assert exact.exact and np.array_equal(exact.image, render_scene(scene, SIZE))
+    finally:
+        v.close()

@@ -1,5 +1,5 @@
-"""The isosurface panel: isovalue over the data's histogram, spline model, colour, opacity,
-material of the current isosurface node.
+"""The isosurface panel: isovalue over the data's histogram, spline model, renderer, colour,
+opacity, material of the current isosurface node.
 
 A view of one :class:`~splineviz.model.IsosurfaceNode` (the scene's selection, or the first
 isosurface of a selected volume): widgets write the node through the scene's undo stack
@@ -11,7 +11,7 @@ The histogram of a big volume is computed in a worker and cached per volume.
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import Qt
+from PySide6.QtCore import Qt, QTimer
 from PySide6.QtGui import QPaintEvent
 from PySide6.QtWidgets import (
     QComboBox,
@@ -27,6 +27,7 @@ from PySide6.QtWidgets import (
 )
 from superqt import QLabeledDoubleSlider
 
+from splineviz.core.renderers import AUTO, RENDERERS, choose_renderer
 from splineviz.core.splines import MODELS
 from splineviz.gui.undo import undo_stack
 from splineviz.gui.widgets import ColorButton, HistogramSlider
@@ -35,6 +36,10 @@ from splineviz.model.summaries import HISTOGRAM_BINS, cached_histogram
 
 #: volumes with at most this many samples get their histogram in the GUI thread
 INLINE_HISTOGRAM_SAMPLES = 2_000_000
+#: how soon the renderer note looks again whether OpenCL was probed (milliseconds), and
+#: how many times
+NOTE_RETRY_MS = 500
+NOTE_RETRIES = 20
 
 def model_label(name: str) -> str:
     spec = MODELS[name]
@@ -112,6 +117,21 @@ class IsosurfacePanel(QWidget):
         self.k.setRange(1, 16)
         self.k.setToolTip("k of the truncated-octahedral operator Q_k (thesis eq. 5.9)")
         self.k_label = QLabel("Q_k order")
+        self.renderer = ElidedComboBox()
+        self.renderer.setSizeAdjustPolicy(
+            QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.renderer.setMinimumContentsLength(12)
+        for name, renderer in RENDERERS.items():
+            self.renderer.addItem(renderer.label, name)
+        self.renderer.fit_popup()
+        #: what draws the surface when it is not what was chosen, in one sentence
+        self.renderer_note = QLabel("")
+        self.renderer_note.setWordWrap(True)
+        self.renderer_note.setVisible(False)
+        self.renderer.setToolTip("What draws the surface (thesis ch. 6): the ray caster in "
+                                 "OpenCL, or cell projection in OpenGL (super-quadratic and "
+                                 "cubic C1, one colour); automatic: ray casting where an "
+                                 "OpenCL device works, else cell projection")
         self.color = ColorButton()
         self.color.setToolTip("Colour of the front side of the surface")
         self.opacity = QLabeledDoubleSlider(Qt.Orientation.Horizontal)
@@ -134,18 +154,23 @@ class IsosurfacePanel(QWidget):
         form.addRow("Isovalue", self.spin)
         form.addRow("Model", self.model)
         form.addRow(self.k_label, self.k)
+        form.addRow("Renderer", self.renderer)
+        form.addRow(self.renderer_note)
         form.addRow("Colour", self.color)
         form.addRow("Opacity", self.opacity)
         form.addRow("Material", self.material)
         form.addRow("Shown in", self.shown_in)
         form.addRow(self.add_button)
         self._syncing = False
+        self._note_retries = 0
         self.fill_models()
         self.histogram.valueChanged.connect(lambda v: self._iso_changed(v, self.spin))
         self.spin.valueChanged.connect(lambda v: self._iso_changed(v, self.histogram))
         self.model.currentIndexChanged.connect(lambda _i: self._write(
             "model", self.model.currentData()))
         self.k.valueChanged.connect(lambda v: self._write("k", int(v)))
+        self.renderer.currentIndexChanged.connect(lambda _i: self._write(
+            "renderer", self.renderer.currentData()))
         self.color.colorChanged.connect(lambda c: self._write("color", tuple(c)))
         self.opacity.valueChanged.connect(lambda v: self._write("opacity", float(v)))
         self.material.currentTextChanged.connect(lambda m: self._write("material", m))
@@ -201,8 +226,8 @@ class IsosurfacePanel(QWidget):
             self._volume.events.disconnect(self._volume_changed)
         self.node = node
         self._volume = self.scene.volume_of(node) if node is not None else volume
-        for w in (self.histogram, self.spin, self.model, self.k, self.color, self.opacity,
-                  self.material):
+        for w in (self.histogram, self.spin, self.model, self.k, self.renderer, self.color,
+                  self.opacity, self.material):
             w.setEnabled(node is not None)
         self._split_changed(self.scene.view.split)
         self.add_button.setEnabled(self._volume is not None)
@@ -212,6 +237,7 @@ class IsosurfacePanel(QWidget):
             self.title.setText("Select an isosurface or a volume in the data panel")
             self.k.setVisible(False)
             self.k_label.setVisible(False)
+            self.renderer_note.setVisible(False)
             self._clear_widgets()
             return
         self.spin.setSpecialValueText("")
@@ -267,12 +293,40 @@ class IsosurfacePanel(QWidget):
             self.k.setVisible(has_k)
             self.k_label.setVisible(has_k)
             self.k.setValue(n.k)
+            self.renderer.setCurrentIndex(self.renderer.findData(n.renderer))
+            self._show_renderer_note()
             self.color.setColor(n.color)
             self.opacity.setValue(n.opacity)
             self.material.setCurrentText(n.material)
             self.shown_in.setCurrentIndex(self.shown_in.findData(n.shown_in))
         finally:
             self._syncing = False
+
+    def _show_renderer_note(self) -> None:
+        """Say what draws the surface where the choice is automatic or cannot be followed
+        (:func:`~splineviz.core.renderers.choose_renderer`; before the view has probed
+        OpenCL, an automatic choice says nothing yet)."""
+        from splineviz.compute.device import opencl_known
+        from splineviz.render.isosurface import not_projectable
+
+        n = self.node
+        if n is None:
+            return
+        opencl = opencl_known()
+        text = ""
+        if opencl is None and n.renderer == AUTO:
+            # the view's worker probes OpenCL for its first exact frame: look again then
+            if self._note_retries < NOTE_RETRIES:
+                self._note_retries += 1
+                QTimer.singleShot(NOTE_RETRY_MS, self, self._show_renderer_note)
+        else:
+            choice = choose_renderer(n.renderer, n.model, n.color_by, opencl is not False,
+                                     not_projectable(self._volume.active))
+            text = choice.note
+            if not text and n.renderer == AUTO:
+                text = f"drawn by {RENDERERS[choice.renderer].label}"
+        self.renderer_note.setText(text)
+        self.renderer_note.setVisible(bool(text))
 
     def _node_changed(self, info) -> None:
         if not self._syncing and self.node is not None:
@@ -300,7 +354,9 @@ class IsosurfacePanel(QWidget):
         finally:
             self._syncing = False
         if field == "model":
-            self._sync_all()  # shows or hides the Q_k order
+            self._sync_all()  # shows or hides the Q_k order (and says what draws it)
+        elif field == "renderer":
+            self._show_renderer_note()
 
     def _iso_changed(self, v, mirror) -> None:
         """The slider or the spin box moved: show the value in the other one, write it."""
