@@ -9,7 +9,8 @@ renderer box and ``splineviz render --renderer`` all read this table, and
 draws it.
 
 Cell projection draws the type-6 models (``super-quadratic``, ``cubic-c1``: the kernel
-family ``"type6"``) in one flat colour; any other model, and colour by, is ray cast (on the
+family ``"type6"``) and the quadratic C1 spline on truncated octahedra (``to-quadratic``,
+family ``"to"``) in one flat colour; any other model, and colour by, is ray cast (on the
 NumPy reference path where no OpenCL device exists: slow, but correct).
 """
 
@@ -54,7 +55,7 @@ CELL_PROJECTION = "cell-projection"
 RENDERERS: dict[str, Renderer] = {r.name: r for r in (
     Renderer(AUTO, "automatic (ray casting with OpenCL, else cell projection)"),
     Renderer(RAY_CASTING, "ray casting (OpenCL)"),
-    Renderer(CELL_PROJECTION, "cell projection (OpenGL)", ("type6",)),
+    Renderer(CELL_PROJECTION, "cell projection (OpenGL)", ("type6", "to")),
 )}
 
 #: other spellings accepted where a name is typed (the command line, Python)

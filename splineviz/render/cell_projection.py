@@ -1,4 +1,5 @@
-"""Hybrid cell projection / ray casting of type-6 spline isosurfaces in VTK's OpenGL pipeline
+"""Hybrid cell projection / ray casting of tetrahedral spline isosurfaces (type-6:
+super-quadratic, cubic-c1; truncated octahedra: to-quadratic) in VTK's OpenGL pipeline
 (thesis §6.1).
 
 The relevant tetrahedra (:mod:`splineviz.core.relevant_tets`) are drawn as triangles, each tet
@@ -39,9 +40,8 @@ from vtk.util import numpy_support
 from splineviz.core import bform
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.material import BACK_COLOR, DEFAULT_MATERIAL, FRONT_COLOR, MATERIALS, Material
-from splineviz.core.partitions import type6
 from splineviz.core.raycast_reference import BACKGROUND, ClipPlaneError, normalize_clip_planes
-from splineviz.core.relevant_tets import RelevantTets, relevant_tets
+from splineviz.core.relevant_tets import PARTITIONS, RelevantTets, relevant_tets
 
 _HERE = Path(__file__).parent
 
@@ -102,11 +102,13 @@ def shader_sources(degree: int) -> tuple[str, str]:
 
 
 @cache
-def _outward_faces() -> np.ndarray:
-    """(24, 4, 3) vertex indices of the four faces of each generic tet, counter-clockwise seen
-    from outside (OpenGL front faces)."""
-    out = np.empty((type6.N_TETS, 4, 3), np.int64)
-    for t, v in enumerate(type6.VERTICES):
+def _outward_faces(partition: str) -> np.ndarray:
+    """(T, 4, 3) vertex indices of the four faces of each generic tet of ``partition`` (a
+    :data:`~splineviz.core.relevant_tets.PARTITIONS` key), counter-clockwise seen from
+    outside (OpenGL front faces)."""
+    generic = PARTITIONS[partition][0]()
+    out = np.empty((len(generic), 4, 3), np.int64)
+    for t, v in enumerate(generic):
         for m in range(4):
             face = [i for i in range(4) if i != m]
             a, b, c = v[face]
@@ -140,7 +142,8 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
     vpts = vtk.vtkPoints()
     vpts.SetData(numpy_support.numpy_to_vtk(pts.reshape(-1, 3).astype(np.float32), deep=True))
     poly.SetPoints(vpts)
-    tri = (_outward_faces()[tets.tet] + 4 * np.arange(n)[:, None, None]).reshape(-1, 3)
+    tri = (_outward_faces(tets.partition)[tets.tet]
+           + 4 * np.arange(n)[:, None, None]).reshape(-1, 3)
     cells = vtk.vtkCellArray()
     cells.SetData(numpy_support.numpy_to_vtk(np.arange(0, 3 * len(tri) + 1, 3), deep=True,
                                              array_type=vtk.VTK_ID_TYPE),
@@ -156,7 +159,7 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
 
     add("lam", np.broadcast_to(np.eye(4), (n, 4, 4)))
     # d lam_m / d x_world = M[m, a] / spacing[a], the same at the tet's four vertices
-    grads = type6.barycentric_gradients()[tets.tet] / spacing  # (N, 4 lam, 3 axes)
+    grads = tets.barycentric_matrices()[tets.tet, :, :3] / spacing  # (N, 4 lam, 3 axes)
     for a, name in enumerate(("gradx", "grady", "gradz")):
         add(name, np.broadcast_to(grads[:, None, :, a], (n, 4, 4)))
     nv = _vec4_count(tets.degree)
@@ -173,7 +176,7 @@ class CellGeometry:
 
     Attributes
     ----------
-    spline : Type6Spline
+    spline : Type6Spline or TOQuadraticSpline
     isovalue : float
     tets : RelevantTets
     polydata : vtkPolyData
@@ -201,7 +204,7 @@ class CellProjectionLayer:
 
     Parameters
     ----------
-    spline : Type6Spline (``"super-quadratic"`` or ``"cubic-c1"``)
+    spline : Type6Spline (``"super-quadratic"``, ``"cubic-c1"``) or TOQuadraticSpline
     isovalue : float or None
         None: nothing is drawn until :meth:`set_geometry`.
     """
@@ -459,7 +462,7 @@ def render_cell_projection(spline, camera: Camera, size, isovalue: float, clip_p
 
     Parameters
     ----------
-    spline : Type6Spline
+    spline : Type6Spline or TOQuadraticSpline
     camera : Camera
     size : (width, height) or "WxH"
     isovalue : float

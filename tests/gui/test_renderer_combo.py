@@ -38,9 +38,11 @@ def test_the_renderer_box_writes_the_node_undoably_and_the_scene_draws_it(qtbot)
     assert iso.renderer == "auto" and box.currentData() == "auto"
     undo.redo()
     assert box.currentData() == "cell-projection"
-    iso.model = "to-quadratic"                                    # node -> note
+    iso.model = "to-quadratic"                # drawn by cell projection too: no note
+    assert not panel.renderer_note.isVisibleTo(panel)
+    iso.model = "trilinear"                                       # node -> note
     assert panel.renderer_note.isVisibleTo(panel)
-    assert "'to-quadratic' is ray cast" in panel.renderer_note.text()
+    assert "'trilinear' is ray cast" in panel.renderer_note.text()
 
 
 @pytest.fixture

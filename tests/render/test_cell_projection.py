@@ -18,7 +18,7 @@ from splineviz.core.relevant_tets import RelevantTetsError, relevant_tets
 from splineviz.core.splines import build_spline
 from splineviz.core.volume import Volume
 
-MODELS = ["super-quadratic", "cubic-c1"]
+MODELS = ["super-quadratic", "cubic-c1", "to-quadratic"]
 SIZE = (96, 72)
 
 
@@ -44,7 +44,7 @@ def _tooth_crop():
     return Volume(np.ascontiguousarray(vol.data[36:68, 31:63, 64:96]), spacing=vol.spacing)
 
 
-@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("model", ["super-quadratic", "cubic-c1"])
 def test_relevant_tets_are_exactly_the_spanning_ones(model):
     spline = build_spline(_sphere(10), model)
     iso = 3.3
@@ -60,6 +60,35 @@ def test_relevant_tets_are_exactly_the_spanning_ones(model):
     np.testing.assert_allclose(got.coeffs, spline.tet_coefficients(got.cube, got.tet))
     assert got.per_orientation().sum() == len(got)
     assert got.coeffs.shape[1] == {"super-quadratic": 10, "cubic-c1": 20}[model]
+
+
+def test_relevant_truncated_octahedral_tets_are_exactly_the_spanning_ones():
+    """to-quadratic: every tet of every TO meeting the data box, tested on its exact
+    coefficients (the spline's own piece at the tet's centroid), against the culled
+    classification."""
+    from splineviz.core.partitions import truncated_octahedra as to
+
+    vol = _sphere(10)
+    spline = build_spline(vol, "to-quadratic")
+    iso = 3.3
+    got = relevant_tets(spline, iso)
+    centres = to.centres_covering(np.zeros(3), np.array(vol.shape) - 1.0)
+    generic = to.generic_tetrahedra()[0]
+    n = len(generic)
+    all_centre = np.repeat(centres, n, axis=0)
+    all_tet = np.tile(np.arange(n), len(centres))
+    # the spline's own B-form at each tet's centroid: its TO, tet and coefficients
+    centroids = all_centre + generic.mean(axis=1)[all_tet]
+    coeffs, _lam, _m = spline.local_bform(centroids)
+    keep = (coeffs.min(axis=1) <= iso) & (iso <= coeffs.max(axis=1))
+    assert keep.sum() > 0 and len(got) == keep.sum()
+    key = lambda c, t: set(zip(map(tuple, np.round(2 * c).astype(int).tolist()),  # noqa: E731
+                               t.tolist(), strict=True))
+    assert key(got.cube, got.tet) == key(all_centre[keep], all_tet[keep])
+    assert got.per_orientation().sum() == len(got) and got.degree == 2
+    # the tets' vertices are the TOs' generic tets moved to their centres
+    np.testing.assert_allclose(got.vertices().mean(axis=1), got.cube + generic.mean(axis=1)[
+        got.tet])
 
 
 def test_relevant_tets_need_a_type6_model():

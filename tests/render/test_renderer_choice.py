@@ -48,7 +48,9 @@ def test_the_choice_follows_the_machine_and_the_model():
         "cell-projection", "super-quadratic")
     assert choose_renderer("auto", "cubic-c1", opencl=False).renderer == CELL_PROJECTION
     # what cell projection does not draw is ray cast, and the note says why in a sentence
-    for args, why in ((("cell-projection", "to-quadratic"), "'to-quadratic' is ray cast"),
+    assert choose_renderer("cell-projection", "to-quadratic").renderer == CELL_PROJECTION
+    assert choose_renderer("auto", "to-quadratic", opencl=False).renderer == CELL_PROJECTION
+    for args, why in ((("cell-projection", "trilinear"), "'trilinear' is ray cast"),
                       (("cell-projection", "cubic-c1", "mean-curvature"), "colour by"),
                       (("cell-projection", "cubic-c1", "none", True, "an oblique scan"),
                        "oblique"),

@@ -240,6 +240,8 @@ class TOQuadraticSpline(TetSpline):
     """
 
     model = "to-quadratic"
+    #: polynomial degree of the pieces
+    degree = 2
 
     def __init__(self, volume, k: float = 2):
         super().__init__(volume)
