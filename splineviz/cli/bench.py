@@ -110,7 +110,7 @@ def register(subparsers) -> None:
                    help="isovalue, dvr: volume sizes n (bonsai resampled to n^3), "
                         "comma-separated (256,512); "
                         "movie: frame sizes among 720p,1080p,4K (default all); "
-                        "renderers: sphere volume sizes n (16,32,64,128)")
+                        "renderers: sphere volume sizes n (16,32,64,128,256,512)")
     p.add_argument("--frames", type=int, default=4, help="movie: frames per size")
     p.add_argument("--models", default=None,
                    help="isovalue: comma-separated spline models (default: all four)")
