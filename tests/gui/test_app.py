@@ -28,20 +28,6 @@ def sphere_volume(n=15):
                      origin=(-1, -1, -1))
 
 
-@pytest.fixture
-def window(qtbot, tmp_path):
-    # recent files go to a private settings folder, not the user's
-    from PySide6.QtCore import QSettings
-
-    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
-    w = MainWindow(size=SIZE)
-    qtbot.addWidget(w)
-    w.resize(900, 560)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.wait_idle()
-    w.close()
 
 
 def add_sphere(w, iso=0.64, model="trilinear"):

@@ -5,24 +5,10 @@ import pytest
 
 pytest.importorskip("pytestqt")
 
-from splineviz.gui.main_window import MainWindow  # noqa: E402
 
 SIZE = (160, 120)
 
 
-@pytest.fixture
-def window(qtbot, tmp_path):
-    from PySide6.QtCore import QSettings
-
-    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
-    w = MainWindow(size=SIZE)
-    qtbot.addWidget(w)
-    w.resize(900, 560)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.wait_idle()
-    w.close()
 
 
 @pytest.fixture

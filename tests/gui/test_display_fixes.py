@@ -12,21 +12,6 @@ from splineviz.gui import window_state  # noqa: E402
 from splineviz.gui.main_window import MainWindow  # noqa: E402
 
 
-@pytest.fixture
-def window(qtbot, tmp_path):
-    from PySide6.QtCore import QSettings
-
-    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
-    w = MainWindow(size=(160, 120))
-    qtbot.addWidget(w)
-    w.resize(900, 560)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.wait_idle()
-    w.close()
-
-
 def _camera(w):
     c = w.scene.camera
     return np.array([*c.position, *c.focal_point, *c.view_up])

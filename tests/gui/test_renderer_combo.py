@@ -45,21 +45,6 @@ def test_the_renderer_box_writes_the_node_undoably_and_the_scene_draws_it(qtbot)
     assert "'trilinear' is ray cast" in panel.renderer_note.text()
 
 
-@pytest.fixture
-def window(qtbot, tmp_path):
-    from PySide6.QtCore import QSettings
-
-    from splineviz.gui.main_window import MainWindow
-
-    QSettings.setPath(QSettings.Format.NativeFormat, QSettings.Scope.UserScope, str(tmp_path))
-    w = MainWindow(size=(160, 120))
-    qtbot.addWidget(w)
-    w.resize(900, 560)
-    w.show()
-    qtbot.waitExposed(w)
-    yield w
-    w.wait_idle()
-    w.close()
 
 
 def test_the_window_draws_the_surface_by_cell_projection_once_chosen(window, qtbot):
