@@ -16,6 +16,9 @@ vertices or edges at once:
   triangles, so the features the start caught stay), valence flips and tangential relaxation
   (:func:`splineviz.pointcloud.relaxation.optimize`), every moved vertex projected onto the
   spline itself, not onto the start mesh.
+* Refinement: edges whose midpoint lies more than ``REFINE_DEVIATION`` of the target length
+  off the surface (where it bends within an edge) are split at the midpoint's projection
+  (:func:`refine_deviating_edges`), so no triangle cuts far across a bend.
 * One sheet (optional): triangles that leave the surface (flying edges' own, where two sheets
   are about a grid step apart; the front's one-sheet test
   :func:`.spline_mesh.triangles_on_surface`) are dropped and their holes closed on the
@@ -71,6 +74,13 @@ COLLAPSE_DEVIATION = 0.15
 MAX_VALENCE = 9
 #: rounds of collapses, flips and relaxation
 ROUNDS = 3
+#: after the rounds, an edge whose midpoint lies farther than this share of the target length
+#: from the surface is split at the midpoint's projection (where the surface bends within an
+#: edge). The whole tooth: the largest mesh -> surface distance 0.57 -> 0.28 grid steps for
+#: 134 more triangles (of 98,650), radius ratio and valences unchanged
+REFINE_DEVIATION = 0.2
+#: most passes of that refinement
+REFINE_PASSES = 3
 #: spline samples evaluated at once (bounds the memory of the start grid)
 SLAB_POINTS = 2_000_000
 #: points per task of the parallel Newton projection
@@ -394,6 +404,79 @@ def collapse_short_edges(spline, iso, vertices, faces, length: float, tol: float
     return v, f, total
 
 
+def _split_marked(faces, edge_of_face, new_vertex):
+    """Faces with the marked edges split (red-green refinement): a face with one marked edge
+    in two, two in three, three in four, counter-clockwise kept.
+
+    Parameters
+    ----------
+    faces : (F, 3)
+    edge_of_face : (F, 3) edge ids of the face's edges (v0 v1, v1 v2, v2 v0)
+    new_vertex : (E,) the vertex put on each edge, -1 where the edge is not split
+
+    Returns
+    -------
+    (F', 3) faces
+    """
+    m = new_vertex[edge_of_face]  # (F, 3)
+    count = (m >= 0).sum(axis=1)
+    out = [faces[count == 0]]
+    for r in range(3):
+        i, j, k = faces[:, r], faces[:, (r + 1) % 3], faces[:, (r + 2) % 3]
+        x, y = m[:, r], m[:, (r + 1) % 3]
+        one = (count == 1) & (x >= 0)  # the edge (i, j) split at x
+        out += [np.stack([i[one], x[one], k[one]], 1), np.stack([x[one], j[one], k[one]], 1)]
+        two = (count == 2) & (m[:, (r + 2) % 3] < 0)  # (i, j) at x and (j, k) at y
+        out += [np.stack([x[two], j[two], y[two]], 1), np.stack([i[two], x[two], y[two]], 1),
+                np.stack([i[two], y[two], k[two]], 1)]
+    three = count == 3
+    a, b, c = faces[three].T
+    x, y, z = m[three].T
+    out += [np.stack([a, x, z], 1), np.stack([x, b, y], 1), np.stack([z, y, c], 1),
+            np.stack([x, y, z], 1)]
+    return np.concatenate(out)
+
+
+def refine_deviating_edges(spline, iso, vertices, faces, deviation: float, tol: float,
+                           passes: int = REFINE_PASSES):
+    """Split the interior edges whose midpoint lies farther than ``deviation`` from the
+    surface at the midpoint's projection onto ``s = iso`` (border edges stay: their new
+    vertices would leave the data box's faces).
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    vertices : (V, 3) on the surface
+    faces : (F, 3)
+    deviation : float, world units
+    tol : float, Newton tolerance on |s - iso|
+    passes : int, most passes (each splits the edges still deviating)
+
+    Returns
+    -------
+    vertices : (V', 3), faces : (F', 3), splits : int
+    """
+    v, f = vertices, faces
+    total = 0
+    for _ in range(passes):
+        e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+        key = e[:, 0].astype(np.int64) * len(v) + e[:, 1]
+        uniq, edge_id, counts = np.unique(key, return_inverse=True, return_counts=True)
+        a, b = uniq // len(v), uniq % len(v)
+        mid = 0.5 * (v[a] + v[b])
+        proj, _n = _project(spline, mid, iso, 30, tol)
+        split = (np.linalg.norm(proj - mid, axis=1) > deviation) & (counts == 2)
+        if not split.any():
+            break
+        new_vertex = np.full(len(uniq), -1, dtype=np.int64)
+        new_vertex[split] = len(v) + np.arange(int(split.sum()))
+        v = np.concatenate([v, proj[split]])
+        f = _split_marked(f, edge_id.reshape(3, -1).T, new_vertex)
+        total += int(split.sum())
+    return v, f, total
+
+
 class _SplineSurface:
     """The projector :func:`splineviz.pointcloud.relaxation.relax` asks: Newton steps onto
     ``s = iso``."""
@@ -471,6 +554,8 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
             report(0.1 + 0.8 * r / rounds, f"remeshing (round {r + 1} of {rounds})")
             v, f, _k = collapse_short_edges(spline, iso, v, f, length, tol)
             v, f, _flips = optimize(v, f, surface, rounds=1)
+        v, f, _splits = refine_deviating_edges(spline, iso, v, f, REFINE_DEVIATION * length,
+                                               tol)
     if one_sheet:
         report(0.85, "closing holes")
         with _stage(timings, "holes"):

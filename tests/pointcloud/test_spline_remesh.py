@@ -176,3 +176,32 @@ def test_point_triangle_distance_matches_dense_sampling():
         want = np.min(np.sum((pts - p) ** 2, axis=1))
         got = _point_triangle_distance2(p, a, b, c)
         assert got <= want + 1e-12 and np.sqrt(want) - np.sqrt(got) < 1e-2
+
+
+def test_no_edge_cuts_far_across_a_bend(monkeypatch):
+    """A small sphere meshed with long edges: after the refinement every interior edge's
+    midpoint is within the deviation bound of the surface (a tight bound here, 0.05 edge
+    lengths: the sphere's chords sag up to 0.1), the new vertices on it; without the
+    refinement many midpoints are farther."""
+    import splineviz.pointcloud.spline_remesh as sr
+    from splineviz.pointcloud.spline_mesh import project_onto
+
+    x = np.indices((16, 16, 16)).astype(float) - 7.5
+    spline = sv.build_spline(sv.Volume(np.sqrt((x ** 2).sum(axis=0))), "cubic-c1")
+    length = 2.5
+    bound = 0.05 * length
+
+    def midpoint_deviation(v, f):
+        e = np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]),
+                              axis=1), axis=0)
+        mid = 0.5 * (v[e[:, 0]] + v[e[:, 1]])
+        return np.linalg.norm(project_onto(spline, mid, 4.0, 30)[0] - mid, axis=1)
+
+    monkeypatch.setattr(sr, "REFINE_DEVIATION", 0.05)
+    v, f, _n = sr.spline_remesh(spline, 4.0, edge_length=length)
+    assert midpoint_deviation(v, f).max() <= bound + 1e-6
+    assert np.abs(spline.evaluate(v) - 4.0).max() < 1e-6
+    monkeypatch.setattr(sr, "REFINE_DEVIATION", np.inf)  # no refinement
+    v0, f0, _n = sr.spline_remesh(spline, 4.0, edge_length=length)
+    assert (midpoint_deviation(v0, f0) > bound).sum() > 10
+    assert len(f) > len(f0)
