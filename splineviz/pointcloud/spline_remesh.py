@@ -18,7 +18,10 @@ vertices or edges at once:
   spline itself, not onto the start mesh.
 * Refinement: edges whose midpoint lies more than ``REFINE_DEVIATION`` of the target length
   off the surface (where it bends within an edge) are split at the midpoint's projection
-  (:func:`refine_deviating_edges`), so no triangle cuts far across a bend.
+  (:func:`refine_deviating_edges`), so no triangle cuts far across a bend; then flips and
+  relaxation and the refinement again (``REFINE_ROUNDS``). The splits cost regularity where
+  the surface bends within an edge (the bonsai's leaves: valence-6 share 72 -> 63 % on a
+  leafy crop, Hausdorff 1.38 -> 0.63 grid steps).
 * One sheet (optional): triangles that leave the surface (flying edges' own, where two sheets
   are about a grid step apart; the front's one-sheet test
   :func:`.spline_mesh.triangles_on_surface`) are dropped and their holes closed on the
@@ -81,6 +84,10 @@ ROUNDS = 3
 REFINE_DEVIATION = 0.2
 #: most passes of that refinement
 REFINE_PASSES = 3
+#: rounds of flips and relaxation after the refinement, each followed by the refinement again
+#: (a split edge's new vertex has valence 4, its opposite corners one more): the leafy 40^3
+#: crop of the bonsai, valence-6 share 60 -> 63 %, Hausdorff 0.61 -> 0.63 grid steps
+REFINE_ROUNDS = 1
 #: spline samples evaluated at once (bounds the memory of the start grid)
 SLAB_POINTS = 2_000_000
 #: points per task of the parallel Newton projection
@@ -556,6 +563,10 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
             v, f, _flips = optimize(v, f, surface, rounds=1)
         v, f, _splits = refine_deviating_edges(spline, iso, v, f, REFINE_DEVIATION * length,
                                                tol)
+        for _ in range(REFINE_ROUNDS):
+            v, f, _flips = optimize(v, f, surface, rounds=1)
+            v, f, _splits = refine_deviating_edges(spline, iso, v, f,
+                                                   REFINE_DEVIATION * length, tol)
     if one_sheet:
         report(0.85, "closing holes")
         with _stage(timings, "holes"):
