@@ -103,6 +103,10 @@ def point_to_triangle_distance(points: np.ndarray, tri: np.ndarray) -> np.ndarra
     return np.linalg.norm(points - closest, axis=1)
 
 
+#: points per block of :func:`distance_to_mesh`
+DISTANCE_BLOCK = 131072
+
+
 def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
                      candidates: int = 16) -> np.ndarray:
     """Distance of each point to the triangle mesh, ``(M,)``.
@@ -114,11 +118,18 @@ def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray
     """
     cent = vertices[faces].mean(axis=1)
     k = min(candidates, len(faces))
-    _, idx = cKDTree(cent).query(points, k=k)
-    idx = idx.reshape(len(points), k)
+    tree = cKDTree(cent)
     best = np.full(len(points), np.inf)
-    for j in range(k):
-        best = np.minimum(best, point_to_triangle_distance(points, vertices[faces[idx[:, j]]]))
+    # in blocks: the candidates' (M, k) ids and (M, 3, 3) triangles of a dense scan's
+    # millions of points took gigabytes at once
+    for lo in range(0, len(points), DISTANCE_BLOCK):
+        block = points[lo:lo + DISTANCE_BLOCK]
+        _, idx = tree.query(block, k=k)
+        idx = idx.reshape(len(block), k)
+        out = best[lo:lo + DISTANCE_BLOCK]
+        for j in range(k):
+            np.minimum(out, point_to_triangle_distance(block, vertices[faces[idx[:, j]]]),
+                       out=out)
     return best
 
 
