@@ -318,11 +318,11 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
     return (*out[:5], sigma, rss, dof)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _sheet_mask(normals, index, cos_min):
     n, k = index.shape
     out = np.empty((n, k), dtype=np.bool_)
-    for i in range(n):
+    for i in numba.prange(n):
         out[i, 0] = True
         for c in range(1, k):
             j = index[i, c]
@@ -342,6 +342,7 @@ def sheet_mask(normals, index, cos_min):
     index : (N, K) int neighbour ids
     cos_min : float
     """
+    use_allowed_cores()
     return _sheet_mask(np.ascontiguousarray(normals, dtype=np.float64),
                        np.ascontiguousarray(index, dtype=np.int32), float(cos_min))
 
