@@ -139,3 +139,35 @@ def test_void_ratio_in_blocks_is_the_whole_cloud_s(monkeypatch):
     whole = conn.void_ratio()
     monkeypatch.setattr(cocone, "QUERY_BLOCK", 1000)
     assert conn.void_ratio() == whole
+
+
+def test_orientation_of_many_components_is_one_search_per_component():
+    """Normals oriented by one breadth-first search over all components (from a node joined
+    to each component's root) are those of a search per component, which cost O(N) each."""
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    from splineviz.pointcloud.cocone import _flip_in_order, orient_normals
+
+    base = S.sphere(3000, seed=4)
+    pts = np.vstack([base, base[:1000] * 0.3 + 5, base[:50] * 0.01 - 7, base[50:80] * 0.01 + 9])
+    conn = knn_connectivity(pts)
+    rng = np.random.default_rng(5)
+    normals = rng.normal(size=conn.normals.shape)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    g = sparse.triu(conn.graph, k=1).tocoo()
+    w = 1.0 - np.abs(np.einsum("ij,ij->i", normals[g.row], normals[g.col])) + 1e-6
+    mst = csgraph.minimum_spanning_tree(sparse.csr_matrix((w, (g.row, g.col)),
+                                                          shape=conn.graph.shape))
+    mst = (mst + mst.T).tocsr()
+    want = normals.copy()
+    ncomp, labels = csgraph.connected_components(mst, directed=False)
+    assert ncomp == 4
+    for c in range(ncomp):
+        members = np.flatnonzero(labels == c)
+        root = members[np.argmax(conn.points[members, 0])]
+        if want[root, 0] < 0:
+            want[root] *= -1
+        order, pred = csgraph.breadth_first_order(mst, root, directed=False)
+        _flip_in_order(want, order, pred)
+    assert np.array_equal(orient_normals(normals, conn.graph, conn.points), want)
