@@ -169,9 +169,9 @@ def _load_peers():
 def _load_ours():
     import pyvista  # noqa: F401  (remesh's mesh type)
 
-    from splineviz.pointcloud import front_kernels, local_fits, relaxation
+    from splineviz.pointcloud import cocone, front_kernels, local_fits, relaxation
 
-    for module in (local_fits, front_kernels, relaxation):
+    for module in (cocone, local_fits, front_kernels, relaxation):
         module.compile_kernels()  # numba's cached kernels are loaded before the clock
 
 
