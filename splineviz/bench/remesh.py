@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
+import re
 import sys
 import time
 from pathlib import Path
@@ -45,12 +46,53 @@ import numpy as np
 
 CLOUDS = ("bunny", "kitten", "lucy", "bunny-noisy", "bunny-open")
 NOISE = 0.002  # Gaussian sigma in units of the bounding-box diagonal
+#: dense clouds ``<mesh>-<count>`` (``lucy-2m``, ``bunny-500k``): the shared mesh's triangles
+#: sampled area-uniformly with that many points, moved by Gaussian noise of this fraction of
+#: the diagonal
+DENSE_NOISE = 0.001
+#: the dense clouds' peers: Poisson at this depth, remeshed
+DENSE_DEPTH = 10
+#: the dense rows' time limit per method, at least (s)
+DENSE_TIMEOUT = 3600.0
+_COUNT = re.compile(r"^(\d+(?:\.\d+)?)([km]?)$")
+
+
+def dense_count(name: str) -> int | None:
+    """The point count of a dense cloud's name (``lucy-2m`` -> 2,000,000), else None."""
+    base, _, tail = name.rpartition("-")
+    match = _COUNT.match(tail.lower())
+    if not base or match is None:
+        return None
+    return int(float(match[1]) * {"": 1, "k": 1e3, "m": 1e6}[match[2]])
+
+
+def dense_samples(name: str, data_dir: Path, seed: int = 0):
+    """A dense cloud (see ``DENSE_NOISE``): ``(clean (N, 3), noisy (N, 3))``, the same
+    samples on the mesh's triangles without and with the noise."""
+    import pyvista as pv
+
+    base, n = name.rpartition("-")[0], dense_count(name)
+    mesh = pv.read(data_dir / f"{base}.ply").triangulate()
+    v = np.asarray(mesh.points, dtype=np.float64)
+    f = np.asarray(mesh.faces).reshape(-1, 4)[:, 1:]
+    area = np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    rng = np.random.default_rng(seed)
+    tri = rng.choice(len(f), n, p=area / area.sum())
+    u, w = rng.random(n), rng.random(n)
+    flip = u + w > 1  # folded back into the triangle: uniform over its area
+    u[flip], w[flip] = 1 - u[flip], 1 - w[flip]
+    clean = (v[f[tri, 0]] * (1 - u - w)[:, None] + v[f[tri, 1]] * u[:, None]
+             + v[f[tri, 2]] * w[:, None])
+    diag = float(np.linalg.norm(np.ptp(clean, axis=0)))
+    return clean, clean + rng.normal(scale=DENSE_NOISE * diag, size=clean.shape)
 
 
 def load_cloud(name: str, data_dir: Path) -> np.ndarray:
     """``(N, 3)`` points of a named benchmark cloud."""
     from splineviz.io.points import read_points
 
+    if dense_count(name):
+        return dense_samples(name, data_dir)[1]
     base = name.split("-")[0]
     file = {"bunny": "bunny.ply", "kitten": "kitten.xyz", "lucy": "lucy.ply"}[base]
     pts = read_points(data_dir / file).points
@@ -93,10 +135,10 @@ def _bpa(points):
     return np.asarray(mesh.vertices), np.asarray(mesh.triangles)
 
 
-def _poisson_remeshed(points, n_vertices):
+def _poisson_remeshed(points, n_vertices, depth=8):
     import pymeshlab
 
-    v, f = _poisson(points)
+    v, f = _poisson(points, depth)
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(v, f))
     area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]),
@@ -108,37 +150,75 @@ def _poisson_remeshed(points, n_vertices):
     return m.vertex_matrix(), m.face_matrix()
 
 
-def _child(queue, fn, args):
-    try:
-        # the peers' libraries are loaded before the clock starts, as ours are (open3d's
-        # import alone takes 0.5-1 s, most of a small cloud's anchor time)
-        import open3d  # noqa: F401
-        import pymeshlab  # noqa: F401
+def _ours(points):
+    """``sv.remesh`` with default parameters as ``(V, F)`` (the dense rows run it in a child
+    process, as the peers, for its own peak memory)."""
+    from splineviz.pointcloud.remesh import remesh
 
+    mesh = remesh(points)
+    return np.asarray(mesh.points), np.asarray(mesh.faces).reshape(-1, 4)[:, 1:]
+
+
+def _load_peers():
+    # the peers' libraries are loaded before the clock starts, as ours are (open3d's
+    # import alone takes 0.5-1 s, most of a small cloud's anchor time)
+    import open3d  # noqa: F401
+    import pymeshlab  # noqa: F401
+
+
+def _load_ours():
+    import pyvista  # noqa: F401  (remesh's mesh type)
+
+    from splineviz.pointcloud import cocone, front_kernels, local_fits, relaxation
+
+    for module in (cocone, local_fits, front_kernels, relaxation):
+        module.compile_kernels()  # numba's cached kernels are loaded before the clock
+
+
+def peak_rss() -> int:
+    """This process's peak resident memory in bytes (Linux's VmHWM: ``ru_maxrss`` carries a
+    parent's high-water mark across fork and exec)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def _child(queue, fn, args, preload=_load_peers):
+    try:
+        preload()
         t = time.perf_counter()
         v, f = fn(*args)
-        queue.put(("ok", np.asarray(v, float), np.asarray(f, np.int64), time.perf_counter() - t))
+        secs = time.perf_counter() - t
+        queue.put(("ok", np.asarray(v, float), np.asarray(f, np.int64), secs, peak_rss()))
     except Exception as exc:  # reported in the table, the benchmark goes on
-        queue.put(("error", f"{type(exc).__name__}: {exc}", None, None))
+        queue.put(("error", f"{type(exc).__name__}: {exc}", None, None, None))
 
 
-def run_peer(fn, args, timeout):
-    """Run ``fn(*args) -> (V, F)`` in a child process; ``(V, F, seconds)`` or a message.
+def run_peer(fn, args, timeout, preload=_load_peers):
+    """Run ``fn(*args) -> (V, F)`` in a child process after ``preload()``; ``(V, F, seconds,
+    peak RSS bytes of the child)`` or a message.
 
     The child is spawned, not forked: the peers run OpenMP, which hangs in a child forked
     from a process whose own OpenMP threads (numba's) have run."""
     ctx = mp.get_context("spawn")
     queue = ctx.Queue()
-    proc = ctx.Process(target=_child, args=(queue, fn, args))
+    proc = ctx.Process(target=_child, args=(queue, fn, args, preload))
     proc.start()
     try:
-        status, a, b, secs = queue.get(timeout=timeout)
+        status, a, b, secs, peak = queue.get(timeout=timeout)
     except Exception:
         proc.kill()
         proc.join()
         return f"timed out after {timeout:.0f} s"
     proc.join()
-    return (a, b, secs) if status == "ok" else a
+    return (a, b, secs, peak) if status == "ok" else a
 
 
 SPHERE_POINTS = 20000
@@ -224,9 +304,10 @@ def _row(cloud, method, points, diag, result):
 
     if isinstance(result, str):
         return {"cloud": cloud, "method": method, "error": result}
-    v, f, secs = result
+    v, f, secs = result[:3]
     q = mesh_quality((v, f), reference=points)
     q.update(cloud=cloud, method=method, time_s=secs,
+             peak_rss=result[3] if len(result) > 3 else float("nan"),
              hausdorff_pct=100 * q["hausdorff"] / diag,
              points_to_mesh_pct=100 * q["hausdorff_points_to_mesh"] / diag,
              points_to_mesh_p99_pct=100 * q["points_to_mesh_p99"] / diag,
@@ -251,17 +332,32 @@ def run_bench(data_dir=None, clouds=CLOUDS, timeout=180.0, peers=True, out=sys.s
     data_dir = Path(data_dir) if data_dir else Path.cwd() / ".." / "shared" / "data" / "points"
     rows, truth_rows = [], []
     for cloud in clouds:
-        pts = load_cloud(cloud, data_dir)
+        dense = dense_count(cloud) is not None
+        if dense:
+            truth, pts = dense_samples(cloud, data_dir)
+        else:
+            pts = load_cloud(cloud, data_dir)
+            # the noisy cloud's meshes are also measured against the noise-free scan
+            truth = load_cloud(cloud.removesuffix("-noisy"), data_dir) \
+                if cloud.endswith("-noisy") else None
         diag = float(np.linalg.norm(np.ptp(pts, axis=0)))
-        # the noisy cloud's meshes are also measured against the noise-free scan
-        truth = load_cloud(cloud.removesuffix("-noisy"), data_dir) \
-            if cloud.endswith("-noisy") else None
 
         def measured(method, result, cloud=cloud, pts=pts, diag=diag, truth=truth):
             rows.append(_row(cloud, method, pts, diag, result))
             if truth is not None:
                 truth_rows.append(_row(cloud, method, truth, diag, result))
 
+        if dense:
+            # ours and the peer each in a child process, for their own peak memory
+            limit = max(timeout, DENSE_TIMEOUT)
+            result = run_peer(_ours, (pts,), limit, _load_ours)
+            measured("ours", result)
+            print(f"  {cloud} ours: done", file=sys.stderr)
+            if peers and not isinstance(result, str):
+                measured(f"poisson{DENSE_DEPTH}+remesh",
+                         run_peer(_poisson_remeshed, (pts, len(result[0]), DENSE_DEPTH), limit))
+                print(f"  {cloud} poisson{DENSE_DEPTH}+remesh: done", file=sys.stderr)
+            continue
         ours = {}
         variants = [("ours", {}), ("ours-mls2", {"fixed_degree": 2})]
         if cloud.endswith("-noisy"):
@@ -284,7 +380,8 @@ def run_bench(data_dir=None, clouds=CLOUDS, timeout=180.0, peers=True, out=sys.s
                 print(f"  {cloud} {method}: done", file=sys.stderr)
     print_table(rows, out)
     if truth_rows:
-        print("\nThe noisy cloud's meshes against the noise-free scan:", file=out)
+        print("\nThe noisy clouds' meshes against the noise-free scan (dense clouds: the same "
+              "samples without the noise):", file=out)
         print_table(truth_rows, out)
     return rows
 
@@ -293,15 +390,16 @@ def print_table(rows, out=sys.stdout):
     """Markdown table; last columns: Hausdorff and time over those of poisson+remesh on that
     cloud."""
     anchor = {r["cloud"]: r for r in rows
-              if r["method"] == "poisson+remesh" and "error" not in r}
+              if r["method"].startswith("poisson") and r["method"].endswith("+remesh")
+              and "error" not in r}
     head = ("| cloud | method | V | F | r/R mean | r/R min | val 6 | Hausdorff % "
             "| points->mesh % | points->mesh p99 % | RMS % "
-            "| border e | non-mf e | time s | H / H(anchor) | t / t(anchor) |")
+            "| border e | non-mf e | time s | peak RSS GiB | H / H(anchor) | t / t(anchor) |")
     print(head, file=out)
     print("|" + "---|" * (head.count("|") - 1), file=out)
     for r in rows:
         if "error" in r:
-            print(f"| {r['cloud']} | {r['method']} | {r['error']} |" + " |" * 14, file=out)
+            print(f"| {r['cloud']} | {r['method']} | {r['error']} |" + " |" * 15, file=out)
             continue
         a = anchor.get(r["cloud"])
         ratio = r["hausdorff"] / a["hausdorff"] if a else float("nan")
@@ -311,7 +409,8 @@ def print_table(rows, out=sys.stdout):
               f"{100 * r['valence6_fraction']:.1f} % | {r['hausdorff_pct']:.3f} | "
               f"{r['points_to_mesh_pct']:.3f} | {r['points_to_mesh_p99_pct']:.3f} | "
               f"{r['rms_pct']:.4f} | {r['boundary_edges']} | {r['non_manifold_edges']} | "
-              f"{r['time_s']:.1f} | {ratio:.2f} | {t_ratio:.2f} |", file=out)
+              f"{r['time_s']:.1f} | {r['peak_rss'] / 2**30:.2f} | {ratio:.2f} | {t_ratio:.2f} |",
+              file=out)
 
 
 def main(argv=None) -> int:

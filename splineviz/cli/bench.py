@@ -128,7 +128,8 @@ def register(subparsers) -> None:
     p.add_argument("--timeout", type=float, default=None,
                    help="remesh: seconds per peer run (180); isovalue: per measurement (600)")
     p.add_argument("--clouds", default=None,
-                   help="remesh: comma-separated clouds (bunny,kitten,bunny-noisy,bunny-open); "
+                   help="remesh: comma-separated clouds (bunny,kitten,bunny-noisy,bunny-open; "
+                        "dense samples of a shared mesh with noise: lucy-2m,bunny-500k); "
                         "gui: the point cloud file to open and remesh (kitten.xyz)")
     p.add_argument("--volume", default=None,
                    help="gui: volume file in the data folder's volumes/ (default: the embedded "

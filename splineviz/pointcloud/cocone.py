@@ -61,7 +61,7 @@ class Connectivity:
         k-d tree over ``points``.
     triangles : (F, 3) int
         The Cocone triangles (a rough surface triangulation; unoriented).
-    nearest : (N, k) int or None
+    nearest : (N, k) int32 or None
         The ``k`` nearest points of each point, nearest first (column 0 the point itself),
         where the builder was asked for them (:func:`knn_connectivity`).
     """
@@ -150,6 +150,42 @@ def tree_query(tree: cKDTree, x: np.ndarray, k: int = 1):
     """``tree.query(x, k)``: ``(distances, indices)``, on every allowed core for big batches
     (the result does not depend on the number of threads)."""
     return tree.query(x, k=k, workers=allowed_cores() if len(x) >= PARALLEL_QUERIES else 1)
+
+
+#: points per block of :func:`nearest_points` and :func:`tangent_void_ratio`: their
+#: temporaries (the k-d tree's (B, k) int64 and float64 answers, the void test's (B, 16)
+#: fans) are bounded by the block, not the cloud (at 2 million points the unblocked ones
+#: took gigabytes)
+QUERY_BLOCK = 65536
+
+
+def nearest_points(tree: cKDTree, points: np.ndarray, k: int, distances: int = 0):
+    """The ``k`` nearest points of every point of ``points``, queried in blocks of
+    ``QUERY_BLOCK`` rows so the k-d tree's int64 and float64 answers never exist for the
+    whole cloud.
+
+    Parameters
+    ----------
+    tree : cKDTree
+    points : (N, 3) float64
+    k : int
+    distances : int
+        Keep the distances of the first this many columns.
+
+    Returns
+    -------
+    index : (N, k) int32, nearest first (the rows of ``tree.query``)
+    dist : (N, distances) float64, the first columns of the distances
+    """
+    n = len(points)
+    index = np.empty((n, k), dtype=np.int32)
+    dist = np.empty((n, distances))
+    for lo in range(0, n, QUERY_BLOCK):
+        d, i = tree_query(tree, points[lo:lo + QUERY_BLOCK], k)
+        d, i = np.reshape(d, (-1, k)), np.reshape(i, (-1, k))
+        index[lo:lo + QUERY_BLOCK] = i
+        dist[lo:lo + QUERY_BLOCK] = d[:, :distances]
+    return index, dist
 
 
 def local_spacing(tree: cKDTree, points: np.ndarray, k: int = SPACING_NEIGHBOURS) -> np.ndarray:
@@ -256,6 +292,8 @@ def cocone_triangles(dt: Delaunay, points: np.ndarray, pole: np.ndarray, centers
 
 #: nearest points whose empty circles in the tangent plane :func:`tangent_void_ratio` finds
 VOID_NEIGHBOURS = 16
+#: most threads of :func:`tangent_void_ratio` (each holds a quarter block's fans, ~40 MB)
+VOID_THREADS = 8
 
 
 def tangent_void_ratio(points: np.ndarray, normals: np.ndarray, spacing: np.ndarray,
@@ -277,15 +315,30 @@ def tangent_void_ratio(points: np.ndarray, normals: np.ndarray, spacing: np.ndar
     -------
     float: the ``quantile`` of the ratios (1.0 when there are none).
     """
+    from concurrent.futures import ThreadPoolExecutor
+
     k = min(VOID_NEIGHBOURS, len(points) - 1)
-    _, idx = tree_query(tree, points, k + 1)
+    n, block = len(points), max(1, QUERY_BLOCK // 4)
+    # NumPy releases the GIL in its loops: blocks on threads (2 million points took 40 s on
+    # one core); each thread's fans are a quarter block's, so memory stays bounded
+    with ThreadPoolExecutor(max(1, min(allowed_cores(), VOID_THREADS))) as pool:
+        ratios = np.concatenate(list(pool.map(
+            lambda lo: _void_ratios(points, normals, spacing, tree, k, lo, min(lo + block, n)),
+            range(0, n, block))))
+    return float(np.quantile(ratios, quantile)) if len(ratios) else 1.0
+
+
+def _void_ratios(points, normals, spacing, tree, k, lo, hi):
+    """The empty-circle ratios of :func:`tangent_void_ratio` at points ``lo:hi``: ``(R,)``."""
+    _, idx = tree.query(points[lo:hi], k + 1)  # one worker: the blocks run on threads
     idx = idx[:, 1:]
-    helper = np.zeros_like(normals)
-    helper[np.arange(len(points)), np.argmin(np.abs(normals), axis=1)] = 1.0
-    t1 = np.cross(helper, normals)
+    nrm, centre = normals[lo:hi], points[lo:hi]
+    helper = np.zeros_like(nrm)
+    helper[np.arange(len(nrm)), np.argmin(np.abs(nrm), axis=1)] = 1.0
+    t1 = np.cross(helper, nrm)
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(normals, t1)
-    rel = points[idx] - points[:, None, :]
+    t2 = np.cross(nrm, t1)
+    rel = points[idx] - centre[:, None, :]
     u = np.einsum("nkc,nc->nk", rel, t1)
     v = np.einsum("nkc,nc->nk", rel, t2)
     order = np.argsort(np.arctan2(v, u), axis=1)
@@ -302,8 +355,7 @@ def tangent_void_ratio(points: np.ndarray, normals: np.ndarray, spacing: np.ndar
         gap = np.minimum(gap, np.hypot(cx - u[:, j:j + 1], cy - v[:, j:j + 1]))
     reach = np.sqrt(np.max(na, axis=1, keepdims=True))
     empty = (cross > 0) & (gap >= radius * (1 - 1e-9)) & (2 * radius <= reach)
-    ratios = (radius / spacing[:, None])[empty]
-    return float(np.quantile(ratios, quantile)) if len(ratios) else 1.0
+    return (radius / spacing[lo:hi, None])[empty]
 
 
 def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.ndarray) -> np.ndarray:
@@ -328,24 +380,35 @@ def orient_normals(normals: np.ndarray, graph: sparse.csr_matrix, points: np.nda
     mst = csgraph.minimum_spanning_tree(sparse.csr_matrix((w, (g.row, g.col)), shape=graph.shape))
     mst = (mst + mst.T).tocsr()
     out = normals.copy()
+    n = len(points)
     ncomp, labels = csgraph.connected_components(mst, directed=False)
-    for c in range(ncomp):
-        members = np.flatnonzero(labels == c)
-        root = members[np.argmax(points[members, 0])]
-        if out[root, 0] < 0:
-            out[root] *= -1
-        order, pred = csgraph.breadth_first_order(mst, root, directed=False)
-        _flip_in_order(out, order, pred)
+    # each component's root: its point of largest x (the first such id)
+    by_x = np.lexsort((np.arange(n), -points[:, 0], labels))
+    roots = by_x[np.r_[True, labels[by_x[1:]] != labels[by_x[:-1]]]]
+    out[roots[out[roots, 0] < 0]] *= -1
+    # one breadth-first search from a node joined to every root: a forest has one path from
+    # its root to each point, so each point's predecessor is the one a search of its own
+    # component gives (a search per component cost O(N) each: noisy clouds of millions of
+    # points have thousands of components)
+    joined = sparse.vstack([sparse.hstack([mst, sparse.csr_matrix((n, 1))]),
+                            sparse.csr_matrix((np.ones(ncomp), (np.zeros(ncomp, dtype=np.int64),
+                                                                roots)), shape=(1, n + 1))])
+    order, pred = csgraph.breadth_first_order(joined.tocsr(), n, directed=False)
+    _flip_in_order(out, order, pred)
     return out
 
 
 @numba.njit(cache=True)
 def _flip_in_order(normals, order, pred):
     """Flip ``normals (N, 3)`` in place where they oppose their predecessor's, in breadth-first
-    ``order`` (each parent is final before its children)."""
-    for t in range(1, len(order)):
+    ``order`` (each parent is final before its children); nodes whose predecessor is no
+    point (a root, or the search's own start) stay."""
+    n = len(normals)
+    for t in range(len(order)):
         v = order[t]
-        u = pred[v]
+        u = pred[v] if v < n else -1
+        if u < 0 or u >= n:
+            continue
         if normals[v, 0] * normals[u, 0] + normals[v, 1] * normals[u, 1] \
                 + normals[v, 2] * normals[u, 2] < 0:
             normals[v, 0] = -normals[v, 0]
@@ -460,8 +523,8 @@ def _pca_rings(points, idx, dist, sectors):
     Parameters
     ----------
     points : (N, 3) float64
-    idx, dist : (N, K + 1) nearest points (column 0 the point itself) and their distances,
-        sorted by distance
+    idx, dist : (N, K + 1) int32 nearest points (column 0 the point itself) and their float64
+        distances, sorted by distance
     sectors : int
 
     Returns
@@ -549,8 +612,7 @@ def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Con
     n = len(points)
     tree = cKDTree(points)
     k = min(max(NORMAL_NEIGHBOURS, SPACING_NEIGHBOURS), n - 1)
-    dist, nearest = tree_query(tree, points, min(max(k + 1, int(neighbours)), n))
-    dist = np.ascontiguousarray(dist[:, :k + 1])
+    nearest, dist = nearest_points(tree, points, min(max(k + 1, int(neighbours)), n), k + 1)
     use_allowed_cores()
     normals, ring, ring_dist = _pca_rings(points, np.ascontiguousarray(nearest[:, :k + 1]),
                                           dist, GRAPH_SECTORS)
@@ -560,7 +622,7 @@ def knn_connectivity(cloud: PointCloud | np.ndarray, neighbours: int = 0) -> Con
     graph = graph.maximum(graph.T).tocsr()
     normals = orient_normals(normals, graph, points)
     spacing = dist[:, 1:min(SPACING_NEIGHBOURS, n - 1) + 1].mean(axis=1)
-    nearest = nearest[:, :neighbours] if neighbours > 0 else None
+    nearest = np.ascontiguousarray(nearest[:, :neighbours]) if neighbours > 0 else None
     return Connectivity(points, inverse, graph, normals, spacing, tree,
                         np.empty((0, 3), dtype=np.int64), nearest)
 
@@ -570,4 +632,4 @@ def compile_kernels() -> None:
     _flip_in_order(np.ones((2, 3)), np.arange(2), np.zeros(2, dtype=np.int32))
     points = np.random.default_rng(0).normal(size=(12, 3))
     order = np.argsort(np.linalg.norm(points[:, None] - points[None], axis=-1), axis=1)[:, :5]
-    _pca_rings(points, np.ascontiguousarray(order), np.ones(order.shape), 6)
+    _pca_rings(points, np.ascontiguousarray(order, dtype=np.int32), np.ones(order.shape), 6)

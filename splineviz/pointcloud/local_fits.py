@@ -8,7 +8,10 @@ spends its time allocating and filling ``(points, neighbours, monomials)`` tempo
 
 Conventions as in :mod:`~splineviz.pointcloud.projection`: points ``(N, 3)``, orthonormal
 frames ``(N, 3, 3)`` with rows x, y, z, local coordinates in units of the local spacing, the
-monomial basis ordered by total degree ``(1, x, y, x^2, xy, y^2, ...)``.
+monomial basis ordered by total degree ``(1, x, y, x^2, xy, y^2, ...)``.  Neighbour id
+arrays (``index``, ``sets``) are read as int32: at 80 neighbours an int64 index takes 640 bytes a
+point, most of a 2-million-point cloud's memory (clouds of 2^31 points or more would not fit
+in memory anyway).
 """
 
 from __future__ import annotations
@@ -304,7 +307,7 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
     degrees = np.array([q for _, q in scales], dtype=np.int64)
     use_allowed_cores()
     out = _fits(np.ascontiguousarray(points, dtype=np.float64),
-                np.ascontiguousarray(index, dtype=np.int64),
+                np.ascontiguousarray(index, dtype=np.int32),
                 np.ascontiguousarray(valid, dtype=np.bool_),
                 np.ascontiguousarray(frames, dtype=np.float64),
                 np.ascontiguousarray(scale, dtype=np.float64),
@@ -315,11 +318,11 @@ def smoothing_fits(points, index, valid, frames, scale, ids, scales, cond_max,
     return (*out[:5], sigma, rss, dof)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, parallel=True)
 def _sheet_mask(normals, index, cos_min):
     n, k = index.shape
     out = np.empty((n, k), dtype=np.bool_)
-    for i in range(n):
+    for i in numba.prange(n):
         out[i, 0] = True
         for c in range(1, k):
             j = index[i, c]
@@ -339,8 +342,9 @@ def sheet_mask(normals, index, cos_min):
     index : (N, K) int neighbour ids
     cos_min : float
     """
+    use_allowed_cores()
     return _sheet_mask(np.ascontiguousarray(normals, dtype=np.float64),
-                       np.ascontiguousarray(index, dtype=np.int64), float(cos_min))
+                       np.ascontiguousarray(index, dtype=np.int32), float(cos_min))
 
 
 @numba.njit(cache=True, parallel=True)
@@ -369,13 +373,13 @@ def neighbour_median(values, index):
     """
     use_allowed_cores()
     return _neighbour_median(np.ascontiguousarray(values, dtype=np.float64),
-                             np.ascontiguousarray(index, dtype=np.int64))
+                             np.ascontiguousarray(index, dtype=np.int32))
 
 
 @numba.njit(cache=True, parallel=True)
 def _nearest_in_rows(indptr, indices, data, k):
     n = len(indptr) - 1
-    out = np.empty((n, k), dtype=np.int64)
+    out = np.empty((n, k), dtype=np.int32)
     for i in numba.prange(n):
         lo, hi = indptr[i], indptr[i + 1]
         # stable: equal lengths keep the order of the row, as np.lexsort
@@ -397,7 +401,7 @@ def nearest_in_rows(graph, k):
 
     Returns
     -------
-    (N, k) int64
+    (N, k) int32
     """
     use_allowed_cores()
     return _nearest_in_rows(np.ascontiguousarray(graph.indptr, dtype=np.int64),
@@ -617,7 +621,7 @@ def variable_degree_fits(points, index, valid, frames, scale, ids, n_neighbours,
     q_max = int(q_max)
     use_allowed_cores()
     return _variable_fits(np.ascontiguousarray(points, dtype=np.float64),
-                          np.ascontiguousarray(index, dtype=np.int64),
+                          np.ascontiguousarray(index, dtype=np.int32),
                           np.ascontiguousarray(valid, dtype=np.bool_),
                           np.ascontiguousarray(frames, dtype=np.float64),
                           np.ascontiguousarray(scale, dtype=np.float64),
@@ -768,7 +772,7 @@ def project_median(points, frames, scale, coeffs, degree, reach, sets, r, iterat
                            np.ascontiguousarray(scale, f64), np.ascontiguousarray(coeffs, f64),
                            np.ascontiguousarray(degree, np.int64),
                            np.ascontiguousarray(reach, f64),
-                           np.ascontiguousarray(sets, np.int64), np.ascontiguousarray(r, f64),
+                           np.ascontiguousarray(sets, np.int32), np.ascontiguousarray(r, f64),
                            int(iterations))
 
 

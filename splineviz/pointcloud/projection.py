@@ -13,6 +13,7 @@ basis of a higher one.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,6 +24,7 @@ from splineviz.pointcloud.cocone import (
     Connectivity,
     cocone_connectivity,
     knn_connectivity,
+    nearest_points,
     tree_query,
 )
 from splineviz.pointcloud.local_fits import (
@@ -86,6 +88,9 @@ DETAIL_SCALE = (3.4, 4)
 #: weights make the ratio's tail heavier: on a noisy sphere, which has no terms past the
 #: quadratic, 6-7 % of the points pass (its 99th-percentile error rises by 3-4 %)
 DEGREE_TEST = 2.41
+#: adaptive mode: points fitted per block (the wider candidates of a block take ~700 bytes a
+#: point while it is chosen among them)
+FIT_BLOCK = 65536
 #: noise below this fraction of the spacing counts as none: the interpolating variable-degree
 #: fit of §7.2 is kept (its error on clean data is far below what any smoothing fit reaches)
 CLEAN_NOISE = 1e-3
@@ -469,6 +474,10 @@ class Projector:
         self.scale = self.conn.spacing.copy()
         if adaptive:
             self._fit_adaptive(cond_max)
+            if connectivity is None:
+                # the (N, 80) nearest points served the fits alone: kept, they were a third
+                # of a large cloud's memory through the meshing
+                self.conn = dataclasses.replace(self.conn, nearest=None)
         else:
             self.smoothing = 1.0 if self.smoothing is None else self.smoothing
             self._fit(fixed_degree, cond_max)
@@ -482,7 +491,6 @@ class Projector:
         pts, n = self.points, len(self.points)
         h = self.smoothing * self.scale
         hood = collect_neighbourhoods(pts, self.conn.graph, CUTOFF * h)
-        self.neighbourhoods = hood
         rel = pts[hood.index] - pts[:, None, :]  # (N, K, 3)
         dist2 = np.einsum("nkc,nkc->nk", rel, rel)
         weights = np.exp(-dist2 / h[:, None] ** 2)  # eq. (7.2)
@@ -532,14 +540,19 @@ class Projector:
         k = min(ADAPTIVE_NEIGHBOURS, n)
         near = self.conn.nearest
         if near is not None and near.shape[1] >= k:
-            index = near[:, :k].copy()
+            index = np.ascontiguousarray(near[:, :k], dtype=np.int32)
         else:
-            _, index = tree_query(self.conn.tree, pts, k)
-        index[:, 0] = np.arange(n)  # points are distinct: the nearest is the point itself
+            index, _ = nearest_points(self.conn.tree, pts, k)
+        own = np.arange(n, dtype=np.int32)
+        if not np.array_equal(index[:, 0], own):
+            # points are distinct: the nearest is the point itself (a copy only where a
+            # tie put another first, so a caller's connectivity is never written to)
+            index = index.copy() if near is not None and np.shares_memory(index, near) \
+                else index
+            index[:, 0] = own
         normals = self.conn.normals
         # the other side of a thin part is near but faces the other way (oriented normals)
         valid = sheet_mask(normals, index, SHEET_COS)
-        self.neighbourhoods = Neighbourhoods(index, np.zeros(index.shape, dtype=int), valid)
         frames = frames_from_normals(normals)
         coeffs = np.zeros((n, basis_size(self.q_max)))
         degree = np.ones(n, dtype=int)
@@ -567,8 +580,15 @@ class Projector:
         self.noise = noise * self.scale
         todo = np.arange(n)
         for it in range(MAX_BISECTIONS + 1):
-            self._choose(todo, index, valid, frames, noise[todo], cond_max,
-                         coeffs, degree, cond, reach, width, fits if it == 0 else None)
+            # in blocks: the wider fits' (4, P, 15) candidates and their copies are bounded
+            # by the block, not the cloud (each point's fit is its own: the same results)
+            for lo in range(0, len(todo), FIT_BLOCK):
+                part = slice(lo, lo + FIT_BLOCK)
+                block = None if it > 0 else tuple(f[part] if f.ndim == 1 else f[:, part]
+                                                  for f in fits)
+                self._choose(todo[part], index, valid, frames, noise[todo[part]], cond_max,
+                             coeffs, degree, cond, reach, width, block)
+            fits = None
             nloc = _origin_normals(coeffs[todo])
             bad = np.arccos(np.clip(nloc[:, 2], -1.0, 1.0)) > MAX_TILT
             if it == MAX_BISECTIONS or not bad.any():

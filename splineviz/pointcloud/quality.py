@@ -37,9 +37,13 @@ def radius_ratios(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def edge_face_counts(faces: np.ndarray):
     """Unique undirected edges ``(E, 2)`` and the number of faces on each ``(E,)``."""
-    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    edges, counts = np.unique(e, axis=0, return_counts=True)
-    return edges, counts
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]),
+                axis=1).astype(np.int64)
+    # one int64 key per edge, ordered as the rows (np.unique over rows sorts structured
+    # records, several times slower on a dense cloud's mesh)
+    n = int(e.max()) + 1 if len(e) else 1
+    keys, counts = np.unique(e[:, 0] * n + e[:, 1], return_counts=True)
+    return np.stack([keys // n, keys % n], axis=1), counts
 
 
 def valences(n_vertices: int, edges: np.ndarray) -> np.ndarray:
@@ -103,6 +107,10 @@ def point_to_triangle_distance(points: np.ndarray, tri: np.ndarray) -> np.ndarra
     return np.linalg.norm(points - closest, axis=1)
 
 
+#: points per block of :func:`distance_to_mesh`
+DISTANCE_BLOCK = 131072
+
+
 def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
                      candidates: int = 16) -> np.ndarray:
     """Distance of each point to the triangle mesh, ``(M,)``.
@@ -114,11 +122,18 @@ def distance_to_mesh(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray
     """
     cent = vertices[faces].mean(axis=1)
     k = min(candidates, len(faces))
-    _, idx = cKDTree(cent).query(points, k=k)
-    idx = idx.reshape(len(points), k)
+    tree = cKDTree(cent)
     best = np.full(len(points), np.inf)
-    for j in range(k):
-        best = np.minimum(best, point_to_triangle_distance(points, vertices[faces[idx[:, j]]]))
+    # in blocks: the candidates' (M, k) ids and (M, 3, 3) triangles of a dense scan's
+    # millions of points took gigabytes at once
+    for lo in range(0, len(points), DISTANCE_BLOCK):
+        block = points[lo:lo + DISTANCE_BLOCK]
+        _, idx = tree.query(block, k=k)
+        idx = idx.reshape(len(block), k)
+        out = best[lo:lo + DISTANCE_BLOCK]
+        for j in range(k):
+            np.minimum(out, point_to_triangle_distance(block, vertices[faces[idx[:, j]]]),
+                       out=out)
     return best
 
 

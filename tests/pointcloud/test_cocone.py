@@ -109,3 +109,65 @@ def test_void_ratio_without_cocone_triangles():
     g = np.stack(np.meshgrid(np.arange(40.0), np.arange(40.0)), -1).reshape(-1, 2)
     grid = np.c_[g + 0.1 * rng.uniform(-1, 1, g.shape), 0.01 * rng.normal(size=len(g))]
     assert knn_connectivity(grid).void_ratio() < 0.9
+
+
+def test_nearest_points_in_blocks_are_one_query_in_int32(monkeypatch):
+    """The blocked k-NN query gives the k-d tree's own answer, ids as int32 (an (N, 80) int64
+    index was 640 bytes a point of a large cloud)."""
+    from scipy.spatial import cKDTree
+
+    from splineviz.pointcloud import cocone
+
+    pts = _ellipsoid(5000)
+    tree = cKDTree(pts)
+    d, i = tree.query(pts, 12)
+    monkeypatch.setattr(cocone, "QUERY_BLOCK", 777)
+    idx, dist = cocone.nearest_points(tree, pts, 12, 5)
+    assert idx.dtype == np.int32 and dist.shape == (5000, 5)
+    assert np.array_equal(idx, i) and np.array_equal(dist, d[:, :5])
+    conn = knn_connectivity(pts, 40)
+    assert conn.nearest.dtype == np.int32 and conn.nearest.shape == (5000, 40)
+    assert np.array_equal(conn.nearest, cKDTree(conn.points).query(conn.points, 40)[1])
+
+
+def test_void_ratio_in_blocks_is_the_whole_cloud_s(monkeypatch):
+    """The tangent-plane void ratio computed block by block (bounded temporaries) is the
+    quantile over the whole cloud, to the bit."""
+    from splineviz.pointcloud import cocone
+
+    conn = knn_connectivity(S.sphere(6000, seed=3))
+    whole = conn.void_ratio()
+    monkeypatch.setattr(cocone, "QUERY_BLOCK", 1000)
+    assert conn.void_ratio() == whole
+
+
+def test_orientation_of_many_components_is_one_search_per_component():
+    """Normals oriented by one breadth-first search over all components (from a node joined
+    to each component's root) are those of a search per component, which cost O(N) each."""
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    from splineviz.pointcloud.cocone import _flip_in_order, orient_normals
+
+    base = S.sphere(3000, seed=4)
+    pts = np.vstack([base, base[:1000] * 0.3 + 5, base[:50] * 0.01 - 7, base[50:80] * 0.01 + 9])
+    conn = knn_connectivity(pts)
+    rng = np.random.default_rng(5)
+    normals = rng.normal(size=conn.normals.shape)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    g = sparse.triu(conn.graph, k=1).tocoo()
+    w = 1.0 - np.abs(np.einsum("ij,ij->i", normals[g.row], normals[g.col])) + 1e-6
+    mst = csgraph.minimum_spanning_tree(sparse.csr_matrix((w, (g.row, g.col)),
+                                                          shape=conn.graph.shape))
+    mst = (mst + mst.T).tocsr()
+    want = normals.copy()
+    ncomp, labels = csgraph.connected_components(mst, directed=False)
+    assert ncomp == 4
+    for c in range(ncomp):
+        members = np.flatnonzero(labels == c)
+        root = members[np.argmax(conn.points[members, 0])]
+        if want[root, 0] < 0:
+            want[root] *= -1
+        order, pred = csgraph.breadth_first_order(mst, root, directed=False)
+        _flip_in_order(want, order, pred)
+    assert np.array_equal(orient_normals(normals, conn.graph, conn.points), want)

@@ -96,3 +96,19 @@ def test_pyvista_input_and_errors():
         sv.mesh_quality((np.zeros((3, 3)), np.array([[0, 1, 5]])))
     with pytest.raises(MeshQualityError):
         sv.mesh_quality("not a mesh")
+
+
+def test_edge_keys_give_the_unique_rows():
+    """Edges found by one int64 key per edge (faster on millions of edges) are the sorted
+    unique rows, with their counts; the surface fit's edge ids likewise."""
+    from splineviz.pointcloud.quality import edge_face_counts
+    from splineviz.pointcloud.surface_fit import _edges
+
+    faces = np.random.default_rng(0).integers(0, 500, size=(3000, 3))
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    want, inverse, counts = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+    edges, got = edge_face_counts(faces)
+    assert np.array_equal(edges, want) and np.array_equal(got, counts)
+    edges, per_face = _edges(faces)
+    assert np.array_equal(edges, want)
+    assert np.array_equal(per_face, inverse.reshape(3, -1).T)

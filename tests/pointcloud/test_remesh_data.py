@@ -111,3 +111,39 @@ def test_noisy_bunny_points_to_mesh_p99_against_the_anchor(shared_data):
     anchor = sv.mesh_quality(_poisson_remeshed(pts, ours["n_vertices"]), reference=pts)
     assert ours["points_to_mesh_p99"] <= anchor["points_to_mesh_p99"]
     assert ours["non_manifold_edges"] == 0
+
+
+def test_bench_dense_clouds_are_noisy_samples_of_the_shared_mesh(shared_data):
+    """``splineviz bench remesh --clouds lucy-2m,bunny-500k``: the names give the counts, the
+    clean samples lie on the mesh's triangles and the noise is DENSE_NOISE of the diagonal;
+    the table shows each method's peak RSS and takes poisson10+remesh as the anchor."""
+    import io
+
+    from splineviz.bench.remesh import DENSE_NOISE, dense_count, dense_samples, print_table
+    from splineviz.pointcloud.quality import distance_to_mesh
+
+    assert dense_count("lucy-2m") == 2_000_000 and dense_count("bunny-500k") == 500_000
+    assert dense_count("bunny-1.5m") == 1_500_000 and dense_count("lucy-3000") == 3000
+    assert dense_count("bunny-noisy") is None and dense_count("lucy") is None
+    clean, noisy = dense_samples("bunny-20k", shared_data / "points")
+    assert clean.shape == noisy.shape == (20000, 3)
+    import pyvista as pv
+
+    mesh = pv.read(shared_data / "points" / "bunny.ply").triangulate()
+    diag = float(np.linalg.norm(np.ptp(clean, axis=0)))
+    on = distance_to_mesh(clean, np.asarray(mesh.points, dtype=float),
+                          mesh.faces.reshape(-1, 4)[:, 1:])
+    assert on.max() < 1e-6 * diag
+    assert abs(np.std(noisy - clean) / (DENSE_NOISE * diag) - 1) < 0.05
+    row = {"n_vertices": 10, "n_faces": 16, "radius_ratio_mean": 0.9, "radius_ratio_min": 0.5,
+           "valence6_fraction": 0.7, "hausdorff_pct": 1.0, "points_to_mesh_pct": 1.0,
+           "points_to_mesh_p99_pct": 0.5, "rms_pct": 0.1, "boundary_edges": 0,
+           "non_manifold_edges": 0, "cloud": "bunny-20k"}
+    rows = [{**row, "method": "ours", "hausdorff": 1.0, "time_s": 50.0, "peak_rss": 2**31},
+            {**row, "method": "poisson10+remesh", "hausdorff": 2.0, "time_s": 100.0,
+             "peak_rss": 2**30}]
+    out = io.StringIO()
+    print_table(rows, out)
+    lines = out.getvalue().splitlines()
+    assert "peak RSS GiB" in lines[0]
+    assert lines[2].endswith("| 50.0 | 2.00 | 0.50 | 0.50 |")
