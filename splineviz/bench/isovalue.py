@@ -14,13 +14,14 @@ included) and no cache of one model helps another.
 from __future__ import annotations
 
 import os
-import resource
 import statistics
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+from splineviz.bench.memory import peak_rss
 
 #: models of the benchmark
 MODELS = ("trilinear", "super-quadratic", "cubic-c1", "to-quadratic")
@@ -68,11 +69,6 @@ def _rotated(cam, degrees: float):
                   view_angle=cam.view_angle)
 
 
-def _peak_rss() -> int:
-    """Peak resident set size of this process in bytes (Linux reports KiB)."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-
-
 def _measure_vtk(path, spacing, size):
     """Flying edges + offscreen render of its mesh, in a child process (see module doc)."""
     if not os.environ.get("DISPLAY"):
@@ -110,7 +106,7 @@ def _measure_vtk(path, spacing, size):
         moving.append(time.perf_counter() - t)
     pl.close()
     return {"extract_s": statistics.median(extract), "first_s": first,
-            "move_s": statistics.median(moving), "triangles": mesh.n_cells, "rss": _peak_rss()}
+            "move_s": statistics.median(moving), "triangles": mesh.n_cells, "rss": peak_rss()}
 
 
 def _box(img):
@@ -158,7 +154,7 @@ def _measure_caster(path, spacing, model, size, preview, device):
     return {"setup_s": setup, "change_s": statistics.median(change),
             "first_s": statistics.median(first), "preview_s": statistics.median(prev),
             "move_s": statistics.median(moving), "visible_cells": cubes,
-            "path": rc.stats["path"], "device": rc.stats["device"], "rss": _peak_rss()}
+            "path": rc.stats["path"], "device": rc.stats["device"], "rss": peak_rss()}
 
 
 def _child(conn, func, args):

@@ -44,6 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
+from splineviz.bench.memory import peak_rss
+
 CLOUDS = ("bunny", "kitten", "lucy", "bunny-noisy", "bunny-open")
 NOISE = 0.002  # Gaussian sigma in units of the bounding-box diagonal
 #: dense clouds ``<mesh>-<count>`` (``lucy-2m``, ``bunny-500k``): the shared mesh's triangles
@@ -174,20 +176,6 @@ def _load_ours():
     for module in (cocone, local_fits, front_kernels, relaxation):
         module.compile_kernels()  # numba's cached kernels are loaded before the clock
 
-
-def peak_rss() -> int:
-    """This process's peak resident memory in bytes (Linux's VmHWM: ``ru_maxrss`` carries a
-    parent's high-water mark across fork and exec)."""
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith("VmHWM:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 def _child(queue, fn, args, preload=_load_peers):

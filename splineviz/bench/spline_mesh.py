@@ -141,9 +141,9 @@ def measure(spline, iso, vertices, faces, other_vertices):
 
 def _peak_rss_gib() -> float:
     """Peak resident memory of this process so far (GiB)."""
-    import resource
+    from splineviz.bench.memory import peak_rss
 
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+    return peak_rss() / 2**30
 
 
 def _timed(fn, *args, **kwargs):

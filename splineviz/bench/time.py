@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from splineviz.bench.isovalue import _in_process, _peak_rss
+from splineviz.bench.isovalue import _in_process
+from splineviz.bench.memory import peak_rss
 
 #: models of the benchmark
 MODELS = ("trilinear", "super-quadratic", "cubic-c1", "to-quadratic")
@@ -101,7 +102,7 @@ def _measure_model(pattern, model, size, preview, device):
         rc.render(cam, preview)
         played += 1
     rate = played / (time.perf_counter() - t) if played else float("nan")
-    return {"change_s": statistics.median(change), "rate": rate, "rss": _peak_rss(),
+    return {"change_s": statistics.median(change), "rate": rate, "rss": peak_rss(),
             "cap": series.cache_bytes, "device": rc.stats["device"]}
 
 
@@ -142,7 +143,7 @@ def _measure_vtk(pattern, size):
         if k:  # the first step built the window
             times.append(time.perf_counter() - t)
     pl.close()
-    return {"step_s": statistics.median(times), "rss": _peak_rss()}
+    return {"step_s": statistics.median(times), "rss": peak_rss()}
 
 
 def sphere_measures(n: int = 64, models=("cubic-c1", "to-quadratic")) -> list[dict]:

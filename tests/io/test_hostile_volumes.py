@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from peak_memory import PEAK_RSS_SOURCE
 
 import splineviz as sv
 from splineviz.io import read_volume_sequence
@@ -22,13 +21,14 @@ from splineviz.io.errors import DataSizeError, InvalidDataError
 ROOT = Path(__file__).resolve().parents[2]
 
 #: the measurement, in a fresh interpreter: seconds and peak RSS growth of one read
-PROBE = PEAK_RSS_SOURCE + """
+PROBE = """
 import json, sys, time
+from splineviz.bench.memory import peak_rss
 import splineviz.io as sio
 from splineviz.core.errors import SplinevizError
 from splineviz.plugins import ensure_loaded
 ensure_loaded()
-before = peak_rss_bytes()
+before = peak_rss()
 start = time.perf_counter()
 try:
     sio.read_volume(sys.argv[1])
@@ -36,7 +36,7 @@ try:
 except SplinevizError as exc:
     error = [type(exc).__name__, str(exc)]
 seconds = time.perf_counter() - start
-grown = peak_rss_bytes() - before
+grown = peak_rss() - before
 print(json.dumps({"error": error, "seconds": seconds, "grown": grown}))
 """
 

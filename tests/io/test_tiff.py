@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from peak_memory import PEAK_RSS_SOURCE
 
 import splineviz as sv
 from splineviz.core.chunked import ChunkedVolume
@@ -203,18 +202,19 @@ def test_tiff_stack_renders_the_same_picture_as_the_same_data_in_nrrd(tmp_path):
 
 
 #: opens a TIFF as the GUI does (read, value range, histogram) and prints peak RSS in MiB
-_PEAK_RSS = PEAK_RSS_SOURCE + textwrap.dedent("""
+_PEAK_RSS = textwrap.dedent("""
     import json, os, sys, time
+    from splineviz.bench.memory import peak_rss
     import dask.array, tifffile, zarr
     import splineviz.io, splineviz.model.opening as mo, splineviz.model.summaries
     from splineviz.core.chunked import ChunkedVolume
-    base = peak_rss_bytes() / 2**20
+    base = peak_rss() / 2**20
     t = time.perf_counter()
     kind, vol, summaries = mo.read_file(sys.argv[1])
     print(json.dumps({"chunked": isinstance(vol, ChunkedVolume), "shape": list(vol.shape),
                       "range": list(vol.finite_range), "seconds": time.perf_counter() - t,
                       "base_mib": base,
-                      "peak_mib": peak_rss_bytes() / 2**20}))
+                      "peak_mib": peak_rss() / 2**20}))
 """)
 
 

@@ -344,6 +344,7 @@ def test_projector_keeps_no_per_neighbour_arrays():
 _MEMORY_PROBE = '''
 import json, sys
 import numpy as np
+from splineviz.bench.memory import peak_rss
 from splineviz.pointcloud import cocone, projection
 
 def sphere(n, seed):
@@ -362,10 +363,10 @@ try:
 except OSError:
     print(json.dumps(None))
     sys.exit()
-base = peak_rss_bytes()
+base = peak_rss()
 proj = projection.Projector(pts)
 proj.conn.void_ratio()
-print(json.dumps((peak_rss_bytes() - base) / n))
+print(json.dumps((peak_rss() - base) / n))
 '''
 
 
@@ -379,10 +380,8 @@ def test_projector_memory_per_point_is_bounded_by_its_blocks():
     import sys
     from pathlib import Path
 
-    from peak_memory import PEAK_RSS_SOURCE
-
     root = Path(__file__).resolve().parents[2]
-    out = subprocess.run([sys.executable, "-c", PEAK_RSS_SOURCE + _MEMORY_PROBE, "40000",
+    out = subprocess.run([sys.executable, "-c", _MEMORY_PROBE, "40000",
                           "8192"], capture_output=True, text=True, timeout=600, cwd=root,
                          check=True)
     per_point = json.loads(out.stdout.strip().splitlines()[-1])
