@@ -53,21 +53,22 @@ class Frame:
 
     Notes
     -----
-    ``position`` and ``normal`` may be given as functions of no argument that return the
-    array: they are then called on first access. Drawing a frame needs only its colour and
-    depth, so the OpenCL ray caster leaves positions and normals on the device until
-    something (picking, colour by, a test) reads them: converting them costs more than the
-    kernel that made the frame.
+    ``position``, ``normal`` and ``color`` may be given as functions of no argument that
+    return the array: they are then called on first access. Drawing a frame needs only its
+    colour and depth, so the OpenCL ray caster leaves positions and normals on the device
+    until something (picking, colour by, a test) reads them: converting them costs more than
+    the kernel that made the frame. A view draws a cell-projected frame from its normals and
+    depth alone, so its colours are shaded only when read.
     """
 
-    __slots__ = ("hit", "_position", "_normal", "depth", "color", "hessian", "gradient_norm")
+    __slots__ = ("hit", "_position", "_normal", "depth", "_color", "hessian", "gradient_norm")
 
     def __init__(self, hit, position, normal, depth, color, hessian=None, gradient_norm=None):
         self.hit = hit
         self._position = position
         self._normal = normal
         self.depth = depth
-        self.color = color
+        self._color = color
         self.hessian = hessian
         self.gradient_norm = gradient_norm
 
@@ -90,6 +91,16 @@ class Frame:
     @normal.setter
     def normal(self, value) -> None:
         self._normal = value
+
+    @property
+    def color(self) -> np.ndarray:
+        if callable(self._color):
+            self._color = self._color()
+        return self._color
+
+    @color.setter
+    def color(self, value) -> None:
+        self._color = value
 
     def load(self) -> Frame:
         """Read the deferred positions and normals now, in this thread; returns ``self``.

@@ -33,6 +33,9 @@ uniform float ambientK;
 uniform float diffuseK;
 uniform float specularK;
 uniform float shininess;
+// 1: write the unit normal in view coordinates packed as (n + 1) / 2 instead of a colour
+// (the bytes of a FrameQuad's normal texture: a frame made off the GUI thread)
+uniform int normalOutput;
 
 //CELLPROJ::Blossom
 
@@ -175,6 +178,10 @@ void main()
   vec4 clip = MCDCMatrix * vec4(pos, 1.0);
   gl_FragDepth = 0.5 * (clip.z / clip.w) + 0.5;
   vec3 n = length(grad) > 0.0 ? normalize(grad) : vec3(0.0);
+  if (normalOutput == 1) {
+    gl_FragData[0] = vec4(0.5 * mat3(MCVCMatrix) * n + 0.5, 1.0);
+    return;
+  }
   float ndl = dot(n, d);
   float cs = abs(ndl);
   vec3 base = ndl > 0.0 ? frontColor : backColor;

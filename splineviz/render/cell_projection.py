@@ -227,6 +227,8 @@ class CellProjectionLayer:
         for u in self._both:
             u.SetUniform3f("boxMin", tuple(float(v) for v in lo))
             u.SetUniform3f("boxMax", tuple(float(v) for v in hi))
+        for u in self._both:
+            u.SetUniformi("normalOutput", 0)
         self.set_material()
         self.set_appearance(FRONT_COLOR, 1.0, BACK_COLOR)
         self.set_clip_planes(())
@@ -280,6 +282,12 @@ class CellProjectionLayer:
         self.tets = geometry.tets
         self._mapper.SetInputData(geometry.polydata)
         self._depth_mapper.SetInputData(geometry.polydata)
+
+    def set_normal_output(self, flag: bool) -> None:
+        """Draw the surface's unit normals in view coordinates, packed as
+        :func:`splineviz.render.quad.view_normals` packs them, instead of its colours
+        (opaque: the nearest hit wins the depth test)."""
+        self._uniforms.SetUniformi("normalOutput", int(bool(flag)))
 
     def set_visible(self, visible: bool) -> None:
         """Show or hide the surface (both actors)."""

@@ -447,6 +447,24 @@ class IsosurfaceLayer:
                                "classified": "all"}
             return geometry
 
+    def cell_frame(self, view: ViewState) -> RenderedFrame:
+        """The exact frame of the surface for ``view`` drawn by cell projection off the
+        calling thread (:func:`splineviz.render.cell_frames.cell_frame`; thread safe, blocks
+        until drawn), its textures made."""
+        from splineviz.render.cell_frames import cell_frame
+        from splineviz.render.quad import packed_textures
+
+        state = self.state
+        geometry = self.cell_geometry()
+        t = time.perf_counter()
+        frame, normals = cell_frame(geometry, view.camera, view.size,
+                                    tuple(view.clip_planes) + self.clip_planes)
+        rf = RenderedFrame(frame, view, state, 1.0, time.perf_counter() - t, CELL_PROJECTION,
+                           dict(self.last_stats), model=self.model)
+        rf.textures = packed_textures(normals, frame.depth)
+        rf.mean_depth = float(frame.depth[frame.hit].mean()) if frame.hit.any() else 1.0
+        return rf
+
     def set_volume(self, volume: Volume) -> None:
         """New data (e.g. smoothed); keeps model and isovalue.
 

@@ -133,9 +133,15 @@ def frame_textures(hit: np.ndarray, normal: np.ndarray, depth: np.ndarray, basis
     """The two textures of a frame, ready to upload: ``(normals (H*W, 4), depth (H*W, 3))``
     uint8, rows flipped to VTK's bottom-up order (:func:`view_normals`, :func:`pack_depth`).
     Pure NumPy, so a worker thread can make them while the GUI thread draws."""
-    rows = (view_normals(normal, hit, basis), pack_depth(depth))
-    h, w = hit.shape
-    return tuple(np.ascontiguousarray(a[::-1]).reshape(h * w, -1) for a in rows)
+    return packed_textures(view_normals(normal, hit, basis), depth)
+
+
+def packed_textures(normals: np.ndarray, depth: np.ndarray):
+    """:func:`frame_textures` of normals already packed: ``normals`` (H, W, 4) uint8 as
+    :func:`view_normals` makes them, ``depth`` (H, W) window depth."""
+    h, w = depth.shape
+    return tuple(np.ascontiguousarray(a[::-1]).reshape(h * w, -1)
+                 for a in (normals, pack_depth(depth)))
 
 
 def frame_colors(rgb: np.ndarray) -> np.ndarray:

@@ -106,8 +106,11 @@ class _LayerView:
     #: whether they draw it now (its quad is hidden then)
     cells: object = None
     by_cells: bool = False
+    #: whether its cell-projected frames are drawn off the GUI thread and shown by its quad
+    #: (a frame takes longer than the preview budget) instead of by its actors in the window
+    cell_frames: bool = False
     #: its stand-in mesh while the camera moves (a ProxySurface, None: none yet), and
-    #: whether it shows instead of the cell-projection actors now
+    #: whether it shows instead of the cell-projection actors or frame now
     proxy: object = None
     proxy_shown: bool = False
 
@@ -184,7 +187,8 @@ class SplineScene:
         self._observer = self.renderer.AddObserver("StartEvent", self._before_render)
         self._end_observer = self.renderer.AddObserver("EndEvent", self._after_render)
         #: seconds of the last window frame that drew a surface by cell projection (its
-        #: GL work happens by the window's end, not the renderer's)
+        #: GL work happens by the window's end, not the renderer's), or of the last
+        #: cell-projected frame a worker drew for it (see :meth:`cells_fast`)
         self.cells_seconds: float | None = None
         self._cells_drawn = False
         self._t_window = None
@@ -330,11 +334,13 @@ class SplineScene:
         q = lv.quad
         q.set_appearance(layer.color, layer.opacity)
         q.set_material(layer.material)
-        q.actor.SetVisibility(bool(layer.visible and q.has_image and not lv.by_cells))
+        q.actor.SetVisibility(bool(layer.visible and q.has_image and not lv.proxy_shown
+                                   and (not lv.by_cells or lv.cell_frames)))
         if lv.cells is not None:
             lv.cells.set_appearance(layer.color, layer.opacity)
             lv.cells.set_material(layer.material)
-            lv.cells.set_visible(bool(layer.visible and lv.by_cells and not lv.proxy_shown))
+            lv.cells.set_visible(bool(layer.visible and lv.by_cells and not lv.cell_frames
+                                      and not lv.proxy_shown))
         if lv.proxy is not None:
             lv.proxy.set_appearance(layer.color, layer.opacity, layer.material)
             lv.proxy.actor.SetVisibility(bool(layer.visible and lv.by_cells
@@ -400,7 +406,6 @@ class SplineScene:
             self.renderer.RemoveActor(lv.proxy.actor)
         lv.cells = None
         lv.proxy = None
-        lv.by_cells = False
         lv.proxy_shown = False
 
     def _window_started(self, *_args) -> None:
@@ -410,12 +415,21 @@ class SplineScene:
         if self._cells_drawn and self._t_window is not None:
             self.cells_seconds = time.perf_counter() - self._t_window
 
+    def cells_fast(self) -> bool:
+        """Whether the last cell-projected frame took at most the preview budget: a
+        progressive view then draws cell-projected surfaces in its window at every render,
+        else (software OpenGL: 0.25-0.8 s for the default data) their exact frames are drawn
+        off the GUI thread (:meth:`IsosurfaceLayer.cell_frame`, in :meth:`refine`) and
+        shown by their quads, the trilinear stand-in meanwhile."""
+        return self.cells_seconds is not None and self.cells_seconds <= PREVIEW_BUDGET_S
+
     def _draw_cells(self, layer: IsosurfaceLayer, lv: _LayerView, view: ViewState,
                     blocking: bool) -> bool:
         """Draw ``layer`` by cell projection in this view: its tets of the current
         isovalue (made now when ``blocking``, else the last ones made until a worker made
-        those: :meth:`refine`), cut by the view's and the layer's clip planes. True when
-        the tets drawn are the current ones."""
+        those: :meth:`refine`), cut by the view's and the layer's clip planes, by its
+        actors or, when not :meth:`cells_fast` in a progressive view, as the frame a worker
+        drew. True when what is shown is the current surface, exact."""
         from splineviz.render.cell_projection import CellProjectionLayer
 
         geometry = layer.cell_geometry(blocking=blocking)
@@ -441,12 +455,17 @@ class SplineScene:
         if lv.cells is not None:
             lv.cells.set_clip_planes(planes)
             lv.mean_depth = _box_depth(layer, view)
-        # while the camera (or the isovalue) moves: the trilinear stand-in when a cell-
-        # projected frame is over the preview budget, or its tets are not made yet
-        moving = self.progressive and self._interacting and not self._force_exact
-        slow = self.cells_seconds is not None and self.cells_seconds > PREVIEW_BUDGET_S
-        mesh = layer.cell_proxy(blocking=False) if moving and (slow or geometry is None) \
-            else None
+        lv.cell_frames = self.progressive and not self._force_exact and not self.cells_fast()
+        if lv.cell_frames:
+            # the trilinear stand-in until a worker drew the exact frame of this view
+            done = geometry is not None and self._is_current(layer, lv, view) \
+                and lv.shown.final
+            stand_in = not done
+        else:
+            # while the camera (or the isovalue) moves: the stand-in while its tets are made
+            stand_in = self.progressive and self._interacting and not self._force_exact \
+                and geometry is None
+        mesh = layer.cell_proxy(blocking=False) if stand_in else None
         if mesh is not None:
             from splineviz.render.cell_projection import ProxySurface
 
@@ -458,7 +477,7 @@ class SplineScene:
             lv.proxy.set_clip_planes(planes)
         lv.proxy_shown = mesh is not None
         self._apply_appearance(layer, lv)
-        return geometry is not None and not lv.proxy_shown
+        return done if lv.cell_frames else geometry is not None and not lv.proxy_shown
 
     def single_sample_for_cells(self) -> None:
         """Turn the window's multisampling off when a layer is drawn by cell projection
@@ -567,6 +586,10 @@ class SplineScene:
                 continue
             if lv.by_cells:
                 self._drop_cells(lv)
+                lv.by_cells = lv.cell_frames = False
+                # a cell-projected frame in the quad is not the ray caster's
+                lv.shown = None
+                lv.quad.has_image = False
             if self._is_current(layer, lv, view):
                 if self.progressive and not lv.shown.final:
                     # a preview of this very view (the last drag step's, or a wheel step's
@@ -601,7 +624,8 @@ class SplineScene:
                 stale.append(layer)
         self._resized = False
         self._cells_drawn = any(
-            layer.visible and lv.by_cells and lv.cells is not None and not lv.proxy_shown
+            layer.visible and lv.by_cells and lv.cells is not None and not lv.cell_frames
+            and not lv.proxy_shown
             for layer, lv in ((la, self._views[id(la)]) for la in self.layers))
         self._order_quads()
         self._fit_scalar_bars()
@@ -731,7 +755,7 @@ class SplineScene:
         for layer in self.layers:
             lv = self._views[id(layer)]
             actors = lv.cells.actors if lv.by_cells and lv.cells is not None \
-                else (lv.quad.actor,)
+                and not lv.cell_frames else (lv.quad.actor,)
             quads.append((layer.opacity < 1.0, -lv.mean_depth, actors))
         for _, _, actors in quads:
             for actor in actors:
@@ -750,7 +774,8 @@ class SplineScene:
                 continue
             renderer = self.renderer_of(layer, probe=False)
             if renderer == CELL_PROJECTION:
-                if not layer.cells_current():
+                if not layer.cells_current() or (lv.cell_frames and not (
+                        self._is_current(layer, lv, view) and lv.shown.final)):
                     return True
             elif renderer is None or not (self._is_current(layer, lv, view) and lv.shown.final):
                 return True
@@ -800,6 +825,12 @@ class SplineScene:
             if self.renderer_of(layer) == CELL_PROJECTION:  # probes OpenCL for "auto"
                 if not layer.cells_current():
                     out.append((layer, layer.cell_geometry()))
+                if self.progressive and not self.cells_fast() and not (
+                        self._is_current(layer, lv, view) and lv.shown.final):
+                    layer.cell_proxy()  # a large volume's stand-in is made here
+                    if given_up():
+                        break
+                    out.append((layer, layer.cell_frame(view)))
                 continue
             if self._is_current(layer, lv, view) and lv.shown.final:
                 continue
@@ -869,6 +900,8 @@ class SplineScene:
                 # a cell geometry (refine): the next render draws it while it is current
                 used = used or layer.cells_current(rf)
             elif rf.view.key() == view.key() and rf.state == layer.state:
+                if rf.path == CELL_PROJECTION:
+                    self.cells_seconds = rf.seconds
                 self._show(layer, rf)
                 used = True
         return used
