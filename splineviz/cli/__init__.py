@@ -62,11 +62,12 @@ def _build_parser() -> argparse.ArgumentParser:
 def _viewer_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="splineviz", description="Open the splineviz app.")
     parser.add_argument("file", nargs="?", help="volume, point cloud or session to open")
-    from splineviz.cli.render import finite_float
+    from splineviz.cli.render import add_renderer_argument, finite_float
 
     parser.add_argument("--iso", type=finite_float, default=None, help="isovalue")
     parser.add_argument("--model", default=None,
                         help="spline model (default: the smoothest one with an OpenCL kernel)")
+    add_renderer_argument(parser)
     parser.add_argument("--screenshot", metavar="PNG", help="save the view to PNG and quit")
     parser.add_argument("--size", metavar="WxH", help="window / screenshot size, e.g. 1024x768")
     parser.add_argument("--series", metavar="UID|INDEX",

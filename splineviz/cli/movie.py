@@ -12,7 +12,12 @@ from __future__ import annotations
 
 import sys
 
-from splineviz.cli.render import RenderArgumentError, finite_float, make_camera
+from splineviz.cli.render import (
+    RenderArgumentError,
+    add_renderer_argument,
+    finite_float,
+    make_camera,
+)
 from splineviz.core.camera import CameraError, parse_size
 
 
@@ -43,7 +48,7 @@ def run(args) -> int:
     from tqdm import tqdm
 
     from splineviz.cli.render import _time_scene
-    from splineviz.model.opening import scene_from_path
+    from splineviz.model.opening import override, scene_from_path
     from splineviz.render.movie import movie
 
     size = parse_size(args.size)
@@ -57,6 +62,7 @@ def run(args) -> int:
                                 allow_outside=args.allow_outside_data)
     if not scene.isosurfaces:
         raise RenderArgumentError(f"{args.file} holds no volume to render")
+    override(scene, renderer=args.renderer)
     for vol in scene.volumes:
         vol.show_outline = False
     scene.view.show_scale = False
@@ -132,6 +138,7 @@ def register(subparsers) -> None:
     p.add_argument("--iso", type=finite_float, default=None, help="isovalue")
     p.add_argument("--model", default=None,
                    help=" | ".join(MODELS) + " (default: cubic-c1, or the session's)")
+    add_renderer_argument(p)
     p.add_argument("--camera", default=None,
                    help="px,py,pz[,fx,fy,fz[,ux,uy,uz]] starting eye [focal point [view up]]")
     p.add_argument("--view-angle", type=float, default=30.0, help="vertical view angle, degrees")

@@ -145,9 +145,8 @@ def _volume_rendering(scene, args) -> None:
 
 
 def run(args) -> int:
-    from splineviz.core.renderers import renderer_name
     from splineviz.core.splines import model_spec
-    from splineviz.model.opening import scene_from_path
+    from splineviz.model.opening import override, scene_from_path
     from splineviz.render.scene_view import render_scene
 
     size = parse_size(args.size)
@@ -183,10 +182,7 @@ def run(args) -> int:
     for text in args.clip or ():
         p = _floats(text, (6,), "--clip")
         scene.add_clip_plane(p[:3], p[3:])
-    if args.renderer is not None:
-        renderer = renderer_name(args.renderer)
-        for iso in scene.isosurfaces:
-            iso.renderer = renderer
+    override(scene, renderer=args.renderer)
     chunked = _configure_bricks(scene, args)
     spec = model_spec(scene.isosurfaces[0].model)
     if spec.family is None:
@@ -252,9 +248,20 @@ def _renderers(scene, device) -> list[str]:
     return out
 
 
+def add_renderer_argument(parser) -> None:
+    """``--renderer`` of ``render``, ``movie`` and the app (applied by
+    :func:`splineviz.model.opening.override`)."""
+    from splineviz.core.renderers import RENDERERS
+
+    parser.add_argument("--renderer", default=None, metavar="|".join(RENDERERS),
+                        help="what draws the isosurfaces: ray casting (OpenCL), cell "
+                        "projection (OpenGL; the type-6 models super-quadratic and cubic-c1, "
+                        "and to-quadratic), or auto: ray casting where an OpenCL device works, "
+                        "else cell projection (default: auto, or the session's)")
+
+
 def register(subparsers) -> None:
     """Add the ``render`` sub-command (see :mod:`splineviz.cli`)."""
-    from splineviz.core.renderers import RENDERERS
     from splineviz.core.splines import MODELS
 
     p = subparsers.add_parser("render", help="ray cast a spline isosurface into a PNG",
@@ -273,11 +280,7 @@ def register(subparsers) -> None:
     p.add_argument("--view-angle", type=float, default=30.0, help="vertical view angle, degrees")
     p.add_argument("--clip", action="append", metavar="OX,OY,OZ,NX,NY,NZ",
                    help="clip plane keeping the side its normal points to (repeatable)")
-    p.add_argument("--renderer", default=None, metavar="|".join(RENDERERS),
-                   help="what draws the isosurfaces: ray casting (OpenCL), cell projection "
-                   "(OpenGL; the type-6 models super-quadratic and cubic-c1), or auto: ray "
-                   "casting where an OpenCL device works, else cell projection (default: "
-                   "auto, or the session's)")
+    add_renderer_argument(p)
     p.add_argument("--device", default=None, help="gpu | cpu | numpy | device-name substring "
                    "(default: $SPLINEVIZ_DEVICE, else GPU before CPU)")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",

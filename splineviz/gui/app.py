@@ -22,9 +22,10 @@ def _scene(args):
     from splineviz.model.opening import default_scene, override, scene_from_path
 
     if args.file:
-        return scene_from_path(args.file, isovalue=args.iso, model=args.model)
+        return scene_from_path(args.file, isovalue=args.iso, model=args.model,
+                               renderer=args.renderer)
     scene = default_scene()
-    override(scene, isovalue=args.iso, model=args.model)
+    override(scene, isovalue=args.iso, model=args.model, renderer=args.renderer)
     return scene
 
 

@@ -26,6 +26,7 @@ import time
 import numpy as np
 from PySide6.QtCore import QEvent, QObject, QTimer, Signal
 
+from splineviz.core.renderers import CELL_PROJECTION
 from splineviz.gui.jobs import JobRunner
 from splineviz.gui.overlay import ViewOverlay
 from splineviz.model import Scene
@@ -451,7 +452,11 @@ class View3D(QObject):
         if lines:
             status = lines[0].replace("\n", " - ")
         else:
-            status = "ray casting..." if job is not None else ""
+            ss = self.spline_scene
+            cells = any(layer.visible and ss.renderer_of(layer, probe=False) == CELL_PROJECTION
+                        for layer in ss.layers)
+            status = "" if job is None else (
+                "drawing by cell projection..." if cells else "ray casting...")
         self.busy.emit(status)
         self.overlay.set_text("\n".join(lines))
 

@@ -126,10 +126,11 @@ def noting_warnings(func, *args, **kwargs) -> Noted:
     return Noted(value, ours, other)
 
 
-def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
+def scene_from_path(path, *, isovalue=None, model=None, renderer=None, repoint=None,
                     allow_outside: bool = False, **volume_options) -> Scene:
     """Read a session, volume or point cloud into a new scene, framed isometrically
-    (a session keeps its own camera). ``isovalue``/``model`` override every isosurface;
+    (a session keeps its own camera). ``isovalue``/``model``/``renderer`` override every
+    isosurface (:func:`override`);
     ``allow_outside`` lets headers and sessions name data outside their folders;
     ``volume_options`` (``channel``, ``oblique``) go to the volume reader."""
     from splineviz.io.opening import data_name, open_path
@@ -145,17 +146,21 @@ def scene_from_path(path, *, isovalue=None, model=None, repoint=None,
     else:
         scene.add_points(opened.value, opened.path.name, path=str(opened.path))
         scene.frame(view="isometric")
-    override(scene, isovalue=isovalue, model=model)
+    override(scene, isovalue=isovalue, model=model, renderer=renderer)
     scene.mark_saved()
     return scene
 
 
-def override(scene: Scene, *, isovalue=None, model=None) -> None:
-    """Set the isovalue and/or spline model of every isosurface (command-line flags)."""
+def override(scene: Scene, *, isovalue=None, model=None, renderer=None) -> None:
+    """Set the isovalue, spline model and/or renderer (a name or alias of
+    :data:`splineviz.core.renderers.RENDERERS`) of every isosurface (command-line flags)."""
     from splineviz.core.registry import load_extensions
+    from splineviz.core.renderers import renderer_name
 
     if model is not None:
         load_extensions()  # a plugin model named on the command line
+    if renderer is not None:
+        renderer = renderer_name(renderer)
     if (isovalue is not None or model is not None) and not scene.isosurfaces:
         raise SplinevizError("--iso and --model need a volume; this scene has no isosurface")
     for iso in scene.isosurfaces:
@@ -163,3 +168,5 @@ def override(scene: Scene, *, isovalue=None, model=None) -> None:
             iso.isovalue = float(isovalue)
         if model is not None:
             iso.model = model
+        if renderer is not None:
+            iso.renderer = renderer

@@ -112,6 +112,39 @@ def test_render_flag_and_its_one_sentence_error(tmp_path, capsys):
     assert "unknown renderer 'opengl'; choose one of auto, ray-casting, cell-projection" in err
 
 
+def test_movie_and_the_apps_screenshot_take_the_renderer_flag(tmp_path, capsys, monkeypatch):
+    from PIL import Image
+
+    frames = tmp_path / "f_%02d.png"
+    assert main(["movie", str(SESSION), "--size", "64x48", "--frames", "2", "--orbit", "20",
+                 "--renderer", "cell-projection", "-o", str(frames)]) == 0
+    still = tmp_path / "still.png"
+    assert main(["render", str(SESSION), "--size", "64x48", "--renderer",
+                 "cell-projection", "-o", str(still)]) == 0
+    ray = tmp_path / "ray.png"
+    assert main(["render", str(SESSION), "--size", "64x48", "--renderer", "ray-casting",
+                 "-o", str(ray)]) == 0
+    first, cells, cast = (np.asarray(Image.open(p)) for p in
+                          (tmp_path / "f_00.png", still, ray))
+    np.testing.assert_array_equal(first, cells)  # the movie's first frame: cell projected
+    assert not np.array_equal(cells, cast)
+    # the app's --screenshot without a display: the same picture
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    shot = tmp_path / "shot.png"
+    capsys.readouterr()
+    assert main([str(SESSION), "--renderer", "cell-projection", "--screenshot", str(shot),
+                 "--size", "64x48"]) == 0
+    from splineviz.model.opening import scene_from_path
+    from splineviz.render.scene_view import render_scene
+
+    np.testing.assert_array_equal(np.asarray(Image.open(shot)), render_scene(
+        scene_from_path(SESSION, renderer="cell-projection"), (64, 48)))
+    assert main(["movie", str(SESSION), "--renderer", "gl", "-o", str(frames)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "unknown renderer 'gl'" in err
+
+
 #: hides every OpenCL platform from a process before splineviz looks for one: an ICD loader
 #: that lists none, or one that fails as without any ICD installed
 _NO_OPENCL = {
