@@ -46,6 +46,12 @@ PARTITIONS = {
 }
 
 
+def partition_of(spline) -> str:
+    """The :data:`PARTITIONS` key of ``spline``'s tets (``"type6"`` for super-quadratic and
+    cubic-c1, ``"truncated-octahedra"`` for to-quadratic)."""
+    return "truncated-octahedra" if isinstance(spline, TOQuadraticSpline) else "type6"
+
+
 @dataclass(frozen=True)
 class RelevantTets:
     """The relevant tetrahedra of one isosurface of a type-6 spline.

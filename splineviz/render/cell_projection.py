@@ -13,10 +13,14 @@ every other prop of the scene.
 
 Per-tet data travel as vertex attributes, not textures: float textures reached shaders
 quantised to 8 bits on Mesa/llvmpipe (ENVIRONMENT.md), vertex attributes keep float32. Each
-vertex carries its barycentric coordinates (``lam``, interpolated), the tet's barycentric
-gradients in world units (``gradx/y/z``: the columns of ``M_T`` scaled by the spacing) and the
-B-coefficients (``coef0..``, flat). Only the outward faces facing the eye are drawn (back-face
-culling): a ray enters a convex tet through exactly one front face.
+vertex carries its corner (``corner`` = 4 * generic tet + vertex slot: the vertex shader
+makes the vertex's barycentric coordinates from it, and looks the tet's barycentric
+gradients in world units up in a uniform table of the partition's generic tets, the columns
+of ``M_T`` scaled by the spacing) and the B-coefficients (``coef0..``, flat). What is the
+same for every tet of an orientation is stored once (as the thesis' instancing does): 24 of
+39 floats per vertex of a cubic patch, the memory that bounds the largest surfaces drawn.
+Only the outward faces facing the eye are drawn (back-face culling): a ray enters a convex
+tet through exactly one front face.
 
 Deviation from the thesis: one draw of all relevant tets with their geometry per tet, not
 one instanced draw per generic orientation (Fig. 6.6); VTK's poly data mapper has no
@@ -41,7 +45,7 @@ from splineviz.core import bform
 from splineviz.core.camera import Camera, parse_size
 from splineviz.core.material import BACK_COLOR, DEFAULT_MATERIAL, FRONT_COLOR, MATERIALS, Material
 from splineviz.core.raycast_reference import BACKGROUND, ClipPlaneError, normalize_clip_planes
-from splineviz.core.relevant_tets import PARTITIONS, RelevantTets, relevant_tets
+from splineviz.core.relevant_tets import PARTITIONS, RelevantTets, partition_of, relevant_tets
 
 _HERE = Path(__file__).parent
 
@@ -75,11 +79,14 @@ def _blossom_glsl(degree: int) -> str:
 
 
 @cache
-def shader_sources(degree: int) -> tuple[str, str]:
-    """(vertex, fragment) GLSL of the cell projection for B-forms of ``degree`` (2 or 3)."""
+def shader_sources(degree: int, partition: str = "type6") -> tuple[str, str]:
+    """(vertex, fragment) GLSL of the cell projection for B-forms of ``degree`` (2 or 3) on
+    ``partition`` (a :data:`~splineviz.core.relevant_tets.PARTITIONS` key)."""
     nv = _vec4_count(degree)
     ncoef = bform.n_coefficients(degree)
     vert = (_HERE / "cell_projection.vert.glsl").read_text()
+    vert = vert.replace("//VTK::System::Dec", "//VTK::System::Dec\n#define NGENERIC "
+                        f"{len(PARTITIONS[partition][0]())}")
     frag = (_HERE / "cell_projection.frag.glsl").read_text()
     vert = vert.replace("//CELLPROJ::CoefIn", "\n".join(f"in vec4 coef{i};" for i in range(nv)))
     vert = vert.replace("//CELLPROJ::CoefOut",
@@ -131,9 +138,9 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
 
     Returns
     -------
-    vtkPolyData with 4 N points (world coordinates), 4 N triangles and float32 point arrays
-    ``lam`` (4), ``gradx``, ``grady``, ``gradz`` (4 each) and ``coef0..`` (4 each: the
-    coefficients of ``p - isovalue``, zero-padded to whole vec4s).
+    vtkPolyData with 4 N points (world coordinates), 4 N triangles (32-bit ids) and float32
+    point arrays ``corner`` (1: 4 * generic tet + vertex slot, see :func:`tet_gradients`) and
+    ``coef0..`` (4 each: the coefficients of ``p - isovalue``, zero-padded to whole vec4s).
     """
     n = len(tets)
     spacing = np.asarray(spacing, dtype=np.float64)
@@ -145,10 +152,11 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
     tri = (_outward_faces(tets.partition)[tets.tet]
            + 4 * np.arange(n)[:, None, None]).reshape(-1, 3)
     cells = vtk.vtkCellArray()
-    cells.SetData(numpy_support.numpy_to_vtk(np.arange(0, 3 * len(tri) + 1, 3), deep=True,
-                                             array_type=vtk.VTK_ID_TYPE),
-                  numpy_support.numpy_to_vtk(tri.ravel(), deep=True,
-                                             array_type=vtk.VTK_ID_TYPE))
+    # 32-bit ids while they fit: half the memory of VTK's 64-bit ones
+    ids = np.int32 if 4 * n < 2**31 else np.int64
+    cells.SetData(numpy_support.numpy_to_vtk(np.arange(0, 3 * len(tri) + 1, 3, dtype=ids),
+                                             deep=True),
+                  numpy_support.numpy_to_vtk(tri.ravel().astype(ids), deep=True))
     poly.SetPolys(cells)
 
     def add(name, per_vertex):
@@ -157,17 +165,21 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
         arr.SetName(name)
         poly.GetPointData().AddArray(arr)
 
-    add("lam", np.broadcast_to(np.eye(4), (n, 4, 4)))
-    # d lam_m / d x_world = M[m, a] / spacing[a], the same at the tet's four vertices
-    grads = tets.barycentric_matrices()[tets.tet, :, :3] / spacing  # (N, 4 lam, 3 axes)
-    for a, name in enumerate(("gradx", "grady", "gradz")):
-        add(name, np.broadcast_to(grads[:, None, :, a], (n, 4, 4)))
+    add("corner", 4 * tets.tet[:, None] + np.arange(4))
     nv = _vec4_count(tets.degree)
     coef = np.zeros((n, 4 * nv))
     coef[:, :tets.coeffs.shape[1]] = tets.coeffs - float(isovalue)
     for i in range(nv):
         add(f"coef{i}", np.broadcast_to(coef[:, None, 4 * i:4 * i + 4], (n, 4, 4)))
     return poly
+
+
+def tet_gradients(partition: str, spacing) -> np.ndarray:
+    """The vertex shader's table ``tetGrad``: (T * 12,) float32, per generic tet ``t`` of
+    ``partition`` the world gradients of its barycentric coordinates, d lam_m / dx (m = 0..3),
+    then / dy, then / dz (``M[m, a] / spacing[a]``, the same all over the tet)."""
+    grads = PARTITIONS[partition][1]()[:, :, :3] / np.asarray(spacing, np.float64)
+    return np.ascontiguousarray(grads.transpose(0, 2, 1), dtype=np.float32).ravel()
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,13 +266,15 @@ class CellProjectionLayer:
         # the shader's alpha blends it over what is drawn before it
         actor.ForceOpaqueOn()
         actor.SetPickable(False)
-        vert, frag = shader_sources(spline.degree)
+        partition = partition_of(spline)
+        vert, frag = shader_sources(spline.degree, partition)
         sp = actor.GetShaderProperty()
         sp.SetVertexShaderCode(vert)
         sp.SetFragmentShaderCode(frag)
+        table = tet_gradients(partition, spline.volume.spacing)
+        sp.GetVertexCustomUniforms().SetUniform1fv("tetGrad", len(table), table.tolist())
         assoc = vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS
-        names = ["lam", "gradx", "grady", "gradz"]
-        names += [f"coef{i}" for i in range(_vec4_count(spline.degree))]
+        names = ["corner"] + [f"coef{i}" for i in range(_vec4_count(spline.degree))]
         for name in names:
             mapper.MapDataArrayToVertexAttribute(name, name, assoc, -1)
         return actor, mapper, sp.GetFragmentCustomUniforms()

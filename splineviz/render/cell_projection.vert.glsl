@@ -1,15 +1,15 @@
 //VTK::System::Dec
-// Cell projection of relevant tetrahedra (thesis §6.1.2): per vertex, the world position and
-// barycentric coordinates (interpolated), the tet's B-coefficients and barycentric gradients
-// (flat: constant over the tet), and the eye.
+// Cell projection of relevant tetrahedra (thesis §6.1.2): per vertex, the world position,
+// the corner (4 * generic tet + vertex slot, which gives the barycentric coordinates of the
+// vertex, interpolated, and the generic tet's barycentric gradients, flat, from a table) and
+// the tet's B-coefficients (flat: constant over the tet), and the eye.
 in vec4 vertexMC;
-in vec4 lam;
-in vec4 gradx;
-in vec4 grady;
-in vec4 gradz;
+in float corner;
 //CELLPROJ::CoefIn
 uniform mat4 MCDCMatrix;
 uniform mat4 MCVCMatrix;
+// per generic tet t: d lam / dx (4), d lam / dy (4), d lam / dz (4) at tetGrad[12 t ..]
+uniform float tetGrad[12 * NGENERIC];
 out vec3 posVS;
 out vec4 clipVS;
 out vec4 lamVS;
@@ -24,10 +24,14 @@ void main()
   gl_Position = MCDCMatrix * vertexMC;
   clipVS = gl_Position;
   posVS = vertexMC.xyz;
-  lamVS = lam;
-  gradxVS = gradx;
-  gradyVS = grady;
-  gradzVS = gradz;
+  int c = int(corner + 0.5);
+  int t = c / 4;
+  int k = c - 4 * t;
+  lamVS = vec4(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0, k == 3 ? 1.0 : 0.0);
+  int g = 12 * t;
+  gradxVS = vec4(tetGrad[g], tetGrad[g + 1], tetGrad[g + 2], tetGrad[g + 3]);
+  gradyVS = vec4(tetGrad[g + 4], tetGrad[g + 5], tetGrad[g + 6], tetGrad[g + 7]);
+  gradzVS = vec4(tetGrad[g + 8], tetGrad[g + 9], tetGrad[g + 10], tetGrad[g + 11]);
   // the eye is the view origin; MCVCMatrix is rigid, so its inverse is exact to rounding
   // (inverting the projection instead lost ~1e-5 in depth)
   eyeVS = -(transpose(mat3(MCVCMatrix)) * MCVCMatrix[3].xyz);
