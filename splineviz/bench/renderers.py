@@ -20,20 +20,22 @@ import time
 
 import numpy as np
 
+from splineviz.bench.memory import peak_rss
 from splineviz.compute.raycast import RayCaster
 from splineviz.core.camera import Camera
 from splineviz.core.splines import build_spline
 from splineviz.core.volume import Volume
 
-#: volume sizes: 6e3 to 6.3e6 relevant tets (512: about 1.5 minutes and 14 GB peak RSS, most
-#: of it the 6.3e6 tets' vertex attributes; 10^7 tets, n ~ 640, would need about 22 GB)
-SIZES = (16, 32, 64, 128, 256, 512)
+#: volume sizes: 6e3 to 1.0e7 relevant tets (648^3: 1.0e7 tets, about 100 bytes a tet in
+#: the drawn geometry; the classification's float64 coefficients dominate the peak)
+SIZES = (16, 32, 64, 128, 256, 512, 648)
 
 
 def sphere_volume(n: int) -> tuple[Volume, float]:
-    """Distance to the centre sampled at n^3 points, and the isovalue n / 3."""
-    x = np.indices((n, n, n), dtype=np.float32) - (n - 1) / 2
-    return Volume(np.sqrt((x * x).sum(axis=0))), n / 3.0
+    """Distance to the centre sampled at n^3 points (float32), and the isovalue n / 3."""
+    x = np.arange(n, dtype=np.float32) - np.float32((n - 1) / 2)
+    x2 = x * x
+    return Volume(np.sqrt(x2[:, None, None] + x2[None, :, None] + x2[None, None, :])), n / 3.0
 
 
 def orbit(volume: Volume, k: int, frames: int) -> Camera:
@@ -64,7 +66,7 @@ def run_renderers_bench(sizes=SIZES, model: str = "cubic-c1", size=(512, 512),
     rows = []
     print(f"bench renderers: {model}, {size[0]}x{size[1]}, median of {repeats} frames")
     print(f"{'n':>5} {'tets':>10} {'classify s':>11} {'cell proj s':>12} "
-          f"{'ray cast s':>11} {'ratio':>7}")
+          f"{'ray cast s':>11} {'ratio':>7} {'peak GB':>8}")
     for n in sizes:
         vol, iso = sphere_volume(n)
         spline = build_spline(vol, model)
@@ -76,11 +78,13 @@ def run_renderers_bench(sizes=SIZES, model: str = "cubic-c1", size=(512, 512),
         rc = RayCaster(vol, model=model, device=device)
         rc.set_isovalue(iso)
         t_rc = _median_time(lambda cam, rc=rc: rc.render(cam, size), vol, repeats)
+        # the process's high-water mark: the sizes grow, so it is this size's
         row = {"n": n, "tets": len(layer.tets), "classify_s": classify,
-               "cell_projection_s": t_cp, "raycast_s": t_rc, "path": rc.stats.get("path")}
+               "cell_projection_s": t_cp, "raycast_s": t_rc, "path": rc.stats.get("path"),
+               "peak_rss": peak_rss()}
         rows.append(row)
         print(f"{n:>5} {row['tets']:>10} {classify:>11.3f} {t_cp:>12.3f} {t_rc:>11.3f} "
-              f"{t_rc / t_cp:>7.2f}")
+              f"{t_rc / t_cp:>7.2f} {row['peak_rss'] / 2**30:>8.2f}")
     faster = [r["n"] for r in rows if r["cell_projection_s"] < r["raycast_s"]]
     cross = next((r for r in rows if r["cell_projection_s"] >= r["raycast_s"]), None)
     if faster and cross is not None:

@@ -2,9 +2,9 @@
 super-quadratic, cubic-c1; truncated octahedra: to-quadratic) in VTK's OpenGL pipeline
 (thesis §6.1).
 
-The relevant tetrahedra (:mod:`splineviz.core.relevant_tets`) are drawn as triangles, each tet
-with its own four points; the rasteriser finds the pixels each tet covers and a fragment
-program intersects that pixel's ray with the tet's B-form patch
+The relevant tetrahedra (:mod:`splineviz.core.relevant_tets`) are drawn as one point each, from
+which a geometry program emits the tet's four faces; the rasteriser finds the pixels each tet
+covers and a fragment program intersects that pixel's ray with the tet's B-form patch
 (``cell_projection.frag.glsl``): the ray is cut to the tet and the data box, the patch
 restricted to the segment is a univariate Bernstein polynomial whose coefficients are
 blossoms of the segment's ends, its first root is found, the hit is shaded (headlight Phong,
@@ -12,19 +12,20 @@ as the ray casters) and ``gl_FragDepth`` is written, so the surface composites e
 every other prop of the scene.
 
 Per-tet data travel as vertex attributes, not textures: float textures reached shaders
-quantised to 8 bits on Mesa/llvmpipe (ENVIRONMENT.md), vertex attributes keep float32. Each
-vertex carries its corner (``corner`` = 4 * generic tet + vertex slot: the vertex shader
-makes the vertex's barycentric coordinates from it, and looks the tet's barycentric
-gradients in world units up in a uniform table of the partition's generic tets, the columns
-of ``M_T`` scaled by the spacing) and the B-coefficients (``coef0..``, flat). What is the
-same for every tet of an orientation is stored once (as the thesis' instancing does): 24 of
-39 floats per vertex of a cubic patch, the memory that bounds the largest surfaces drawn.
-Only the outward faces facing the eye are drawn (back-face culling): a ray enters a convex
-tet through exactly one front face.
+quantised to 8 bits on Mesa/llvmpipe (ENVIRONMENT.md), vertex attributes keep float32. The
+point of a tet is its cell's centre and carries its generic tet (``tet``) and B-coefficients
+(``coef0..``); what is the same for every tet of an orientation is stored once, in uniform
+tables of the partition's generic tets (:func:`generic_tables`: vertices, outward faces and
+the barycentric gradients in world units, the columns of ``M_T`` scaled by the spacing), as
+the thesis' instancing by orientation (Fig. 6.6) stores the geometry once. A cubic tet takes
+24 floats, where four points of its own with their barycentric coordinates and gradients
+took 156 (the memory that bounds the largest surfaces drawn). Only the outward faces facing
+the eye are drawn (back-face culling): a ray enters a convex tet through exactly one front
+face.
 
-Deviation from the thesis: one draw of all relevant tets with their geometry per tet, not
-one instanced draw per generic orientation (Fig. 6.6); VTK's poly data mapper has no
-instancing hook. The fragment work is the thesis'.
+Deviation from the thesis: one draw of all relevant tets whose faces a geometry program
+emits, not one instanced draw per generic orientation (Fig. 6.6); VTK's poly data mapper has
+no instancing hook. The fragment work is the thesis'.
 
 Conventions: world coordinates ``origin + index * spacing``; the depth is OpenGL window depth
 of VTK's projection, as :meth:`splineviz.core.camera.Camera.window_depth` for the same
@@ -79,20 +80,27 @@ def _blossom_glsl(degree: int) -> str:
 
 
 @cache
-def shader_sources(degree: int, partition: str = "type6") -> tuple[str, str]:
-    """(vertex, fragment) GLSL of the cell projection for B-forms of ``degree`` (2 or 3) on
-    ``partition`` (a :data:`~splineviz.core.relevant_tets.PARTITIONS` key)."""
+def shader_sources(degree: int, partition: str = "type6") -> tuple[str, str, str]:
+    """(vertex, geometry, fragment) GLSL of the cell projection for B-forms of ``degree``
+    (2 or 3) on ``partition`` (a :data:`~splineviz.core.relevant_tets.PARTITIONS` key)."""
     nv = _vec4_count(degree)
     ncoef = bform.n_coefficients(degree)
     vert = (_HERE / "cell_projection.vert.glsl").read_text()
-    vert = vert.replace("//VTK::System::Dec", "//VTK::System::Dec\n#define NGENERIC "
-                        f"{len(PARTITIONS[partition][0]())}")
-    frag = (_HERE / "cell_projection.frag.glsl").read_text()
     vert = vert.replace("//CELLPROJ::CoefIn", "\n".join(f"in vec4 coef{i};" for i in range(nv)))
     vert = vert.replace("//CELLPROJ::CoefOut",
-                        "\n".join(f"flat out vec4 coefVS{i};" for i in range(nv)))
+                        "\n".join(f"flat out vec4 coefGS{i};" for i in range(nv)))
     vert = vert.replace("//CELLPROJ::CoefCopy",
-                        "\n".join(f"  coefVS{i} = coef{i};" for i in range(nv)))
+                        "\n".join(f"  coefGS{i} = coef{i};" for i in range(nv)))
+    geom = (_HERE / "cell_projection.geom.glsl").read_text()
+    geom = geom.replace("//VTK::System::Dec", "//VTK::System::Dec\n#define NGENERIC "
+                        f"{len(PARTITIONS[partition][0]())}")
+    geom = geom.replace("//CELLPROJ::CoefGSIn",
+                        "\n".join(f"flat in vec4 coefGS{i}[];" for i in range(nv)))
+    geom = geom.replace("//CELLPROJ::CoefOut",
+                        "\n".join(f"flat out vec4 coefVS{i};" for i in range(nv)))
+    geom = geom.replace("//CELLPROJ::CoefCopy",
+                        "\n".join(f"      coefVS{i} = coefGS{i}[0];" for i in range(nv)))
+    frag = (_HERE / "cell_projection.frag.glsl").read_text()
     frag = frag.replace("//VTK::System::Dec",
                         f"//VTK::System::Dec\n#extension GL_ARB_sample_shading : enable\n"
                         f"#define DEGREE {degree}\n#define NCOEF {ncoef}")
@@ -105,7 +113,7 @@ def shader_sources(degree: int, partition: str = "type6") -> tuple[str, str]:
     for k in range(degree + 1):
         seg.append(f"  b[{k}] = blossom(c, {', '.join(['p0'] * (degree - k) + ['p1'] * k)});")
     frag = frag.replace("//CELLPROJ::Segment", "\n".join(seg))
-    return vert, frag
+    return vert, geom, frag
 
 
 @cache
@@ -126,7 +134,7 @@ def _outward_faces(partition: str) -> np.ndarray:
 
 
 def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.vtkPolyData:
-    """The relevant tets as triangles with the per-vertex attributes of the shaders.
+    """The relevant tets as points with the attributes of the shaders.
 
     Parameters
     ----------
@@ -138,48 +146,54 @@ def tets_polydata(tets: RelevantTets, origin, spacing, isovalue: float) -> vtk.v
 
     Returns
     -------
-    vtkPolyData with 4 N points (world coordinates), 4 N triangles (32-bit ids) and float32
-    point arrays ``corner`` (1: 4 * generic tet + vertex slot, see :func:`tet_gradients`) and
-    ``coef0..`` (4 each: the coefficients of ``p - isovalue``, zero-padded to whole vec4s).
+    vtkPolyData with N points (the world centres of the tets' cells), N vertex cells (32-bit
+    ids) and float32 point arrays ``tet`` (1: the generic tet, see :func:`generic_tables`)
+    and ``coef0..`` (4 each: the coefficients of ``p - isovalue``, zero-padded to whole
+    vec4s).
     """
     n = len(tets)
-    spacing = np.asarray(spacing, dtype=np.float64)
-    pts = tets.vertices() * spacing + np.asarray(origin, dtype=np.float64)  # (N, 4, 3)
+    centres = np.asarray(tets.cube, np.float64) * np.asarray(spacing, np.float64) \
+        + np.asarray(origin, np.float64)
     poly = vtk.vtkPolyData()
     vpts = vtk.vtkPoints()
-    vpts.SetData(numpy_support.numpy_to_vtk(pts.reshape(-1, 3).astype(np.float32), deep=True))
+    vpts.SetData(numpy_support.numpy_to_vtk(centres.astype(np.float32), deep=True))
     poly.SetPoints(vpts)
-    tri = (_outward_faces(tets.partition)[tets.tet]
-           + 4 * np.arange(n)[:, None, None]).reshape(-1, 3)
     cells = vtk.vtkCellArray()
     # 32-bit ids while they fit: half the memory of VTK's 64-bit ones
-    ids = np.int32 if 4 * n < 2**31 else np.int64
-    cells.SetData(numpy_support.numpy_to_vtk(np.arange(0, 3 * len(tri) + 1, 3, dtype=ids),
-                                             deep=True),
-                  numpy_support.numpy_to_vtk(tri.ravel().astype(ids), deep=True))
-    poly.SetPolys(cells)
+    ids = np.int32 if n < 2**31 else np.int64
+    cells.SetData(numpy_support.numpy_to_vtk(np.arange(n + 1, dtype=ids), deep=True),
+                  numpy_support.numpy_to_vtk(np.arange(n, dtype=ids), deep=True))
+    poly.SetVerts(cells)
 
-    def add(name, per_vertex):
-        arr = numpy_support.numpy_to_vtk(
-            np.ascontiguousarray(per_vertex.reshape(4 * n, -1), dtype=np.float32), deep=True)
+    def add(name, values):
+        arr = numpy_support.numpy_to_vtk(np.ascontiguousarray(values, dtype=np.float32),
+                                         deep=True)
         arr.SetName(name)
         poly.GetPointData().AddArray(arr)
 
-    add("corner", 4 * tets.tet[:, None] + np.arange(4))
+    add("tet", tets.tet)
     nv = _vec4_count(tets.degree)
-    coef = np.zeros((n, 4 * nv))
+    coef = np.zeros((n, 4 * nv), np.float32)
     coef[:, :tets.coeffs.shape[1]] = tets.coeffs - float(isovalue)
     for i in range(nv):
-        add(f"coef{i}", np.broadcast_to(coef[:, None, 4 * i:4 * i + 4], (n, 4, 4)))
+        add(f"coef{i}", coef[:, 4 * i:4 * i + 4])
     return poly
 
 
-def tet_gradients(partition: str, spacing) -> np.ndarray:
-    """The vertex shader's table ``tetGrad``: (T * 12,) float32, per generic tet ``t`` of
-    ``partition`` the world gradients of its barycentric coordinates, d lam_m / dx (m = 0..3),
-    then / dy, then / dz (``M[m, a] / spacing[a]``, the same all over the tet)."""
-    grads = PARTITIONS[partition][1]()[:, :, :3] / np.asarray(spacing, np.float64)
-    return np.ascontiguousarray(grads.transpose(0, 2, 1), dtype=np.float32).ravel()
+def generic_tables(partition: str, spacing) -> dict[str, np.ndarray]:
+    """The geometry shader's tables of the generic tets of ``partition``, each (T * 12,):
+
+    * ``tetGrad`` float32: per generic tet ``t`` the world gradients of its barycentric
+      coordinates, d lam_m / dx (m = 0..3), then / dy, then / dz (``M[m, a] / spacing[a]``);
+    * ``tetVert`` float32: its vertices 0..3 relative to the cell centre, world units;
+    * ``tetFace`` int32: the vertex slots of its four faces, outward counter-clockwise.
+    """
+    spacing = np.asarray(spacing, np.float64)
+    grads = PARTITIONS[partition][1]()[:, :, :3] / spacing
+    verts = PARTITIONS[partition][0]() * spacing
+    return {"tetGrad": np.ascontiguousarray(grads.transpose(0, 2, 1), np.float32).ravel(),
+            "tetVert": np.ascontiguousarray(verts, np.float32).ravel(),
+            "tetFace": np.ascontiguousarray(_outward_faces(partition), np.int32).ravel()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -267,14 +281,19 @@ class CellProjectionLayer:
         actor.ForceOpaqueOn()
         actor.SetPickable(False)
         partition = partition_of(spline)
-        vert, frag = shader_sources(spline.degree, partition)
+        vert, geom, frag = shader_sources(spline.degree, partition)
         sp = actor.GetShaderProperty()
         sp.SetVertexShaderCode(vert)
+        sp.SetGeometryShaderCode(geom)
         sp.SetFragmentShaderCode(frag)
-        table = tet_gradients(partition, spline.volume.spacing)
-        sp.GetVertexCustomUniforms().SetUniform1fv("tetGrad", len(table), table.tolist())
+        uniforms = sp.GetGeometryCustomUniforms()
+        for name, table in generic_tables(partition, spline.volume.spacing).items():
+            if table.dtype == np.int32:
+                uniforms.SetUniform1iv(name, len(table), table.tolist())
+            else:
+                uniforms.SetUniform1fv(name, len(table), table.tolist())
         assoc = vtk.vtkDataObject.FIELD_ASSOCIATION_POINTS
-        names = ["corner"] + [f"coef{i}" for i in range(_vec4_count(spline.degree))]
+        names = ["tet"] + [f"coef{i}" for i in range(_vec4_count(spline.degree))]
         for name in names:
             mapper.MapDataArrayToVertexAttribute(name, name, assoc, -1)
         return actor, mapper, sp.GetFragmentCustomUniforms()
