@@ -41,9 +41,7 @@ class _Drawer:
     thread only)."""
 
     def __init__(self):
-        egl = getattr(vtk, "vtkEGLRenderWindow", None)
-        self.window = egl() if egl is not None else vtk.vtkRenderWindow()
-        self.window.SetOffScreenRendering(True)
+        self.window = _offscreen_window()
         self.window.SetMultiSamples(0)
         self.renderer = vtk.vtkRenderer()
         self.window.AddRenderer(self.renderer)
@@ -82,6 +80,20 @@ class _Drawer:
         self.window.GetZbufferData(0, 0, w - 1, h - 1, zbuf)
         depth = numpy_support.vtk_to_numpy(zbuf).reshape(h, w)[::-1].astype(np.float32)
         return packed, depth
+
+
+def _offscreen_window():
+    """An EGL off-screen window where VTK has EGL and it works here, else VTK's default."""
+    egl = getattr(vtk, "vtkEGLRenderWindow", None)
+    if egl is not None:
+        window = egl()
+        window.SetOffScreenRendering(True)
+        if window.SupportsOpenGL():
+            return window
+        window.Finalize()
+    window = vtk.vtkRenderWindow()
+    window.SetOffScreenRendering(True)
+    return window
 
 
 _DRAWER: list = []  # the drawing thread's _Drawer, made there on first use
