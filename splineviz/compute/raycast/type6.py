@@ -3,18 +3,20 @@ centred at the samples.
 
 Cube bounds come from the 27-point stencil (every coefficient is an affine combination of it,
 widened by the negative weight mass). A cube's tet code comes from its determining set and
-the averaging rules (§5.1-5.2). The ray part inside each relevant tet comes from the tet's
-four barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
-model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
-root by the monotone-piece cubic solver, the gradient from the last de Casteljau step.
-Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
-the neighbour table (same result, no special cases at cube faces).
+the averaging rules (§5.1-5.2), written out as straight-line code
+(:mod:`~splineviz.compute.raycast.type6_program`). The ray part inside each relevant tet
+comes from the tet's four barycentric plane equations (§6.2.2), its coefficients from the
+stencil with the core model's masks, the Bernstein coefficients of the segment from blossoms
+(§6.1.2), the first root by the monotone-piece cubic solver, the gradient from the last de
+Casteljau step. Deviation from Listing 6.2: tets of a cube are clipped independently instead
+of walked via the neighbour table (same result, no special cases at cube faces).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from splineviz.compute.raycast import type6_program
 from splineviz.compute.raycast.family import (
     SKIP_ACTIVE,
     TET_SLACK,
@@ -52,7 +54,6 @@ class Type6Family(KernelFamily):
         q = rc._device.queue
         scheme = rc.spline.scheme
         self.degree = scheme.degree
-        self.npoints = len(scheme.cube_points)
         rc._data = padded_device_samples(rc._device, rc.volume.data, self.ghost_layers,
                                          rc._sample_type[0])
         _, py, pz = rc._data.shape
@@ -62,13 +63,8 @@ class Type6Family(KernelFamily):
         # dense tet masks (24, 27, NCHUNK * 8): per tet and stencil value, its weights in the
         # tet's coefficients (whole float8s of the kernel)
         self._tet_dense = cla.to_device(q, padded_rows(scheme.tet_masks.transpose(0, 2, 1), 8))
-        program, order = cube_program(scheme)
-        self._cube_program = [cla.to_device(q, a) for a in program]
-        # per program row (cube point), the bit set of the tets whose B-net holds it
-        point_tets = np.zeros(len(scheme.cube_points), np.uint32)
-        for t, points in enumerate(scheme.tet_points):
-            point_tets[points] |= np.uint32(1 << t)
-        self._point_tets = cla.to_device(q, point_tets[order])
+        # the tet code: the cube program written out (type6_program), tet masks as literals
+        self.prelude = type6_program.code_source(rc.spline.scheme_name)
         self._bary = cla.to_device(
             q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
         red = [reduction_table(k) for k in range(scheme.degree, 0, -1)]
@@ -76,7 +72,7 @@ class Type6Family(KernelFamily):
         # largest negative weight mass of any coefficient (bounds of stencil_bounds)
         rc._negmass = float(np.max(np.sum(np.clip(-scheme.cube_masks, 0, None), axis=1)))
         return {"MODEL_TYPE6": 1, "NCOEF": bform.n_coefficients(scheme.degree),
-                "NPOINTS": len(scheme.cube_points), "SKIP_ACTIVE": SKIP_ACTIVE}
+                "SKIP_ACTIVE": SKIP_ACTIVE}
 
     def upload_samples(self, rc) -> None:
         """The new samples only: the tables come from the model, the stencil offsets from
@@ -89,12 +85,10 @@ class Type6Family(KernelFamily):
         return sample_blocks(rc)
 
     def defines(self, rc) -> dict:
-        return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK, "NPOINTS": self.npoints}
+        return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK}
 
     def ray_args(self, rc) -> list:
-        return [self._stencil.data, self._tet_dense.data,
-                *(a.data for a in self._cube_program), self._point_tets.data,
-                self._bary.data, self._red.data]
+        return [self._stencil.data, self._tet_dense.data, self._bary.data, self._red.data]
 
     def classify(self, rc, listed, cells: np.ndarray, iso: np.float32):
         """Tet codes of every candidate cube, written into the cache too (the next frames use
@@ -118,8 +112,7 @@ class Type6Family(KernelFamily):
             rc._ray_kernel("tet_codes")(
                 q, (n,), None, rc._data.data, np.int32(rc._strides[0]),
                 np.int32(rc._strides[1]), np.int32(ny), np.int32(nz), listed.data,
-                self._stencil.data, *(a.data for a in self._cube_program),
-                self._point_tets.data, np.float32(rc._negmass), iso,
+                self._stencil.data, np.float32(rc._negmass), iso,
                 *rc._cache_args()[:-1], code_buf.data, nrel.data)
             relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
         # the cache is complete: later frames count nothing new
