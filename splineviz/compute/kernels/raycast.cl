@@ -211,22 +211,6 @@ inline void decasteljau(const float *in, float *out, int n_out, __constant const
                  + lam.z * in[red[4 * a + 2]] + lam.w * in[red[4 * a + 3]];
 }
 
-// Blossom b(lam0^(DEGREE - j), lam1^j) of the coefficients c (thesis §3.4.3).
-inline float blossom_ij(const float *c, __constant const int *red, float4 lam0, float4 lam1,
-                        int j)
-{
-    float t1[10], t2[4], t3[1];
-#if DEGREE == 3
-    decasteljau(c, t1, 10, red, (j >= 3) ? lam1 : lam0);
-    decasteljau(t1, t2, 4, red + 40, (j >= 2) ? lam1 : lam0);
-    decasteljau(t2, t3, 1, red + 56, (j >= 1) ? lam1 : lam0);
-#else
-    decasteljau(c, t2, 4, red, (j >= 2) ? lam1 : lam0);
-    decasteljau(t2, t3, 1, red + 16, (j >= 1) ? lam1 : lam0);
-#endif
-    return t3[0];
-}
-
 // The DEGREE-1 fold de Casteljau at lam: the 4 linear coefficients whose combination with the
 // barycentric gradients gives the gradient (thesis §3.4.2).
 inline float4 linear_part(const float *c, __constant const int *red, float4 lam)
@@ -389,16 +373,15 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
                               float3 *grad, int want_hess, float *hess)
 {
     const float4 lam0 = l + lo * av, lam1 = l + hi * av;
+    // the blossoms b(lam0^(DEGREE - j), lam1^j) (thesis §3.4.3): segment_blossoms, generated
+    // by splineviz/compute/raycast/segment_program.py and prepended to this file
+    const float4 b = segment_blossoms(c, lam0, lam1);
     float4 k;
 #if DEGREE == 3
-    const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
-    const float b2 = blossom_ij(c, red, lam0, lam1, 2), b3 = blossom_ij(c, red, lam0, lam1, 3);
-    k = (float4)(b0, 3.0f * (b1 - b0), 3.0f * (b2 - 2.0f * b1 + b0),
-                 b3 - 3.0f * b2 + 3.0f * b1 - b0);
+    k = (float4)(b.x, 3.0f * (b.y - b.x), 3.0f * (b.z - 2.0f * b.y + b.x),
+                 b.w - 3.0f * b.z + 3.0f * b.y - b.x);
 #else
-    const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
-    const float b2 = blossom_ij(c, red, lam0, lam1, 2);
-    k = (float4)(b0, 2.0f * (b1 - b0), b2 - 2.0f * b1 + b0, 0.0f);
+    k = (float4)(b.x, 2.0f * (b.y - b.x), b.z - 2.0f * b.y + b.x, 0.0f);
 #endif
     const float u = first_cubic_root(k, 1.0f);
     if (u < 0.0f) return -1.0f;

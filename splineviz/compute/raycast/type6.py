@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from splineviz.compute.raycast import type6_program
+from splineviz.compute.raycast import segment_program, type6_program
 from splineviz.compute.raycast.family import (
     SKIP_ACTIVE,
     TET_SLACK,
@@ -63,8 +63,10 @@ class Type6Family(KernelFamily):
         # dense tet masks (24, 27, NCHUNK * 8): per tet and stencil value, its weights in the
         # tet's coefficients (whole float8s of the kernel)
         self._tet_dense = cla.to_device(q, padded_rows(scheme.tet_masks.transpose(0, 2, 1), 8))
-        # the tet code: the cube program written out (type6_program), tet masks as literals
-        self.prelude = type6_program.code_source(rc.spline.scheme_name)
+        # generated: the tet code (the cube program written out, tet masks as literals) and
+        # the blossoms of a ray segment in a tet
+        self.prelude = (type6_program.code_source(rc.spline.scheme_name)
+                        + segment_program.segment_source(scheme.degree))
         self._bary = cla.to_device(
             q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
         red = [reduction_table(k) for k in range(scheme.degree, 0, -1)]
