@@ -477,15 +477,35 @@ inline float type6_cube_root(__global const DATA_T *pdata, offset_t base,
         if (!tet_interval(r0, r1, r2, r3, p0, d, &lo, &hi, &l, &av)) continue;
         // the dense tet mask: each stencil value feeds the NCOEF coefficients' independent
         // sums, NCHUNK float8s at a time (sparse rows made one serial chain per coefficient)
-        float8 acc[NCHUNK];
-        for (int h = 0; h < NCHUNK; ++h) acc[h] = (float8)(0.0f);
+        // (three named float8s, not an array: the array's address, taken to read its floats,
+        // kept the sums in memory, one store and reload per multiply-add, two fifths of this
+        // function's time on PoCL; the same sums in the same order)
         __global const float8 *wt = tet_weights + t * 27 * NCHUNK;
-        for (int q = 0; q < 27; ++q)
-            for (int h = 0; h < NCHUNK; ++h) acc[h] += wt[q * NCHUNK + h] * vals[q];
-        const float *sums = (const float *)acc;
-        float c[NCOEF];
+        float8 a0 = (float8)(0.0f), a1 = (float8)(0.0f);
+#if NCHUNK == 3
+        float8 a2 = (float8)(0.0f);
+#endif
+        for (int q = 0; q < 27; ++q) {
+            const float v = vals[q];
+            a0 += wt[q * NCHUNK] * v;
+            a1 += wt[q * NCHUNK + 1] * v;
+#if NCHUNK == 3
+            a2 += wt[q * NCHUNK + 2] * v;
+#endif
+        }
         // the coefficients of p - iso (constants reproduce exactly)
-        for (int i = 0; i < NCOEF; ++i) c[i] = sums[i] - iso;
+        const float8 i8 = (float8)(iso);
+        a0 -= i8;
+        a1 -= i8;
+#if NCHUNK == 3
+        a2 -= i8;
+        const float c[NCOEF] = {a0.s0, a0.s1, a0.s2, a0.s3, a0.s4, a0.s5, a0.s6, a0.s7,
+                                a1.s0, a1.s1, a1.s2, a1.s3, a1.s4, a1.s5, a1.s6, a1.s7,
+                                a2.s0, a2.s1, a2.s2, a2.s3};
+#else
+        const float c[NCOEF] = {a0.s0, a0.s1, a0.s2, a0.s3, a0.s4, a0.s5, a0.s6, a0.s7,
+                                a1.s0, a1.s1};
+#endif
         float3 g;
         float h6[6];
         const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g,
