@@ -41,9 +41,11 @@ class Type6Family(KernelFamily):
         """Upload the padded samples and the constant tables of a type-6 model.
 
         All tables come from the core model (``rc.spline.scheme``), so the kernel computes
-        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), per cube point
-        the tets whose B-net holds it (from ``tet_points``, (24, n_d)), barycentric matrices
-        (24, 4, 4) and the de Casteljau reduction tables of :mod:`splineviz.core.bform`.
+        exactly the core spline: tet masks (24, n_d, 27), barycentric matrices (24, 4, 4) and
+        the de Casteljau reduction tables of :mod:`splineviz.core.bform`; the cube program and
+        per cube point the tets whose B-net holds it (from ``tet_points``, (24, n_d)) are
+        literals of the generated tet code (:mod:`.type6_program`), the reduction steps of a
+        ray segment's blossoms those of :mod:`.segment_program`.
         """
         import pyopencl.array as cla
 
