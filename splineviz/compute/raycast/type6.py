@@ -124,31 +124,3 @@ class Type6Family(KernelFamily):
             np.array([np.count_nonzero(relevant), relevant.sum()], np.int32), queue=q)
         return relevant, codes
 
-
-def cube_program(scheme):
-    """All cube coefficients of a type-6 scheme as one ordered sparse program (thesis §5.1-5.2).
-
-    Row r computes cube point ``order[r]``: the determining set first, from the 27 stencil
-    values (columns 0..26, weights of ``scheme.determining_masks``), then every other point by
-    its averaging rule in application order, from points of earlier rows (column 27 + row);
-    the same values as :func:`splineviz.core.splines.type6_rules.apply_rules`, with about
-    40 % of the multiply-adds of the full cube masks for cubic-c1 (840 instead of 2061).
-
-    Returns
-    -------
-    (row_ptr int32 (P+1,), cols int32, weights float32), order (P,) int
-    """
-    order = [int(p) for p in scheme.determining] + [int(t) for t, _, _ in scheme.rules]
-    if sorted(order) != list(range(len(scheme.cube_points))):
-        raise AssertionError("the rules do not give every cube point once")  # a bug
-    row = {p: r for r, p in enumerate(order)}
-    rows = [(np.flatnonzero(m), m[m != 0]) for m in scheme.determining_masks]
-    for target, src, w in scheme.rules:
-        if max(row[int(p)] for p in src) >= row[int(target)]:
-            raise AssertionError("a rule reads a point computed after it")  # a bug
-        rows.append((27 + np.array([row[int(p)] for p in src]), np.asarray(w, float)))
-    row_ptr = np.concatenate([[0], np.cumsum([len(c) for c, _ in rows])]).astype(np.int32)
-    cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
-    weights = np.concatenate([w for _, w in rows]).astype(np.float32)
-    return (row_ptr, cols, weights), np.array(order)
-

@@ -1,7 +1,7 @@
-"""OpenCL source of the type-6 tet code, generated from the cube program.
+"""The type-6 cube program and the OpenCL source of the tet code generated from it.
 
 Classifying a cube of a type-6 model (``"cubic-c1"``, ``"super-quadratic"``) computes its
-cube coefficients by the cube program (:func:`splineviz.compute.raycast.type6.cube_program`:
+cube coefficients by the cube program (:func:`cube_program`:
 the determining set from the 27 stencil values, every other coefficient by an averaging rule
 from earlier ones) and marks the tets whose B-coefficients straddle the isovalue. Read from
 tables, every multiply-add also loads a weight and a column, and the loop bounds come from
@@ -36,7 +36,6 @@ def code_source(scheme_name: str) -> str:
     ``iso``: bit t set when the B-coefficients of tet t hold a value <= ``iso`` and one >=
     ``iso`` (their range straddles it, thesis §6.1.1).
     """
-    from splineviz.compute.raycast.type6 import cube_program
     from splineviz.core.splines import type6_rules
 
     scheme = type6_rules.scheme(scheme_name)
@@ -60,3 +59,31 @@ def code_source(scheme_name: str) -> str:
                        f"if (p{r} >= iso) above |= {mask:#x}u;")
     out.append("    return below & above;\n}\n")
     return "\n".join(out)
+
+
+def cube_program(scheme):
+    """All cube coefficients of a type-6 scheme as one ordered sparse program (thesis §5.1-5.2).
+
+    Row r computes cube point ``order[r]``: the determining set first, from the 27 stencil
+    values (columns 0..26, weights of ``scheme.determining_masks``), then every other point by
+    its averaging rule in application order, from points of earlier rows (column 27 + row);
+    the same values as :func:`splineviz.core.splines.type6_rules.apply_rules`, with about
+    40 % of the multiply-adds of the full cube masks for cubic-c1 (840 instead of 2061).
+
+    Returns
+    -------
+    (row_ptr int32 (P+1,), cols int32, weights float32), order (P,) int
+    """
+    order = [int(p) for p in scheme.determining] + [int(t) for t, _, _ in scheme.rules]
+    if sorted(order) != list(range(len(scheme.cube_points))):
+        raise AssertionError("the rules do not give every cube point once")  # a bug
+    row = {p: r for r, p in enumerate(order)}
+    rows = [(np.flatnonzero(m), m[m != 0]) for m in scheme.determining_masks]
+    for target, src, w in scheme.rules:
+        if max(row[int(p)] for p in src) >= row[int(target)]:
+            raise AssertionError("a rule reads a point computed after it")  # a bug
+        rows.append((27 + np.array([row[int(p)] for p in src]), np.asarray(w, float)))
+    row_ptr = np.concatenate([[0], np.cumsum([len(c) for c, _ in rows])]).astype(np.int32)
+    cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
+    weights = np.concatenate([w for _, w in rows]).astype(np.float32)
+    return (row_ptr, cols, weights), np.array(order)
