@@ -113,7 +113,7 @@ def register(subparsers) -> None:
                         "renderers: sphere volume sizes n (16,32,64,128,256,512)")
     p.add_argument("--frames", type=int, default=4, help="movie: frames per size")
     p.add_argument("--models", default=None,
-                   help="isovalue: comma-separated spline models (default: all four)")
+                   help="isovalue, time: comma-separated spline models (default: all four)")
     p.add_argument("--repeats", type=int, default=3,
                    help="raycast: frames per measurement; gui: measurements per action")
     p.add_argument("--n", type=int, default=None,

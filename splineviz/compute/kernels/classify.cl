@@ -133,13 +133,16 @@ __kernel void brick_bounds(__global const DATA_T *data, int SY, int SZ, int CX, 
     // i the samples i..i+2): the blocks a and a + 1, the last one cut at the samples' end
     // (sample_blocks) hold exactly these, so their range, widened as in cell_bounds, is the
     // box's from 8 loads instead of 64
-    for (int i = a; i <= min(a + 1, BX - 1); ++i)
-        for (int j = b; j <= min(b + 1, BY - 1); ++j)
-            for (int k = c; k <= min(c + 1, BZ - 1); ++k) {
-                const DATA_T2 v = blocks[(i * BY + j) * BZ + k];
-                lo = min_acc(lo, (float)v.x);
-                hi = max_acc(hi, (float)v.y);
-            }
+    // (the second block per axis clamped to the last, as in sample_blocks)
+    const int i1 = min(a + 1, BX - 1), j1 = min(b + 1, BY - 1), k1 = min(c + 1, BZ - 1);
+    const int r00 = (a * BY + b) * BZ, r01 = (a * BY + j1) * BZ, r10 = (i1 * BY + b) * BZ,
+              r11 = (i1 * BY + j1) * BZ;
+    const DATA_T2 v[8] = {blocks[r00 + c], blocks[r00 + k1], blocks[r01 + c], blocks[r01 + k1],
+                          blocks[r10 + c], blocks[r10 + k1], blocks[r11 + c], blocks[r11 + k1]};
+    for (int m = 0; m < 8; ++m) {
+        lo = min_acc(lo, (float)v[m].x);
+        hi = max_acc(hi, (float)v[m].y);
+    }
     const float w = negmass * (hi - lo);
     lo -= w;
     hi += w;
@@ -176,14 +179,19 @@ __kernel void sample_blocks(__global const DATA_T *data, int PX, int PY, int PZ,
     const int r = get_global_id(0), q = get_global_id(1), p = get_global_id(2);
     const int BX = (PX + 1) / 2, BY = (PY + 1) / 2, BZ = (PZ + 1) / 2;
     if (p >= BX || q >= BY || r >= BZ) return;
-    float lo = INFINITY, hi = -INFINITY;
-    for (int i = 2 * p; i < min(2 * p + 2, PX); ++i)
-        for (int j = 2 * q; j < min(2 * q + 2, PY); ++j)
-            for (int k = 2 * r; k < min(2 * r + 2, PZ); ++k) {
-                const float v = data[((offset_t)i * PY + j) * PZ + k];
-                lo = min_acc(lo, v);
-                hi = max_acc(hi, v);
-            }
+    // the second sample per axis clamped to the last (a repeated sample changes no extreme):
+    // a loop without bounds that depend on the block, which PoCL runs several times faster
+    const int i1 = min(2 * p + 1, PX - 1), j1 = min(2 * q + 1, PY - 1),
+              k1 = min(2 * r + 1, PZ - 1);
+    const offset_t r00 = ((offset_t)(2 * p) * PY + 2 * q) * PZ, r01 = ((offset_t)(2 * p) * PY + j1) * PZ,
+                   r10 = ((offset_t)i1 * PY + 2 * q) * PZ, r11 = ((offset_t)i1 * PY + j1) * PZ;
+    const float v[8] = {data[r00 + 2 * r], data[r00 + k1], data[r01 + 2 * r], data[r01 + k1],
+                        data[r10 + 2 * r], data[r10 + k1], data[r11 + 2 * r], data[r11 + k1]};
+    float lo = v[0], hi = v[0];
+    for (int m = 1; m < 8; ++m) {
+        lo = min_acc(lo, v[m]);
+        hi = max_acc(hi, v[m]);
+    }
     // back in the samples' type, exactly: integer samples' extremes are integers (a block
     // holds one sample at least), float blocks of NaNs alone keep (inf, -inf)
     blocks[(p * BY + q) * BZ + r] = (DATA_T2)((DATA_T)lo, (DATA_T)hi);
@@ -196,17 +204,19 @@ __kernel void reduce_level(__global float2 *bounds,
 {
     const int c = get_global_id(0), b = get_global_id(1), a = get_global_id(2);
     if (a >= dx || b >= dy || c >= dz) return;
+    // the second child per axis clamped to the last (as in sample_blocks)
+    const int i1 = min(2 * a + 1, sx - 1), j1 = min(2 * b + 1, sy - 1),
+              k1 = min(2 * c + 1, sz - 1);
+    const int r00 = src_off + (2 * a * sy + 2 * b) * sz, r01 = src_off + (2 * a * sy + j1) * sz,
+              r10 = src_off + (i1 * sy + 2 * b) * sz, r11 = src_off + (i1 * sy + j1) * sz;
+    const float2 v[8] = {bounds[r00 + 2 * c], bounds[r00 + k1], bounds[r01 + 2 * c],
+                         bounds[r01 + k1], bounds[r10 + 2 * c], bounds[r10 + k1],
+                         bounds[r11 + 2 * c], bounds[r11 + k1]};
     float lo = INFINITY, hi = -INFINITY;
-    for (int da = 0; da < 2; ++da)
-        for (int db = 0; db < 2; ++db)
-            for (int dc = 0; dc < 2; ++dc) {
-                const int i = 2 * a + da, j = 2 * b + db, k = 2 * c + dc;
-                if (i < sx && j < sy && k < sz) {
-                    const float2 v = bounds[src_off + (i * sy + j) * sz + k];
-                    lo = min_acc(lo, v.x);
-                    hi = max_acc(hi, v.y);
-                }
-            }
+    for (int m = 0; m < 8; ++m) {
+        lo = min_acc(lo, v[m].x);
+        hi = max_acc(hi, v[m].y);
+    }
     bounds[dst_off + (a * dy + b) * dz + c] = (float2)(lo, hi);
 }
 

@@ -5,9 +5,9 @@
 //   NUNION, NWORDS       grid with per-parity-class (TO, tet) tables and per-cell bit sets of
 //                        the relevant pieces
 //   MODEL_TYPE6, DEGREE  type-6 splines (2: super-quadratic, 3: cubic C1): B-coefficients of
-//   NPOINTS              the relevant tets from the 27-point data stencil, blossoms of the
+//                        the relevant tets from the 27-point data stencil, blossoms of the
 //                        ray segment, first root in the tet (thesis §6.1.2, §6.2.2); tet
-//                        codes from the NPOINTS cube coefficients
+//                        codes from the cube coefficients (type6_points_code, prepended)
 //   AMBIENT, DIFFUSE, SPECULAR, SHININESS, FRONT_R.., BACK_R.., BG_R..   Phong headlight
 //   SKIP_ACTIVE          skip code of a candidate cell (skip_codes)
 //   MODEL_CUSTOM         a kernel family brought by a plugin (CustomKernelFamily): its source,
@@ -211,22 +211,6 @@ inline void decasteljau(const float *in, float *out, int n_out, __constant const
                  + lam.z * in[red[4 * a + 2]] + lam.w * in[red[4 * a + 3]];
 }
 
-// Blossom b(lam0^(DEGREE - j), lam1^j) of the coefficients c (thesis §3.4.3).
-inline float blossom_ij(const float *c, __constant const int *red, float4 lam0, float4 lam1,
-                        int j)
-{
-    float t1[10], t2[4], t3[1];
-#if DEGREE == 3
-    decasteljau(c, t1, 10, red, (j >= 3) ? lam1 : lam0);
-    decasteljau(t1, t2, 4, red + 40, (j >= 2) ? lam1 : lam0);
-    decasteljau(t2, t3, 1, red + 56, (j >= 1) ? lam1 : lam0);
-#else
-    decasteljau(c, t2, 4, red, (j >= 2) ? lam1 : lam0);
-    decasteljau(t2, t3, 1, red + 16, (j >= 1) ? lam1 : lam0);
-#endif
-    return t3[0];
-}
-
 // The DEGREE-1 fold de Casteljau at lam: the 4 linear coefficients whose combination with the
 // barycentric gradients gives the gradient (thesis §3.4.2).
 inline float4 linear_part(const float *c, __constant const int *red, float4 lam)
@@ -293,20 +277,22 @@ inline bool enter_cells(float3 we, float3 d, float3 inv_d, int3 lo, int3 hi, flo
 // node (2^3 cells) straddle iso (the cell is a candidate; its own bounds are not stored, the
 // cell's classification decides), else the highest level L whose octree node holding the cell
 // has bounds that exclude iso (an empty macro cube of 2^L cells). A node's bounds contain
-// those of its children, so the empty levels of a cell are 1..L: the walk goes up from level
-// 1 and stops at the first node that may hold the surface. levels[l - 1] is level l.
+// those of its children (reduce_level), so the levels whose node excludes iso are 1..L: the
+// walk goes down from the top and stops at the first node that excludes iso. Top down, not
+// bottom up: the upper levels are small and stay in the caches, while level 1 (8 bytes per
+// 2^3 cells, 17 MB at 256^3) is read only for the cells next to the surface; read first for
+// every step of every ray, its cache misses were two fifths of the ray kernel's own time.
+// levels[l - 1] is level l.
 inline int skip_level(__global const float2 *bounds, __constant const int4 *levels,
                       int n_levels, int3 cell, float iso)
 {
-    int L = -1;
-    for (int l = 1; l <= n_levels; ++l) {
+    for (int l = n_levels; l >= 1; --l) {
         const int4 lv = levels[l - 1];
         const float2 b = bounds[lv.x + (((cell.x >> l) * lv.z + (cell.y >> l)) * lv.w
                                         + (cell.z >> l))];
-        if (b.x <= iso && iso <= b.y) break;
-        L = l;
+        if (!(b.x <= iso && iso <= b.y)) return l;
     }
-    return L;
+    return -1;
 }
 
 // Skip codes of all CX x CY x CZ cells (SKIP_ACTIVE or the macro level), for inspection and
@@ -389,16 +375,15 @@ inline float tet_segment_root(const float *c, __constant const int *red, float4 
                               float3 *grad, int want_hess, float *hess)
 {
     const float4 lam0 = l + lo * av, lam1 = l + hi * av;
+    // the blossoms b(lam0^(DEGREE - j), lam1^j) (thesis §3.4.3): segment_blossoms, generated
+    // by splineviz/compute/raycast/segment_program.py and prepended to this file
+    const float4 b = segment_blossoms(c, lam0, lam1);
     float4 k;
 #if DEGREE == 3
-    const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
-    const float b2 = blossom_ij(c, red, lam0, lam1, 2), b3 = blossom_ij(c, red, lam0, lam1, 3);
-    k = (float4)(b0, 3.0f * (b1 - b0), 3.0f * (b2 - 2.0f * b1 + b0),
-                 b3 - 3.0f * b2 + 3.0f * b1 - b0);
+    k = (float4)(b.x, 3.0f * (b.y - b.x), 3.0f * (b.z - 2.0f * b.y + b.x),
+                 b.w - 3.0f * b.z + 3.0f * b.y - b.x);
 #else
-    const float b0 = blossom_ij(c, red, lam0, lam1, 0), b1 = blossom_ij(c, red, lam0, lam1, 1);
-    const float b2 = blossom_ij(c, red, lam0, lam1, 2);
-    k = (float4)(b0, 2.0f * (b1 - b0), b2 - 2.0f * b1 + b0, 0.0f);
+    k = (float4)(b.x, 2.0f * (b.y - b.x), b.z - 2.0f * b.y + b.x, 0.0f);
 #endif
     const float u = first_cubic_root(k, 1.0f);
     if (u < 0.0f) return -1.0f;
@@ -492,15 +477,35 @@ inline float type6_cube_root(__global const DATA_T *pdata, offset_t base,
         if (!tet_interval(r0, r1, r2, r3, p0, d, &lo, &hi, &l, &av)) continue;
         // the dense tet mask: each stencil value feeds the NCOEF coefficients' independent
         // sums, NCHUNK float8s at a time (sparse rows made one serial chain per coefficient)
-        float8 acc[NCHUNK];
-        for (int h = 0; h < NCHUNK; ++h) acc[h] = (float8)(0.0f);
+        // (three named float8s, not an array: the array's address, taken to read its floats,
+        // kept the sums in memory, one store and reload per multiply-add, two fifths of this
+        // function's time on PoCL; the same sums in the same order)
         __global const float8 *wt = tet_weights + t * 27 * NCHUNK;
-        for (int q = 0; q < 27; ++q)
-            for (int h = 0; h < NCHUNK; ++h) acc[h] += wt[q * NCHUNK + h] * vals[q];
-        const float *sums = (const float *)acc;
-        float c[NCOEF];
+        float8 a0 = (float8)(0.0f), a1 = (float8)(0.0f);
+#if NCHUNK == 3
+        float8 a2 = (float8)(0.0f);
+#endif
+        for (int q = 0; q < 27; ++q) {
+            const float v = vals[q];
+            a0 += wt[q * NCHUNK] * v;
+            a1 += wt[q * NCHUNK + 1] * v;
+#if NCHUNK == 3
+            a2 += wt[q * NCHUNK + 2] * v;
+#endif
+        }
         // the coefficients of p - iso (constants reproduce exactly)
-        for (int i = 0; i < NCOEF; ++i) c[i] = sums[i] - iso;
+        const float8 i8 = (float8)(iso);
+        a0 -= i8;
+        a1 -= i8;
+#if NCHUNK == 3
+        a2 -= i8;
+        const float c[NCOEF] = {a0.s0, a0.s1, a0.s2, a0.s3, a0.s4, a0.s5, a0.s6, a0.s7,
+                                a1.s0, a1.s1, a1.s2, a1.s3, a1.s4, a1.s5, a1.s6, a1.s7,
+                                a2.s0, a2.s1, a2.s2, a2.s3};
+#else
+        const float c[NCOEF] = {a0.s0, a0.s1, a0.s2, a0.s3, a0.s4, a0.s5, a0.s6, a0.s7,
+                                a1.s0, a1.s1};
+#endif
         float3 g;
         float h6[6];
         const float sh = tet_segment_root(c, red, r0, r1, r2, r3, l, av, lo, hi, &g,
@@ -521,15 +526,13 @@ inline float type6_cube_root(__global const DATA_T *pdata, offset_t base,
 // most cubes the rays reach end there. Then all cube coefficients by the cube program: the
 // determining set from the 27 stencil values, every other coefficient by the smoothness
 // (averaging) rules from already computed ones (thesis §5.1-5.2, eq. (5.2);
-// type6_rules.apply_rules is the NumPy reference). Row r of the program (CSR over the
-// stencil values, then the coefficients of rows before r at 27 + row) is the r-th point.
+// type6_rules.apply_rules is the NumPy reference), written out as straight-line code with
+// the tet masks as literals (type6_points_code, generated by
+// splineviz/compute/raycast/type6_program.py and prepended to this file).
 inline uint type6_tet_code(__global const DATA_T *pdata, offset_t base,
-                           __constant const int *stencil, __global const int *prog_ptr,
-                           __global const int *prog_cols,
-                           __global const float *prog_w, __constant const uint *point_tets,
-                           float negmass, float iso)
+                           __constant const int *stencil, float negmass, float iso)
 {
-    float vals[27 + NPOINTS];
+    float vals[27];
     float vlo = INFINITY, vhi = -INFINITY;
     for (int q = 0; q < 27; ++q) {
         vals[q] = pdata[base + stencil[q]];
@@ -538,19 +541,7 @@ inline uint type6_tet_code(__global const DATA_T *pdata, offset_t base,
     }
     const float w = negmass * (vhi - vlo);
     if (!(vlo - w <= iso && iso <= vhi + w)) return 0u;
-    // min <= iso <= max over a tet's coefficients iff one is <= iso and one is >= iso: each
-    // cube point marks the tets whose B-net holds it (point_tets) in two masks
-    uint below = 0u, above = 0u;
-    // the program lives in global memory (cached) so that constant memory stays small on
-    // GPUs (64 KB, 8-9 args)
-    for (int r = 0; r < NPOINTS; ++r) {
-        float acc = 0.0f;
-        for (int e = prog_ptr[r]; e < prog_ptr[r + 1]; ++e) acc += prog_w[e] * vals[prog_cols[e]];
-        vals[27 + r] = acc;
-        below |= acc <= iso ? point_tets[r] : 0u;
-        above |= acc >= iso ? point_tets[r] : 0u;
-    }
-    return below & above;
+    return type6_points_code(vals, iso);
 }
 
 // The tet code of `cube` at this epoch: from the brick cache, or computed and stored. The
@@ -559,9 +550,7 @@ inline uint type6_tet_code(__global const DATA_T *pdata, offset_t base,
 inline uint type6_cached_code(__global uint *slots, __global uint *pool, int pool_cap,
                               uint epoch, int3 cube, int BY, int BZ,
                               __global const DATA_T *pdata, offset_t base,
-                              __constant const int *stencil, __global const int *prog_ptr,
-                              __global const int *prog_cols, __global const float *prog_w,
-                              __constant const uint *point_tets, float negmass, float iso,
+                              __constant const int *stencil, float negmass, float iso,
                               __global int *counts)
 {
     const int a = brick_entry(slots, pool, pool_cap, epoch, cube, BY, BZ, counts);
@@ -570,8 +559,7 @@ inline uint type6_cached_code(__global uint *slots, __global uint *pool, int poo
         const uint v = ((volatile __global const uint *)pool)[at];
         if (v & VALID) return v & CODE_MASK;
     }
-    const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
-                                     point_tets, negmass, iso);
+    const uint code = type6_tet_code(pdata, base, stencil, negmass, iso);
     if (a >= 0 && atomic_cmpxchg((volatile __global uint *)&pool[at], 0u, VALID | code) == 0u
         && code != 0u) {
         atomic_inc(&counts[0]);
@@ -598,8 +586,6 @@ __kernel void brick_entries(__global const int *bricks, __global uint *slots,
 // and per candidate the code and its relevant tets.
 __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, int NZ,
                         __global const int *cubes, __constant const int *stencil,
-                        __global const int *prog_ptr, __global const int *prog_cols,
-                        __global const float *prog_w, __constant const uint *point_tets,
                         float negmass, float iso, __global uint *slots, __global uint *pool,
                         int pool_cap, uint epoch, int BY, int BZ, __global int *counts,
                         __global uint *code_out, __global int *n_relevant)
@@ -608,8 +594,7 @@ __kernel void tet_codes(__global const DATA_T *pdata, int PY, int PZ, int NY, in
     const int cube = cubes[g];
     const int k = cube % NZ, j = (cube / NZ) % NY, i = cube / (NY * NZ);
     const offset_t base = (((offset_t)i + 1) * PY + (j + 1)) * PZ + (k + 1);
-    const uint code = type6_tet_code(pdata, base, stencil, prog_ptr, prog_cols, prog_w,
-                                     point_tets, negmass, iso);
+    const uint code = type6_tet_code(pdata, base, stencil, negmass, iso);
     const int3 c3 = (int3)(i, j, k);
     const int a = brick_entry(slots, pool, pool_cap, epoch, c3, BY, BZ, counts);
     if (a >= 0) pool[cell_word(a, c3)] = VALID | code;
@@ -853,8 +838,6 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
 #endif
 #ifdef MODEL_TYPE6
                       __constant const int *stencil, __global const float8 *tet_weights,
-                      __global const int *prog_ptr, __global const int *prog_cols,
-                      __global const float *prog_w, __constant const uint *point_tets,
                       __constant const float4 *bary, __constant const int *red,
 #endif
 #ifdef MODEL_TO
@@ -1002,8 +985,8 @@ __kernel void raycast(__global const DATA_T *data,   // samples; type-6: the pad
                 // cube centred at data point `cell`
                 const offset_t base = (((offset_t)lc.x + 1) * SY + (lc.y + 1)) * SZ + (lc.z + 1);
                 const uint tc = type6_cached_code(slots, pool, pool_cap, epoch, lc, BY, BZ,
-                                                  data, base, stencil, prog_ptr, prog_cols,
-                                                  prog_w, point_tets, negmass, iso, counts);
+                                                  data, base, stencil, negmass, iso,
+                                                  counts);
                 if (tc != 0u) {
                     const float3 p = ue + s * d - convert_float3(cell);  // from the centre
                     float3 g;

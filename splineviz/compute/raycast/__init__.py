@@ -72,7 +72,7 @@ from splineviz.compute.raycast.samples import (
     pad_linear_into,
     sample_type_for,
 )
-from splineviz.compute.raycast.type6 import cube_program as _cube_program
+from splineviz.compute.raycast.type6_program import cube_program as _cube_program
 
 __all__ = [
     "KERNEL_FAMILIES", "MAX_EPOCH", "MAX_POOL", "MAX_SAMPLES", "RAY_GROUP", "SAMPLE_TYPES",

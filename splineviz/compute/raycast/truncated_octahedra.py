@@ -51,7 +51,7 @@ class TruncatedOctahedraFamily(KernelFamily):
         """
         import pyopencl.array as cla
 
-        from splineviz.compute.raycast import to_program, to_tables
+        from splineviz.compute.raycast import segment_program, to_program, to_tables
         from splineviz.compute.raycast.to_tables import cell_classes
         from splineviz.core.partitions import truncated_octahedra as to
         from splineviz.core.splines import to_quadratic
@@ -100,7 +100,8 @@ class TruncatedOctahedraFamily(KernelFamily):
         self._node_blocks = cla.to_device(q, (blocks @ [by * bz, bz, 1]).astype(np.int32))
         self._nblocks = len(blocks)
         self.prelude = (to_program.relevance_source(k, TO_WORDS)
-                        + to_program.subcell_source(TO_WORDS))
+                        + to_program.subcell_source(TO_WORDS)
+                        + segment_program.segment_source(2))
         self._bary = cla.to_device(q, np.ascontiguousarray(to.barycentric_matrices(), np.float32))
         self._red = cla.to_device(
             q, np.concatenate([reduction_table(k).ravel() for k in (2, 1)]).astype(np.int32))

@@ -3,18 +3,20 @@ centred at the samples.
 
 Cube bounds come from the 27-point stencil (every coefficient is an affine combination of it,
 widened by the negative weight mass). A cube's tet code comes from its determining set and
-the averaging rules (§5.1-5.2). The ray part inside each relevant tet comes from the tet's
-four barycentric plane equations (§6.2.2), its coefficients from the stencil with the core
-model's masks, the Bernstein coefficients of the segment from blossoms (§6.1.2), the first
-root by the monotone-piece cubic solver, the gradient from the last de Casteljau step.
-Deviation from Listing 6.2: tets of a cube are clipped independently instead of walked via
-the neighbour table (same result, no special cases at cube faces).
+the averaging rules (§5.1-5.2), written out as straight-line code
+(:mod:`~splineviz.compute.raycast.type6_program`). The ray part inside each relevant tet
+comes from the tet's four barycentric plane equations (§6.2.2), its coefficients from the
+stencil with the core model's masks, the Bernstein coefficients of the segment from blossoms
+(§6.1.2), the first root by the monotone-piece cubic solver, the gradient from the last de
+Casteljau step. Deviation from Listing 6.2: tets of a cube are clipped independently instead
+of walked via the neighbour table (same result, no special cases at cube faces).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from splineviz.compute.raycast import segment_program, type6_program
 from splineviz.compute.raycast.family import (
     SKIP_ACTIVE,
     TET_SLACK,
@@ -39,9 +41,11 @@ class Type6Family(KernelFamily):
         """Upload the padded samples and the constant tables of a type-6 model.
 
         All tables come from the core model (``rc.spline.scheme``), so the kernel computes
-        exactly the core spline: tet masks (24, n_d, 27), cube masks (P, 27), per cube point
-        the tets whose B-net holds it (from ``tet_points``, (24, n_d)), barycentric matrices
-        (24, 4, 4) and the de Casteljau reduction tables of :mod:`splineviz.core.bform`.
+        exactly the core spline: tet masks (24, n_d, 27), barycentric matrices (24, 4, 4) and
+        the de Casteljau reduction tables of :mod:`splineviz.core.bform`; the cube program and
+        per cube point the tets whose B-net holds it (from ``tet_points``, (24, n_d)) are
+        literals of the generated tet code (:mod:`.type6_program`), the reduction steps of a
+        ray segment's blossoms those of :mod:`.segment_program`.
         """
         import pyopencl.array as cla
 
@@ -52,7 +56,6 @@ class Type6Family(KernelFamily):
         q = rc._device.queue
         scheme = rc.spline.scheme
         self.degree = scheme.degree
-        self.npoints = len(scheme.cube_points)
         rc._data = padded_device_samples(rc._device, rc.volume.data, self.ghost_layers,
                                          rc._sample_type[0])
         _, py, pz = rc._data.shape
@@ -62,13 +65,10 @@ class Type6Family(KernelFamily):
         # dense tet masks (24, 27, NCHUNK * 8): per tet and stencil value, its weights in the
         # tet's coefficients (whole float8s of the kernel)
         self._tet_dense = cla.to_device(q, padded_rows(scheme.tet_masks.transpose(0, 2, 1), 8))
-        program, order = cube_program(scheme)
-        self._cube_program = [cla.to_device(q, a) for a in program]
-        # per program row (cube point), the bit set of the tets whose B-net holds it
-        point_tets = np.zeros(len(scheme.cube_points), np.uint32)
-        for t, points in enumerate(scheme.tet_points):
-            point_tets[points] |= np.uint32(1 << t)
-        self._point_tets = cla.to_device(q, point_tets[order])
+        # generated: the tet code (the cube program written out, tet masks as literals) and
+        # the blossoms of a ray segment in a tet
+        self.prelude = (type6_program.code_source(rc.spline.scheme_name)
+                        + segment_program.segment_source(scheme.degree))
         self._bary = cla.to_device(
             q, np.ascontiguousarray(type6.barycentric_matrices(), np.float32))
         red = [reduction_table(k) for k in range(scheme.degree, 0, -1)]
@@ -76,7 +76,7 @@ class Type6Family(KernelFamily):
         # largest negative weight mass of any coefficient (bounds of stencil_bounds)
         rc._negmass = float(np.max(np.sum(np.clip(-scheme.cube_masks, 0, None), axis=1)))
         return {"MODEL_TYPE6": 1, "NCOEF": bform.n_coefficients(scheme.degree),
-                "NPOINTS": len(scheme.cube_points), "SKIP_ACTIVE": SKIP_ACTIVE}
+                "SKIP_ACTIVE": SKIP_ACTIVE}
 
     def upload_samples(self, rc) -> None:
         """The new samples only: the tables come from the model, the stencil offsets from
@@ -89,12 +89,10 @@ class Type6Family(KernelFamily):
         return sample_blocks(rc)
 
     def defines(self, rc) -> dict:
-        return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK, "NPOINTS": self.npoints}
+        return {"DEGREE": self.degree, "TET_SLACK": TET_SLACK}
 
     def ray_args(self, rc) -> list:
-        return [self._stencil.data, self._tet_dense.data,
-                *(a.data for a in self._cube_program), self._point_tets.data,
-                self._bary.data, self._red.data]
+        return [self._stencil.data, self._tet_dense.data, self._bary.data, self._red.data]
 
     def classify(self, rc, listed, cells: np.ndarray, iso: np.float32):
         """Tet codes of every candidate cube, written into the cache too (the next frames use
@@ -118,40 +116,11 @@ class Type6Family(KernelFamily):
             rc._ray_kernel("tet_codes")(
                 q, (n,), None, rc._data.data, np.int32(rc._strides[0]),
                 np.int32(rc._strides[1]), np.int32(ny), np.int32(nz), listed.data,
-                self._stencil.data, *(a.data for a in self._cube_program),
-                self._point_tets.data, np.float32(rc._negmass), iso,
+                self._stencil.data, np.float32(rc._negmass), iso,
                 *rc._cache_args()[:-1], code_buf.data, nrel.data)
             relevant, codes = nrel.get(queue=q), code_buf.get(queue=q)
         # the cache is complete: later frames count nothing new
         rc._counts[:2].set(
             np.array([np.count_nonzero(relevant), relevant.sum()], np.int32), queue=q)
         return relevant, codes
-
-
-def cube_program(scheme):
-    """All cube coefficients of a type-6 scheme as one ordered sparse program (thesis §5.1-5.2).
-
-    Row r computes cube point ``order[r]``: the determining set first, from the 27 stencil
-    values (columns 0..26, weights of ``scheme.determining_masks``), then every other point by
-    its averaging rule in application order, from points of earlier rows (column 27 + row);
-    the same values as :func:`splineviz.core.splines.type6_rules.apply_rules`, with about
-    40 % of the multiply-adds of the full cube masks for cubic-c1 (840 instead of 2061).
-
-    Returns
-    -------
-    (row_ptr int32 (P+1,), cols int32, weights float32), order (P,) int
-    """
-    order = [int(p) for p in scheme.determining] + [int(t) for t, _, _ in scheme.rules]
-    if sorted(order) != list(range(len(scheme.cube_points))):
-        raise AssertionError("the rules do not give every cube point once")  # a bug
-    row = {p: r for r, p in enumerate(order)}
-    rows = [(np.flatnonzero(m), m[m != 0]) for m in scheme.determining_masks]
-    for target, src, w in scheme.rules:
-        if max(row[int(p)] for p in src) >= row[int(target)]:
-            raise AssertionError("a rule reads a point computed after it")  # a bug
-        rows.append((27 + np.array([row[int(p)] for p in src]), np.asarray(w, float)))
-    row_ptr = np.concatenate([[0], np.cumsum([len(c) for c, _ in rows])]).astype(np.int32)
-    cols = np.concatenate([c for c, _ in rows]).astype(np.int32)
-    weights = np.concatenate([w for _, w in rows]).astype(np.float32)
-    return (row_ptr, cols, weights), np.array(order)
 
