@@ -67,3 +67,23 @@ def test_python_dash_m_splineviz_is_the_command():
 def test_bench_parser_knows_the_movie_benchmark():
     a = _build_parser().parse_args(["bench", "movie", "--sizes", "720p,4K", "--frames", "3"])
     assert (a.which, a.sizes, a.frames) == ("movie", "720p,4K", 3)
+
+
+def test_bench_parser_knows_the_cad_scans_benchmark():
+    a = _build_parser().parse_args(["bench", "cad-scans", "--shapes", "bracket", "--noises",
+                                    "0,0.005", "--points", "20000", "--out", "pics"])
+    assert (a.which, a.shapes, a.noises, a.points, a.out) == ("cad-scans", "bracket", "0,0.005",
+                                                              20000, "pics")
+
+
+def test_bench_cad_scans_refuses_an_unknown_shape_in_one_sentence():
+    import pytest
+
+    from splineviz.core.errors import SplinevizError
+
+    a = _build_parser().parse_args(["bench", "cad-scans", "--shapes", "teapot"])
+    with pytest.raises(SplinevizError, match="unknown cad-scans shape 'teapot'"):
+        a.func(a)
+    b = _build_parser().parse_args(["bench", "cad-scans", "--noises", "low"])
+    with pytest.raises(SplinevizError, match="--noises takes"):
+        b.func(b)

@@ -108,20 +108,35 @@ def load_cloud(name: str, data_dir: Path) -> np.ndarray:
     return pts
 
 
-def _o3d_cloud(points):
+def _o3d_cloud(points, scanners=None):
+    """An Open3D cloud with estimated normals, oriented consistently over the tangent-plane
+    graph or, given each point's scanner position ``scanners (N, 3)``, towards its scanner
+    (as a range scanner knows them)."""
     import open3d as o3d
 
     pcd = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     pcd.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(knn=30))
-    pcd.orient_normals_consistent_tangent_plane(30)
+    if scanners is None:
+        pcd.orient_normals_consistent_tangent_plane(30)
+    else:
+        n = np.asarray(pcd.normals)
+        away = np.einsum("ij,ij->i", n, np.asarray(scanners) - np.asarray(points)) < 0
+        n[away] *= -1
+        pcd.normals = o3d.utility.Vector3dVector(n)
     return pcd
 
 
-def _poisson(points, depth=8):
+def _poisson(points, depth=8, trim=0.0, scanners=None):
+    """Open3D screened Poisson ``(V, F)``; ``trim``: the fraction of lowest-density vertices
+    dropped (with their triangles), as users cut Poisson's extrapolated sheets;
+    ``scanners``: see :func:`_o3d_cloud`."""
     import open3d as o3d
 
-    pcd = _o3d_cloud(points)
-    mesh, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(pcd, depth=depth)
+    pcd = _o3d_cloud(points, scanners)
+    mesh, density = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(pcd, depth=depth)
+    if trim > 0:
+        density = np.asarray(density)
+        mesh.remove_vertices_by_mask(density < np.quantile(density, trim))
     return np.asarray(mesh.vertices), np.asarray(mesh.triangles)
 
 

@@ -6,7 +6,8 @@ the 100 ms budget of the GUI thread for ``gui``; reading + flying edges + render
 for ``time``; VTK's volume mappers and an analytic reference for ``dvr``; one still
 ``render_scene`` picture and the renderer and encoder alone for ``movie``; cell projection
 against the ray caster over surface sizes for ``renderers``; flying edges and flying edges +
-pymeshlab remeshing for ``spline-mesh``)."""
+pymeshlab remeshing for ``spline-mesh``; Open3D screened Poisson, density-trimmed, on
+simulated range scans of parts with creases for ``cad-scans``)."""
 
 from __future__ import annotations
 
@@ -80,6 +81,21 @@ def _run(args) -> int:
         model = args.models.split(",")[0] if args.models else "cubic-c1"
         for name in sets:
             run(Path(data), name, model)
+    elif args.which == "cad-scans":
+        from splineviz.bench.cad_scans import NOISES, SHAPES
+        from splineviz.bench.cad_scans import run_bench as run_cad
+
+        shapes = tuple(args.shapes.split(",")) if args.shapes else SHAPES
+        unknown = [name for name in shapes if name not in SHAPES]
+        if unknown:
+            raise SplinevizError(f"unknown cad-scans shape {unknown[0]!r}; choose from "
+                                 f"{', '.join(SHAPES)}")
+        try:
+            noises = tuple(float(n) for n in args.noises.split(",")) if args.noises else NOISES
+        except ValueError:
+            raise SplinevizError(f"--noises takes comma-separated fractions of the diagonal "
+                                 f"(0,0.0025,0.005), got {args.noises!r}") from None
+        run_cad(shapes, noises, args.points, args.timeout or 300.0, pictures=args.out)
     elif args.which == "gui":
         from splineviz.bench.gui import run_gui_bench
 
@@ -98,7 +114,7 @@ def register(subparsers) -> None:
     """Add the ``bench`` sub-command."""
     p = subparsers.add_parser("bench", help="benchmarks printing ratios against baselines")
     p.add_argument("which", choices=["raycast", "isovalue", "bricks", "remesh", "gui", "time",
-                                     "dvr", "movie", "renderers", "spline-mesh"],
+                                     "dvr", "movie", "renderers", "spline-mesh", "cad-scans"],
                    help="benchmark to run")
     p.add_argument("--data-dir", default=None,
                    help="data folder (default ../shared/data/volumes or ../shared/data/points; "
@@ -126,7 +142,8 @@ def register(subparsers) -> None:
     p.add_argument("--device", default=None,
                    help="raycast, isovalue: OpenCL device (see SPLINEVIZ_DEVICE)")
     p.add_argument("--timeout", type=float, default=None,
-                   help="remesh: seconds per peer run (180); isovalue: per measurement (600)")
+                   help="remesh: seconds per peer run (180); cad-scans: per method (300); "
+                        "isovalue: per measurement (600)")
     p.add_argument("--clouds", default=None,
                    help="remesh: comma-separated clouds (bunny,kitten,bunny-noisy,bunny-open; "
                         "dense samples of a shared mesh with noise: lucy-2m,bunny-500k); "
@@ -136,8 +153,17 @@ def register(subparsers) -> None:
                         "default data)")
     p.add_argument("--sets", default=None,
                    help="spline-mesh: comma-separated sets (tooth,bonsai; bonsai-crop: 40^3)")
+    p.add_argument("--shapes", default=None,
+                   help="cad-scans: comma-separated shapes (box-cylinder,bracket,airplane)")
+    p.add_argument("--noises", default=None,
+                   help="cad-scans: scanner noise levels in fractions of the diagonal "
+                        "(0,0.0025,0.005)")
+    p.add_argument("--points", type=int, default=40000,
+                   help="cad-scans: points of each merged scan")
     p.add_argument("--iso", type=finite_float, default=None, help="gui: isovalue of --volume")
     p.add_argument("--step", type=finite_float, default=0.5,
                    help="dvr: sample distance along the rays in voxels")
-    p.add_argument("--out", default=None, help="dvr: folder for the pictures")
+    p.add_argument("--out", default=None,
+                   help="dvr: folder for the pictures; cad-scans: folder for each mesh and "
+                        "cloud (.npz)")
     p.set_defaults(func=_run)
