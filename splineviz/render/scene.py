@@ -458,8 +458,7 @@ class SplineScene:
         lv.cell_frames = self.progressive and not self._force_exact and not self.cells_fast()
         if lv.cell_frames:
             # the trilinear stand-in until a worker drew the exact frame of this view
-            done = geometry is not None and self._is_current(layer, lv, view) \
-                and lv.shown.final
+            done = geometry is not None and self._exact_shown(layer, lv, view)
             stand_in = not done
         else:
             # while the camera (or the isovalue) moves: the stand-in while its tets are made
@@ -533,6 +532,10 @@ class SplineScene:
     def _is_current(self, layer, lv, view) -> bool:
         return (lv.shown is not None and lv.shown.view.key() == view.key()
                 and lv.shown.state == layer.state)
+
+    def _exact_shown(self, layer, lv, view) -> bool:
+        """Whether the layer's quad shows its exact frame of ``view`` and its state."""
+        return self._is_current(layer, lv, view) and lv.shown.final
 
     def _preview_scale(self, layer, lv, view,
                        first: float = FIRST_PREVIEW_SCALE) -> tuple[float, bool]:
@@ -774,10 +777,10 @@ class SplineScene:
                 continue
             renderer = self.renderer_of(layer, probe=False)
             if renderer == CELL_PROJECTION:
-                if not layer.cells_current() or (lv.cell_frames and not (
-                        self._is_current(layer, lv, view) and lv.shown.final)):
+                if not layer.cells_current() or (
+                        lv.cell_frames and not self._exact_shown(layer, lv, view)):
                     return True
-            elif renderer is None or not (self._is_current(layer, lv, view) and lv.shown.final):
+            elif renderer is None or not self._exact_shown(layer, lv, view):
                 return True
         return any(layer.visible and not self._volume_current(layer, view, final=True)
                    for layer in self.volume_layers)
@@ -825,14 +828,14 @@ class SplineScene:
             if self.renderer_of(layer) == CELL_PROJECTION:  # probes OpenCL for "auto"
                 if not layer.cells_current():
                     out.append((layer, layer.cell_geometry()))
-                if self.progressive and not self.cells_fast() and not (
-                        self._is_current(layer, lv, view) and lv.shown.final):
+                if self.progressive and not self.cells_fast() \
+                        and not self._exact_shown(layer, lv, view):
                     layer.cell_proxy()  # a large volume's stand-in is made here
                     if given_up():
                         break
                     out.append((layer, layer.cell_frame(view)))
                 continue
-            if self._is_current(layer, lv, view) and lv.shown.final:
+            if self._exact_shown(layer, lv, view):
                 continue
             shown = lv.shown
             scales = layer.exact_scales() if partial is not None else (1.0,)
