@@ -445,10 +445,12 @@ class View3D(QObject):
             for layer in self.spline_scene.layers:
                 rf = self.spline_scene.shown_frame(layer)
                 exact = rf is not None and rf.final and rf.state == layer.state
-                if not layer.visible or self.spline_scene.drawn_by_cells(layer) or (
-                        exact and (not cancelled or rf.view.key() == self._cancelled_key[0])):
+                stand_in = self.spline_scene.shows_stand_in(layer)
+                if not layer.visible or (not stand_in and (
+                        self.spline_scene.drawn_by_cells(layer) or (exact and (
+                            not cancelled or rf.view.key() == self._cancelled_key[0])))):
                     continue
-                lines.append(describe(layer, rf, fraction, cancelled))
+                lines.append(describe(layer, rf, fraction, cancelled, stand_in))
         if lines:
             status = lines[0].replace("\n", " - ")
         else:

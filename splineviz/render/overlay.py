@@ -18,10 +18,13 @@ def model_label(name: str) -> str:
     return name if spec is None else spec.label
 
 
-def shown_description(layer, rf) -> str:
+def shown_description(layer, rf, stand_in: bool = False) -> str:
     """What the view shows of ``layer`` (a :class:`~splineviz.render.isosurface.
     IsosurfaceLayer`) while its exact frame is due: ``rf`` is the shown
-    :class:`~splineviz.render.isosurface.RenderedFrame` or None."""
+    :class:`~splineviz.render.isosurface.RenderedFrame` or None; ``stand_in``: a
+    cell-projected surface's trilinear stand-in shows instead."""
+    if stand_in:
+        return "the trilinear stand-in (flying edges of the samples)"
     if rf is None:
         return "nothing shown yet"
     if rf.state != layer.state:
@@ -33,7 +36,8 @@ def shown_description(layer, rf) -> str:
     return f"coarser image, {share}" if not rf.final else "exact picture of another view"
 
 
-def describe(layer, rf, fraction: float | None, cancelled: bool) -> str:
+def describe(layer, rf, fraction: float | None, cancelled: bool,
+             stand_in: bool = False) -> str:
     """Two lines about ``layer``'s frame being computed (see module docstring).
 
     Parameters
@@ -45,9 +49,12 @@ def describe(layer, rf, fraction: float | None, cancelled: bool) -> str:
         Of the exact frame done (None: not known).
     cancelled : bool
         The user gave up the exact frame (Esc): it is not computed until the next change.
+    stand_in : bool
+        The view shows the surface's trilinear stand-in (cell projection, see
+        :meth:`splineviz.render.scene.SplineScene.shows_stand_in`).
     """
     label = model_label(layer.model)
-    shown = f"showing {shown_description(layer, rf)}"
+    shown = f"showing {shown_description(layer, rf, stand_in)}"
     if cancelled:
         return f"{label}: cancelled (any change computes it again)\n{shown}"
     percent = "" if fraction is None else f" ({100 * fraction:.0f} %)"

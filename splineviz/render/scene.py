@@ -504,6 +504,12 @@ class SplineScene:
             return RAY_CASTING
         return choice.renderer
 
+    def shows_stand_in(self, layer: IsosurfaceLayer) -> bool:
+        """Whether this view shows ``layer``'s trilinear stand-in instead of its exact
+        cell-projected surface now."""
+        lv = self._views[id(layer)]
+        return lv.by_cells and lv.proxy_shown
+
     def drawn_by_cells(self, layer: IsosurfaceLayer) -> bool:
         """Whether this view draws ``layer`` by cell projection, its tets current (no
         frame of it is due)."""

@@ -39,3 +39,38 @@ def test_cancel_button_stops_the_exact_frames_under_way(window):
     assert pump(1.0, lambda: not w.cancel_button.isVisible())
     pump(0.5)
     assert not w.view.computing, "a cancelled frame was started again by itself"
+
+
+def test_a_cancelled_cell_projected_frame_says_the_stand_in_shows(qapp, tmp_path, monkeypatch):
+    """Without a fast OpenGL, a cell-projected surface shows its trilinear stand-in until the
+    exact frame is drawn off the GUI thread; cancelling that frame says so in the overlay."""
+    import threading
+
+    from splineviz.render.isosurface import IsosurfaceLayer
+
+    release = threading.Event()
+    original = IsosurfaceLayer.cell_frame
+
+    def slow(self, view):
+        release.wait(60)
+        return original(self, view)
+
+    w = open_window(tmp_path)
+    try:
+        w.open_default()
+        w.scene.isosurfaces[0].renderer = "cell-projection"
+        assert pump(120, lambda: not w.view.refining and not w.spline_scene.needs_refine())
+        monkeypatch.setattr(IsosurfaceLayer, "cell_frame", slow)
+        w.spline_scene.cells_seconds = 1.0  # a slow OpenGL, whatever this machine's
+        w.plotter.camera.Azimuth(30)
+        w.plotter.render()
+        assert pump(10, lambda: w.view.computing)
+        layer = w.spline_scene.layers[0]
+        assert w.spline_scene.shows_stand_in(layer)
+        w.cancel_button.click()
+        assert pump(1.0, lambda: not w.view.refining)
+        text = w.view.overlay.text
+        assert "cancelled" in text and "trilinear stand-in" in text, text
+    finally:
+        release.set()
+        close_window(w)
