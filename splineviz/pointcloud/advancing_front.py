@@ -161,15 +161,6 @@ def _angle_ccw(d1, d2, n):
     return ang if ang >= 0 else ang + 2 * math.pi
 
 
-def _corner_angles(pa, pb, pc):
-    """The three interior angles (radians) of the 3-D triangle ``pa pb pc`` at its corners."""
-    out = []
-    for o, p, q in ((pa, pb, pc), (pb, pc, pa), (pc, pa, pb)):
-        d1, d2 = _sub(p, o), _sub(q, o)
-        out.append(math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2)))
-    return out
-
-
 def heap_smallest(heap: list, k: int) -> list:
     """The ``k`` smallest items of the binary heap ``heap`` in ascending order, as
     ``heapq.nsmallest(k, heap)`` gives them, in O(k log k): an item's children are no smaller
@@ -267,11 +258,9 @@ class AdvancingFront:
         self.P: list[tuple[float, float, float]] = []  # positions as tuples for scalar math
         self.faces: list[tuple[int, int, int]] = []
         self.front: dict[tuple[int, int], int] = {}  # edge -> number of failed attempts
-        self.out_nb: list[set] = []
-        self.in_nb: list[set] = []
         self.edge_faces: dict[tuple[int, int], int] = {}
         self.length_factor = 1.0  # lowered by the refinement passes (see _retry_given_up)
-        self.fan: list[float] = []  # sum of the corner angles of each vertex's triangles
+        self.fan = np.zeros(cap)  # sum of the corner angles of each vertex's triangles
         # per triangle, for _covered: first corner, two edge vectors, unit normal, the Gram
         # matrix entries of the edges, the centroid and the corners' largest distance from
         # it, (F, 19)
@@ -301,12 +290,15 @@ class AdvancingFront:
                                     OUTSIDE_VOID_FACTOR * projector.conn.void_ratio())
         # the total area estimate drives the progress fraction
         self.area_total = float(np.sum(np.pi * (0.5 * projector.scale) ** 2)) * 1.1
+        # the compiled triangle test's limits (front_kernels.LIMIT_*), read when the front
+        # is built so that the module's constants can be changed for an experiment
+        self._limits = np.array([math.cos(MAX_NORMAL_DEVIATION), 2 * math.pi + FAN_SLACK,
+                                 COVER_MARGIN, COVER_HEIGHT, INSIDE_SPACINGS,
+                                 self.outside_spacings, BORDER_GAP])
+        self._neighbours = min(BORDER_NEIGHBOURS, len(self.pgrid.points))
+        self._probes = np.empty((3, 3))  # the triangle test's probes, (3, 3)
 
     # -- bookkeeping -----------------------------------------------------------------------
-    def _cell(self, x):
-        return (int(math.floor(x[0] / self.cell)), int(math.floor(x[1] / self.cell)),
-                int(math.floor(x[2] / self.cell)))
-
     def _add_vertex(self, x, n, length=None):
         """Append vertex ``x (3,)`` with normal ``n (3,)`` and the guidance length at ``x``
         (``length`` if known); returns its id."""
@@ -315,6 +307,7 @@ class AdvancingFront:
                 return np.concatenate([a, np.full_like(a, fill)])
 
             self.V, self.N, self.L = grow(self.V, 0.0), grow(self.N, 0.0), grow(self.L, 0.0)
+            self.fan = grow(self.fan, 0.0)
             self.out_adj, self.in_adj = grow(self.out_adj, -1), grow(self.in_adj, -1)
             self.out_cnt, self.in_cnt = grow(self.out_cnt, 0), grow(self.in_cnt, 0)
             head, nxt, prv, cells = self.vgrid
@@ -326,29 +319,17 @@ class AdvancingFront:
             length = float(self.guide(x[None])[0])
         self.L[i] = self.length_factor * length
         self.nv += 1
-        self.out_nb.append(set())
-        self.in_nb.append(set())
-        self.fan.append(0.0)
         return i
 
-    def _adj_add(self, side, u, w):
-        """Append ``w`` to the ``side`` ("out" or "in") front edges of ``u``."""
-        adj, cnt = getattr(self, side + "_adj"), getattr(self, side + "_cnt")
-        if cnt[u] == adj.shape[1]:
-            adj = np.concatenate([adj, np.full_like(adj, -1)], axis=1)
-            setattr(self, side + "_adj", adj)
-        adj[u, cnt[u]] = w
-        cnt[u] += 1
-
     def _front_add(self, a, b):
-        for v in (a, b):
-            if not self.out_nb[v] and not self.in_nb[v]:
-                fk.grid_insert(*self.vgrid, v, *self._cell(self.P[v]))
+        # a vertex on more front loops than its adjacency rows hold: widen them
+        if self.out_cnt[a] == self.out_adj.shape[1]:
+            self.out_adj = np.concatenate([self.out_adj, np.full_like(self.out_adj, -1)], axis=1)
+        if self.in_cnt[b] == self.in_adj.shape[1]:
+            self.in_adj = np.concatenate([self.in_adj, np.full_like(self.in_adj, -1)], axis=1)
+        fk.front_edge_add(self.out_adj, self.out_cnt, self.in_adj, self.in_cnt, self.vgrid,
+                          self.cell, self.V, a, b)
         self.front[(a, b)] = 0
-        self.out_nb[a].add(b)
-        self.in_nb[b].add(a)
-        self._adj_add("out", a, b)
-        self._adj_add("in", b, a)
         self._push(a, b)
 
     def _front_remove(self, a, b):
@@ -356,13 +337,8 @@ class AdvancingFront:
         self.predictions.pop((a, b), None)
         self.border.discard((a, b))
         self.scan_border.discard((a, b))
-        self.out_nb[a].discard(b)
-        self.in_nb[b].discard(a)
-        fk.adj_remove(self.out_adj, self.out_cnt, a, b)
-        fk.adj_remove(self.in_adj, self.in_cnt, b, a)
-        for v in (a, b):
-            if not self.out_nb[v] and not self.in_nb[v]:
-                fk.grid_remove(*self.vgrid, v)
+        fk.front_edge_remove(self.out_adj, self.out_cnt, self.in_adj, self.in_cnt, self.vgrid,
+                             a, b)
 
     def _push(self, a, b, delay=0):
         self.counter += 1
@@ -377,8 +353,6 @@ class AdvancingFront:
                 self._front_remove(u, w)
             else:
                 self._front_add(w, u)
-        pa, pb, pc = self.P[a], self.P[b], self.P[c]
-        centroid = [(pa[i] + pb[i] + pc[i]) / 3.0 for i in range(3)]
         nf = len(self.faces) - 1
         if nf == len(self.face_geometry):
             self.face_geometry = np.concatenate([self.face_geometry,
@@ -387,28 +361,9 @@ class AdvancingFront:
             self.fgrid = (head, np.concatenate([nxt, np.full_like(nxt, -1)]),
                           np.concatenate([prv, np.full_like(prv, -1)]),
                           np.concatenate([cells, np.zeros_like(cells)]))
-        e1, e2 = _sub(pb, pa), _sub(pc, pa)
-        normal = _cross(e1, e2)
-        length = _norm(normal) or 1.0
-        radius = math.sqrt(max(_dot(d, d) for d in (_sub(pa, centroid), _sub(pb, centroid),
-                                                      _sub(pc, centroid))))
-        # the smallest size class whose cells are at least twice the corner radius
-        cells = self.face_cell
-        lev = 0
-        while lev < len(cells) - 1 and radius > 0.5 * cells[lev]:
-            lev += 1
-        size = cells[lev]
-        head, nxt, prv, fcells = self.fgrid
-        fk.grid_insert(head[self.face_start[lev]:self.face_start[lev + 1]], nxt, prv, fcells, nf,
-                       int(math.floor(centroid[0] / size)),
-                       int(math.floor(centroid[1] / size)), int(math.floor(centroid[2] / size)))
-        self.face_radius[lev] = max(self.face_radius[lev], radius)
-        self.face_geometry[nf] = (*pa, *e1, *e2, normal[0] / length, normal[1] / length,
-                                  normal[2] / length, _dot(e1, e1), _dot(e1, e2), _dot(e2, e2),
-                                  *centroid, radius)
-        self.area_done += 0.5 * _norm(_cross(_sub(pb, pa), _sub(pc, pa)))
-        for o, angle in zip((a, b, c), _corner_angles(pa, pb, pc), strict=True):
-            self.fan[o] += angle
+        self.area_done += fk.face_added(self.V, self.fan, self.face_geometry, self.fgrid,
+                                        self.face_start, self.face_cell, self.face_radius, nf,
+                                        a, b, c)
 
     def _front_vertices_near(self, x, radius, n=None):
         """Front vertices within ``radius`` of ``x (3,)``, nearest first; with a normal ``n``
@@ -421,90 +376,32 @@ class AdvancingFront:
                                            dtype=np.float64), n is not None)
 
     # -- geometry tests --------------------------------------------------------------------
-    def _wedges(self, o, n):
-        """Unmeshed wedges at front vertex ``o``: list of ``(next, total angle)``.
-
-        For each outgoing front edge ``o -> nxt`` the wedge turns counter-clockwise from
-        ``nxt - o`` to ``prv - o`` where ``prv -> o`` is the incoming front edge that closes the
-        smallest such angle (a vertex on several front loops has several wedges).
-        """
-        P, po = self.P, self.P[o]
-        wedges = []
-        for nxt in self.out_nb[o]:
-            d1 = _sub(P[nxt], po)
-            best = None
-            for prv in self.in_nb[o]:
-                ang = 2 * math.pi if prv == nxt else _angle_ccw(d1, _sub(P[prv], po), n)
-                if best is None or ang < best:
-                    best = ang
-            if best is not None:
-                wedges.append((nxt, best))
-        return wedges
-
-    def _inside_wedge(self, o, d, n):
-        """Whether direction ``d`` leaves front vertex ``o`` into unmeshed space."""
-        po = self.P[o]
-        for nxt, total in self._wedges(o, n):
-            ang = _angle_ccw(_sub(self.P[nxt], po), d, n)
-            if 1e-9 < ang < total - 1e-9:
-                return True
-        return False
-
     def _triangle_ok(self, a, b, v, xv, n, min_angle, existing):
-        """Validity of triangle ``(a, b, v)`` with apex at ``xv`` (a tuple; ``v = -1`` for a
-        new vertex): orientation, shape, manifold edges, unmeshed wedges, no front vertex
-        inside, no front edge crossed, no existing triangle covered, and not spanning a hole
-        of the cloud."""
-        xa, xb = self.P[a], self.P[b]
-        e0, e1, e2 = _sub(xb, xa), _sub(xv, xb), _sub(xa, xv)
-        tn = _cross(e0, _sub(xv, xa))
-        tl = _norm(tn)
-        if tl <= 0 or _dot(tn, n) < math.cos(MAX_NORMAL_DEVIATION) * tl:
-            return False
-        la, lb, lc = _norm(e0), _norm(e1), _norm(e2)
-        # the smallest angle is opposite the shortest side: sin = 2 area / (other two sides)
-        sides = sorted((la, lb, lc))
-        if tl / (sides[1] * sides[2]) < math.sin(min_angle):
-            return False
-        # no vertex may be surrounded by more than a full turn of triangles
-        fan = self.fan
-        limit = 2 * math.pi + FAN_SLACK
-        ang_a, ang_b, ang_v = _corner_angles(xa, xb, xv)
-        if fan[a] + ang_a > limit or fan[b] + ang_b > limit or \
-                (existing and fan[v] + ang_v > limit):
-            return False
-        front = self.front
+        """Validity of triangle ``(a, b, v)`` with apex at ``xv`` (a 3-tuple; ``v = -1`` for
+        a new vertex) seen along the normal ``n`` (3-tuple): no edge of the mesh used a second
+        time, then :func:`.front_kernels.triangle_ok` (orientation, shape, fans, unmeshed
+        wedges, no front vertex inside, no front edge crossed, no existing triangle covered,
+        and not spanning a hole of the cloud)."""
         if existing:
+            front = self.front
             for u, w in ((b, v), (v, a)):
                 key = (u, w) if u < w else (w, u)
                 if (u, w) not in front and key in self.edge_faces:
                     return False
-        # every new edge must leave both its ends into their unmeshed wedges
-        if (b, v) not in front:
-            if not self._inside_wedge(b, _sub(xv, xb), n):
-                return False
-            if existing and not self._inside_wedge(v, _sub(xb, xv), n):
-                return False
-        if (v, a) not in front:
-            if not self._inside_wedge(a, _sub(xv, xa), n):
-                return False
-            if existing and not self._inside_wedge(v, _sub(xa, xv), n):
-                return False
-        centre = np.array([(xa[i] + xb[i] + xv[i]) / 3.0 for i in range(3)])
-        probes = np.array([centre] + [
-            [0.5 * (pu[i] + pw[i]) for i in range(3)]
-            for (u, w), (pu, pw) in (((b, v), (xb, xv)), ((v, a), (xv, xa)))
-            if (u, w) not in front])  # the centre and the new edges' midpoints
-        # a triangle whose centre or new edges leave the cloud spans a hole of the scan
-        if self._outside_any(probes, n):
+        g = self.pgrid
+        args = (self.V, self.N, self.fan, self.out_adj, self.out_cnt, self.in_adj, self.in_cnt,
+                self.vgrid, self.cell, self.fgrid, self.face_start, self.face_cell,
+                self.face_radius, self.face_geometry, (g.points, g.cells, g.start, g.order,
+                                                       g.cell),
+                self._cloud[1], self._cloud[2], self._neighbours, self._limits, a, b, v, xv, n,
+                min_angle, existing)
+        status, count = fk.triangle_ok(*args, True, self._probes)
+        if status >= 0:
+            return bool(status)
+        # the grid search left a probe's border test open: the k-d tree settles it
+        if self._outside_any(self._probes[:count], n):
             return False
-        if self._covered(probes, centre, max(la, lb, lc)):
-            return False
-        head, nxt, _prv, cells = self.vgrid
-        return fk.front_clear(head, nxt, cells, self.cell, self.V, self.N, self.out_adj,
-                              self.out_cnt, self.in_adj, self.in_cnt, a, b, v,
-                              np.asarray(xv, dtype=np.float64), np.asarray(n),
-                              max(la, lb, lc) * 1.5)
+        return bool(fk.triangle_ok(*args, False, self._probes)[0])
 
     def _covered(self, probes, centre, length):
         """Whether any of ``probes (K, 3)`` lies on an existing triangle (see COVER_HEIGHT).
@@ -547,7 +444,7 @@ class AdvancingFront:
         ``(1, 3)``: ``(K,)`` bool."""
         g = self.pgrid
         _points, normals, spacing = self._cloud
-        k = min(BORDER_NEIGHBOURS, len(g.points))
+        k = self._neighbours
         xs = np.ascontiguousarray(xs, dtype=np.float64)
         ns = np.ascontiguousarray(ns, dtype=np.float64)
         flags = fk.outside_near(g.points, g.cells, g.start, g.order, g.cell, normals, spacing,
@@ -564,22 +461,11 @@ class AdvancingFront:
 
     # -- the front step --------------------------------------------------------------------
     def _neighbour(self, vertex, other, incoming, n):
-        """The front neighbour across ``vertex`` of the edge towards ``other``."""
-        cands = self.in_nb[vertex] if incoming else self.out_nb[vertex]
-        if len(cands) == 1:
-            return next(iter(cands))
-        if not cands:
-            return None
-        pv = self.P[vertex]
-        d0 = _sub(self.P[other], pv)
-        best, best_ang = None, None
-        for c in cands:
-            ang = _angle_ccw(d0, _sub(self.P[c], pv), n)
-            if not incoming:
-                ang = 2 * math.pi - ang
-            if best_ang is None or ang < best_ang:
-                best, best_ang = c, ang
-        return best
+        """The front neighbour across ``vertex`` of the edge towards ``other``, -1 if none
+        (:func:`.front_kernels.front_neighbour`)."""
+        if incoming:
+            return fk.front_neighbour(self.V, self.in_adj, self.in_cnt, vertex, other, True, n)
+        return fk.front_neighbour(self.V, self.out_adj, self.out_cnt, vertex, other, False, n)
 
     def _step(self, a, b):
         st = self.stats
@@ -597,9 +483,9 @@ class AdvancingFront:
         x = self._neighbour(a, b, True, n)
         y = self._neighbour(b, a, False, n)
         ears = []
-        if x is not None and x != b:
+        if x >= 0 and x != b:
             ears.append((_angle_ccw(ab, _sub(P[x], xa), n), x))
-        if y is not None and y != a:
+        if y >= 0 and y != a:
             ears.append((_angle_ccw(_sub(P[y], xb), (-ab[0], -ab[1], -ab[2]), n), y))
         ears.sort()
         limit = EAR_ANGLE if not relaxed else RELAXED_EAR_ANGLE
@@ -800,7 +686,7 @@ class AdvancingFront:
                 seen.add((a, b))
                 loop.append(a)
                 a, b = b, self._neighbour(b, a, False, tuple(self.N[b]))
-                if b is None:
+                if b < 0:
                     break
             if (a, b) == start:
                 loops.append(loop)

@@ -334,6 +334,282 @@ def front_clear(head, nxt, cells, cell, V, N, out_adj, out_cnt, in_adj, in_cnt, 
     return True
 
 
+@numba.njit(cache=True, inline="always")
+def _sub(u, v):
+    return (u[0] - v[0], u[1] - v[1], u[2] - v[2])
+
+
+@numba.njit(cache=True, inline="always")
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+
+
+@numba.njit(cache=True, inline="always")
+def _cross(u, v):
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+@numba.njit(cache=True, inline="always")
+def _norm(u):
+    return math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+
+
+@numba.njit(cache=True, inline="always")
+def _row(V, i):
+    return (V[i, 0], V[i, 1], V[i, 2])
+
+
+@numba.njit(cache=True)
+def angle_ccw(d1, d2, n):
+    """Counter-clockwise angle (radians, in ``[0, 2 pi)``) from direction ``d1`` to ``d2``
+    around the normal ``n`` (3-tuples)."""
+    ang = math.atan2(_dot(_cross(d1, d2), n), _dot(d1, d2))
+    return ang if ang >= 0 else ang + 2 * math.pi
+
+
+@numba.njit(cache=True)
+def corner_angles(pa, pb, pc):
+    """The interior angles (radians) of the triangle ``pa pb pc`` (3-tuples) at its three
+    corners, as a 3-tuple."""
+    d1, d2 = _sub(pb, pa), _sub(pc, pa)
+    at_a = math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2))
+    d1, d2 = _sub(pc, pb), _sub(pa, pb)
+    at_b = math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2))
+    d1, d2 = _sub(pa, pc), _sub(pb, pc)
+    at_c = math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2))
+    return (at_a, at_b, at_c)
+
+
+@numba.njit(cache=True)
+def in_front(out_adj, out_cnt, u, w):
+    """Whether ``u -> w`` is a front edge (``out_adj (C, D)``, ``out_cnt (C,)``)."""
+    for m in range(out_cnt[u]):
+        if out_adj[u, m] == w:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, o, d, n):
+    """Whether direction ``d`` (3-tuple) leaves front vertex ``o`` into unmeshed space.
+
+    For each outgoing front edge ``o -> nxt`` the unmeshed wedge turns counter-clockwise
+    around ``n`` from ``nxt - o`` to ``prv - o``, where ``prv -> o`` is the incoming front edge
+    that closes the smallest such angle (a vertex on several front loops has several wedges).
+    """
+    po = _row(V, o)
+    for m in range(out_cnt[o]):
+        nxt = out_adj[o, m]
+        d1 = _sub(_row(V, nxt), po)
+        total = -1.0
+        for j in range(in_cnt[o]):
+            prv = in_adj[o, j]
+            ang = 2 * math.pi if prv == nxt else angle_ccw(d1, _sub(_row(V, prv), po), n)
+            if total < 0 or ang < total:
+                total = ang
+        if total >= 0:
+            ang = angle_ccw(d1, d, n)
+            if 1e-9 < ang < total - 1e-9:
+                return True
+    return False
+
+
+@numba.njit(cache=True)
+def front_neighbour(V, adj, cnt, vertex, other, incoming, n):
+    """The front neighbour across ``vertex`` of its front edge towards ``other``: among the
+    ids in row ``vertex`` of ``adj (C, D)`` (``cnt (C,)`` of them; the incoming front edges'
+    tails if ``incoming``, else the outgoing ones' heads), the first counter-clockwise from
+    ``other`` around ``n`` (3-tuple) for incoming edges, the first clockwise for outgoing
+    ones; -1 when there is none."""
+    k = cnt[vertex]
+    if k == 1:
+        return adj[vertex, 0]
+    pv = _row(V, vertex)
+    d0 = _sub(_row(V, other), pv)
+    best, best_ang = -1, 0.0
+    for m in range(k):
+        c = adj[vertex, m]
+        ang = angle_ccw(d0, _sub(_row(V, c), pv), n)
+        if not incoming:
+            ang = 2 * math.pi - ang
+        if best < 0 or ang < best_ang:
+            best, best_ang = c, ang
+    return best
+
+
+@numba.njit(cache=True)
+def front_edge_add(out_adj, out_cnt, in_adj, in_cnt, vgrid, cell, V, a, b):
+    """Record the front edge ``a -> b`` in the adjacency rows (the caller has widened a full
+    row) and file its ends in the front vertices' grid ``vgrid`` (cells ``cell`` wide) unless
+    they are front vertices already."""
+    head, nxt, prv, cells = vgrid
+    for v in (a, b):
+        if out_cnt[v] == 0 and in_cnt[v] == 0:
+            grid_insert(head, nxt, prv, cells, v, int(math.floor(V[v, 0] / cell)),
+                        int(math.floor(V[v, 1] / cell)), int(math.floor(V[v, 2] / cell)))
+    out_adj[a, out_cnt[a]] = b
+    out_cnt[a] += 1
+    in_adj[b, in_cnt[b]] = a
+    in_cnt[b] += 1
+
+
+@numba.njit(cache=True)
+def front_edge_remove(out_adj, out_cnt, in_adj, in_cnt, vgrid, a, b):
+    """Remove the front edge ``a -> b`` from the adjacency rows, and its ends from the front
+    vertices' grid ``vgrid`` when no front edge is left at them."""
+    adj_remove(out_adj, out_cnt, a, b)
+    adj_remove(in_adj, in_cnt, b, a)
+    head, nxt, prv, cells = vgrid
+    for v in (a, b):
+        if out_cnt[v] == 0 and in_cnt[v] == 0:
+            grid_remove(head, nxt, prv, cells, v)
+
+
+#: layout of :func:`triangle_ok`'s ``limits (7,)``
+LIMIT_NORMAL_COS, LIMIT_FAN, LIMIT_COVER_MARGIN, LIMIT_COVER_HEIGHT, LIMIT_INSIDE, \
+    LIMIT_OUTSIDE, LIMIT_GAP = range(7)
+
+
+@numba.njit(cache=True)
+def triangle_ok(V, N, fan, out_adj, out_cnt, in_adj, in_cnt, vgrid, vcell, fgrid, face_start,
+                face_cell, face_radius, geometry, pgrid, cloud_normals, spacing, k, limits,
+                a, b, v, xv, n, min_angle, existing, check_outside, probes):
+    """The advancing front's validity test of the triangle ``(a, b, v)`` with its apex at
+    ``xv`` (3-tuple; ``v = -1`` for a new vertex), seen along the surface normal ``n``
+    (3-tuple): it faces along ``n`` (within ``acos(limits[LIMIT_NORMAL_COS])``), its smallest
+    angle is at least ``min_angle``, no corner's triangles add up to more than
+    ``limits[LIMIT_FAN]``, every new edge leaves its ends into their unmeshed wedges, its
+    centre and the midpoints of its new edges (``probes``, filled, ``(3, 3)``) lie inside the
+    cloud and on no existing triangle, and no front vertex or edge near it is in the way
+    (:func:`front_clear`).
+
+    ``vgrid``: the front vertices' hash grid ``(head, nxt, prv, cells)`` with cells ``vcell``
+    wide; ``fgrid``, ``face_start``, ``face_cell``, ``face_radius``, ``geometry``: the
+    triangles' grids (:func:`covered`); ``pgrid``: the input points' grid ``(points, cells,
+    start, order, cell)`` (:class:`PointGrid`) with their normals and spacings ``(P, 3)``,
+    ``(P,)`` for the border test (:func:`outside_near` with ``k`` neighbours).  ``fan (C,)``:
+    the summed corner angles of each vertex's triangles.  Whether an existing apex's new
+    edges are already mesh edges is the caller's test.
+
+    Returns ``(status, probes used)``: status 1 valid, 0 not, -1 undecided because the grid
+    search did not settle a probe's border test (the caller asks a k-d tree, then calls again
+    with ``check_outside`` false).
+    """
+    xa, xb = _row(V, a), _row(V, b)
+    e0, e1, e2 = _sub(xb, xa), _sub(xv, xb), _sub(xa, xv)
+    tn = _cross(e0, _sub(xv, xa))
+    tl = _norm(tn)
+    if tl <= 0 or _dot(tn, n) < limits[LIMIT_NORMAL_COS] * tl:
+        return 0, 0
+    la, lb, lc = _norm(e0), _norm(e1), _norm(e2)
+    # the smallest angle is opposite the shortest side: sin = 2 area / (other two sides)
+    low, longest = (la, lb) if la <= lb else (lb, la)
+    if lc >= longest:
+        middle, longest = longest, lc
+    else:
+        middle = max(lc, low)
+    if tl / (middle * longest) < math.sin(min_angle):
+        return 0, 0
+    ang_a, ang_b, ang_v = corner_angles(xa, xb, xv)
+    limit = limits[LIMIT_FAN]
+    if fan[a] + ang_a > limit or fan[b] + ang_b > limit or (existing and fan[v] + ang_v > limit):
+        return 0, 0
+    bv_new = not in_front(out_adj, out_cnt, b, v)
+    va_new = not in_front(out_adj, out_cnt, v, a)
+    # every new edge must leave both its ends into their unmeshed wedges
+    if bv_new:
+        if not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, b, _sub(xv, xb), n):
+            return 0, 0
+        if existing and not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, v,
+                                         _sub(xb, xv), n):
+            return 0, 0
+    if va_new:
+        if not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, a, _sub(xv, xa), n):
+            return 0, 0
+        if existing and not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, v,
+                                         _sub(xa, xv), n):
+            return 0, 0
+    count = 1
+    for c in range(3):
+        probes[0, c] = (xa[c] + xb[c] + xv[c]) / 3.0
+    if bv_new:
+        for c in range(3):
+            probes[count, c] = 0.5 * (xb[c] + xv[c])
+        count += 1
+    if va_new:
+        for c in range(3):
+            probes[count, c] = 0.5 * (xv[c] + xa[c])
+        count += 1
+    used = probes[:count]
+    normal = np.empty((1, 3))
+    for c in range(3):
+        normal[0, c] = n[c]
+    # a triangle whose centre or new edges leave the cloud spans a hole of the scan
+    if check_outside:
+        points, pcells, start, order, pcell = pgrid
+        flags = outside_near(points, pcells, start, order, pcell, cloud_normals, spacing, used,
+                             normal, k, limits[LIMIT_INSIDE], limits[LIMIT_OUTSIDE], False,
+                             limits[LIMIT_GAP], MAX_SHELL)
+        undecided = False
+        for p in range(count):
+            if flags[p] == 1:
+                return 0, count
+            undecided = undecided or flags[p] < 0
+        if undecided:
+            return -1, count
+    centre = probes[0].copy()
+    head, fnxt, _fprv, fcells = fgrid
+    if covered(head, face_start, face_cell, face_radius, fnxt, fcells, geometry, used, centre,
+               longest, limits[LIMIT_COVER_MARGIN], limits[LIMIT_COVER_HEIGHT]):
+        return 0, count
+    apex = np.empty(3)
+    for c in range(3):
+        apex[c] = xv[c]
+    vhead, vnxt, _vprv, vcells = vgrid
+    clear = front_clear(vhead, vnxt, vcells, vcell, V, N, out_adj, out_cnt, in_adj, in_cnt,
+                        a, b, v, apex, normal[0], longest * 1.5)
+    return (1 if clear else 0), count
+
+
+@numba.njit(cache=True)
+def face_added(V, fan, geometry, fgrid, face_start, face_cell, face_radius, f, a, b, c):
+    """File the new triangle ``f = (a, b, c)``: its row of ``geometry (F, 19)`` (first corner,
+    two edge vectors, unit normal, Gram entries, centroid, corner radius; see :func:`covered`),
+    its place in the grid of the smallest size class whose cells are at least twice its corner
+    radius, and its corner angles added to ``fan (C,)``.  Returns its area."""
+    pa, pb, pc = _row(V, a), _row(V, b), _row(V, c)
+    centroid = ((pa[0] + pb[0] + pc[0]) / 3.0, (pa[1] + pb[1] + pc[1]) / 3.0,
+                (pa[2] + pb[2] + pc[2]) / 3.0)
+    e1, e2 = _sub(pb, pa), _sub(pc, pa)
+    normal = _cross(e1, e2)
+    area2 = _norm(normal)
+    length = area2 if area2 > 0 else 1.0
+    radius = math.sqrt(max(_dot(_sub(pa, centroid), _sub(pa, centroid)),
+                           _dot(_sub(pb, centroid), _sub(pb, centroid)),
+                           _dot(_sub(pc, centroid), _sub(pc, centroid))))
+    lev = 0
+    while lev < len(face_cell) - 1 and radius > 0.5 * face_cell[lev]:
+        lev += 1
+    size = face_cell[lev]
+    head, nxt, prv, cells = fgrid
+    grid_insert(head[face_start[lev]:face_start[lev + 1]], nxt, prv, cells, f,
+                int(math.floor(centroid[0] / size)), int(math.floor(centroid[1] / size)),
+                int(math.floor(centroid[2] / size)))
+    face_radius[lev] = max(face_radius[lev], radius)
+    g = geometry[f]
+    for i in range(3):
+        g[i], g[3 + i], g[6 + i] = pa[i], e1[i], e2[i]
+        g[9 + i] = normal[i] / length
+        g[15 + i] = centroid[i]
+    g[12], g[13], g[14] = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
+    g[18] = radius
+    ang_a, ang_b, ang_c = corner_angles(pa, pb, pc)
+    fan[a] += ang_a
+    fan[b] += ang_b
+    fan[c] += ang_c
+    return 0.5 * area2
+
+
 class PointGrid:
     """Input points filed in a hash grid of cells ``cell`` wide, for nearest-neighbour queries
     from compiled code (:func:`knn`): a k-d tree query costs ~45 microseconds per call however
