@@ -140,12 +140,14 @@ def test_pca_rings_match_the_numpy_formulation():
     rng = np.random.default_rng(4)
     pts = S.sphere(2000, seed=5) + 0.003 * rng.normal(size=(2000, 3))
     dist, idx = cKDTree(pts).query(pts, 13)
-    normals, ring, ring_dist = _pca_rings(pts, idx, dist, 6)
+    normals, ring, ring_dist, flat = _pca_rings(pts, idx, dist, 6, np.array([12]), 0.5)
     # reference: batched covariance eigenvectors, then the nearest point per angular sector
     nb = pts[idx]
     d = nb - nb.mean(axis=1, keepdims=True)
-    want = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))[1][:, :, 0]
+    w, vec = np.linalg.eigh(np.einsum("nki,nkj->nij", d, d))
+    want = vec[:, :, 0]
     assert np.allclose(np.abs(np.einsum("ij,ij->i", normals, want)), 1.0, atol=1e-12)
+    assert np.allclose(flat, w[:, 0] / w[:, 1], rtol=1e-9)
     for i in rng.choice(len(pts), 200, replace=False):
         n = normals[i]
         t1 = np.cross(np.eye(3)[np.argmin(np.abs(n))], n)
@@ -159,6 +161,32 @@ def test_pca_rings_match_the_numpy_formulation():
             assert ring[i, s] == (idx[i, 1 + hit[0]] if len(hit) else -1)
             if len(hit):
                 assert ring_dist[i, s] == dist[i, 1 + hit[0]]
+
+
+def test_pca_normals_take_more_neighbours_where_noise_hides_the_plane():
+    # a plane with noise of about the spacing: the 12 nearest points are not flat enough, the
+    # normal comes from the first count whose least variance is at most half the middle one
+    rng = np.random.default_rng(7)
+    xy = rng.random((3000, 2))
+    pts = np.column_stack([xy, 0.02 * rng.normal(size=3000)])
+    idx = cKDTree(pts).query(pts, 49)[1]
+    dist = cKDTree(pts).query(pts, 13)[0]
+    counts = np.array([12, 24, 48])
+    normals, _, _, flat = _pca_rings(pts, idx, dist, 6, counts, 0.5)
+    want = np.empty((len(pts), 3))
+    for i in range(len(pts)):
+        for c in counts:
+            d = pts[idx[i, :c + 1]] - pts[idx[i, :c + 1]].mean(axis=0)
+            w, vec = np.linalg.eigh(d.T @ d)
+            want[i] = vec[:, 0]
+            if w[0] <= 0.5 * w[1]:
+                break
+    assert np.allclose(np.abs(np.einsum("ij,ij->i", normals, want)), 1.0, atol=1e-9)
+    assert np.median(flat) > 0.25  # a noise-dominated cloud by knn_connectivity's gate
+    # and the larger neighbourhoods do find the plane: the normals of 12 points do not
+    twelve = _pca_rings(pts, idx, dist, 6, counts[:1], 0.5)[0]
+    assert np.median(np.abs(normals[:, 2])) > 0.93  # 0.955: 17 degrees
+    assert np.median(np.abs(twelve[:, 2])) < 0.9  # 0.87: 30 degrees off
 
 
 def test_neighbour_median_and_nearest_in_rows_match_numpy():
