@@ -245,3 +245,31 @@ def test_heap_smallest_is_nsmallest():
     for k in (0, 1, 5, 64, len(heap), len(heap) + 3):
         assert heap_smallest(heap, k) == heapq.nsmallest(k, heap)
     assert heap_smallest([], 4) == []
+
+
+def test_the_triangle_test_accepts_a_fitting_triangle_and_refuses_each_fault():
+    """The compiled validity test of a front step's triangle, one fault at a time, on a
+    triangle built on the plane (front edges a -> b, b -> c, c -> a facing +z: the
+    unmeshed side of a -> b is its right, seen from +z)."""
+    front = _plane_front()
+    up = np.array([0.0, 0.0, 1.0])
+    a, b, c = (front._add_vertex(np.array(x), up)
+               for x in ([0.0, 0.0, 0.0], [0.2, 0.0, 0.0], [0.1, 0.17, 0.0]))
+    front._add_triangle(a, b, c)
+    assert (b, a) in front.front  # the new triangle's edges face the unmeshed plane around it
+    n = (0.0, 0.0, 1.0)
+    ok = front._triangle_ok
+    below = (0.1, -0.17, 0.0)  # the equilateral apex on the unmeshed side of b -> a
+    assert ok(b, a, -1, below, n, np.deg2rad(30), False)
+    assert not ok(b, a, -1, below, (0.0, 0.0, -1.0), np.deg2rad(30), False)  # faces away
+    assert not ok(b, a, -1, (0.1, -0.02, 0.0), n, np.deg2rad(30), False)  # a sliver
+    # the apex at a front vertex whose new edges would leave it into meshed space (c lies on
+    # the other side of a -> b, the triangle would fold over abc)
+    assert not ok(b, a, c, front.P[c], n, np.deg2rad(10), True)
+    # the same triangle on a front edge inside the cloud fits, past the cloud's end (0.2
+    # beyond its last points, two spacings) it spans a hole of the scan
+    for y, inside in ((1.0, True), (front.proj.points[:, 1].min() - 0.2, False)):
+        d, e, f = (front._add_vertex(np.array(x), up)
+                   for x in ([0.0, y, 0.0], [0.2, y, 0.0], [0.1, y + 0.17, 0.0]))
+        front._add_triangle(d, e, f)
+        assert ok(e, d, -1, (0.1, y - 0.17, 0.0), n, np.deg2rad(30), False) is inside
