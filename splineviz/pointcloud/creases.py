@@ -1,0 +1,422 @@
+"""Sharp creases of scanned parts: detection from two-plane fits and the feature-preserving
+projection of a mesh onto them (issue 31, part 3).
+
+Conventions: input points ``(N, 3)`` float64 of a
+:class:`~splineviz.pointcloud.projection.Projector`; mesh ``vertices (V, 3)`` float64 and
+``faces (F, 3)`` int, counter-clockwise seen from the normal side.
+
+The local polynomials of the projection are smooth: across a crease of a machined part they
+round the edge, and the advancing front's vertices, put on that rounded surface, cut a band
+about one triangle wide across every edge (a bevel with wrong normals).  As robust MLS and
+feature-preserving projections do, a neighbourhood is tested for two sides: where a quadric
+leaves residuals well above the noise but two planes, split by k-planes clustering, fit it,
+the surface there is the union of two half-planes meeting on their intersection line.  Mesh
+vertices near that line are put on it, the others of the neighbourhood on their own side's
+plane, and edges are flipped so that the mesh's edges run along the line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from splineviz.pointcloud.cocone import tree_query
+from splineviz.pointcloud.projection import NOISE_FLOOR_PERCENTILE
+from splineviz.pointcloud.relaxation import border_vertices, face_normals
+
+#: input points per neighbourhood: about three spacings around a vertex, so a vertex of the
+#: bevel (within an edge length, at least 1.5 spacings, of the crease) sees both sides
+CREASE_NEIGHBOURS = 32
+#: a neighbourhood is a crease candidate when a quadric leaves a residual (RMS) above this
+#: many times the cloud's noise floor plus ``QUADRIC_FLOOR`` spacings (a noisy flat face's
+#: quadric leaves about 0.8 of its noise: 32 points, 6 coefficients)
+QUADRIC_NOISE = 1.2
+#: (clean scans have no noise to measure against)
+QUADRIC_FLOOR = 0.05
+#: the two planes must explain the points this much better (RMS ratio) than one quadric:
+#: a smooth bend is a quadric, a crease is not (on a cube with 0.29 spacings of noise two
+#: planes overfit a flat face's noise to 0.63-0.75 of the quadric's residual, and fit a
+#: crease to 0.35-0.47 of it)
+PLANES_GAIN = 0.55
+#: ... and leave no more than this many noise levels plus ``QUADRIC_FLOOR`` spacings
+PLANES_NOISE = 2.0
+#: smallest angle between the two planes' (oriented) normals of a crease: gentler bends are
+#: left to the smooth fits (two planes fitted to a noisy flat face's points, 0.29 spacings
+#: of noise, are 20-29 degrees apart)
+MIN_ANGLE = np.deg2rad(40.0)
+#: each side holds at least this fraction of the neighbourhood (a few outliers past an edge
+#: are no side)
+MIN_SHARE = 0.15
+#: k-planes iterations (assign points to the nearer plane, refit)
+PLANE_ITERATIONS = 4
+#: a vertex is put on the crease line when its own side's foot lies within this fraction of
+#: its shortest edge of the line
+SNAP_EDGE = 0.5
+#: two vertices on the line keep at least this fraction of their edge length apart along it
+SNAP_SPREAD = 0.5
+#: a flip towards the line must leave each new triangle within this angle of its side's plane
+FLIP_PLANE_TILT = np.deg2rad(20.0)
+#: passes of the crease flips
+FLIP_PASSES = 3
+
+
+@dataclass(frozen=True)
+class Creases:
+    """Two-sided neighbourhoods found by :func:`detect_creases`, one row per crease query.
+
+    Attributes
+    ----------
+    ids : (M,) int, rows of the queries that lie at a crease
+    normals : (M, 2, 3) unit normals of the two sides' planes
+    origin : (M, 3) the point of the crease line nearest the query
+    direction : (M, 3) unit direction of the line (``normals[:, 0] x normals[:, 1]``)
+    inward : (M, 2, 3) unit directions in each side's plane, across the line, towards that
+        side's points
+    """
+
+    ids: np.ndarray
+    normals: np.ndarray
+    origin: np.ndarray
+    direction: np.ndarray
+    inward: np.ndarray
+
+
+def _plane_fits(rel: np.ndarray, w: np.ndarray):
+    """Weighted least-squares planes of point sets.
+
+    Parameters
+    ----------
+    rel : (M, K, 3) points
+    w : (M, K) weights (0 or 1)
+
+    Returns
+    -------
+    normal : (M, 3) unit normals, centroid : (M, 3), rms : (M,) residual
+    """
+    total = np.maximum(w.sum(axis=1), 1e-300)
+    centroid = np.einsum("mk,mkc->mc", w, rel) / total[:, None]
+    d = rel - centroid[:, None]
+    cov = np.einsum("mk,mki,mkj->mij", w, d, d) / total[:, None, None]
+    ev, evec = np.linalg.eigh(cov)
+    return evec[:, :, 0], centroid, np.sqrt(np.maximum(ev[:, 0], 0.0))
+
+
+def _quadric_rms(rel: np.ndarray) -> np.ndarray:
+    """RMS residual ``(M,)`` of the least-squares quadric ``z = q(x, y)`` over the principal
+    plane of each point set ``rel (M, K, 3)``."""
+    normal, centroid, _ = _plane_fits(rel, np.ones(rel.shape[:2]))
+    d = rel - centroid[:, None]
+    helper = np.zeros_like(normal)
+    helper[np.arange(len(normal)), np.argmin(np.abs(normal), axis=1)] = 1.0
+    ex = np.cross(helper, normal)
+    ex /= np.linalg.norm(ex, axis=1, keepdims=True)
+    ey = np.cross(normal, ex)
+    x, y, z = (np.einsum("mkc,mc->mk", d, e) for e in (ex, ey, normal))
+    scale = np.maximum(np.sqrt((x * x + y * y).mean(axis=1)), 1e-300)[:, None]
+    x, y = x / scale, y / scale  # unit spread: the normal equations stay well conditioned
+    b = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=2)  # (M, K, 6)
+    a = np.einsum("mki,mkj->mij", b, b) + 1e-9 * np.eye(6)
+    c = np.linalg.solve(a, np.einsum("mki,mk->mi", b, z)[..., None])[..., 0]
+    r = z - np.einsum("mki,mi->mk", b, c)
+    return np.sqrt((r * r).mean(axis=1))
+
+
+def detect_creases(queries: np.ndarray, projector) -> Creases:
+    """Find the queries whose neighbourhood of input points is two planes meeting at a crease.
+
+    Per query: its ``CREASE_NEIGHBOURS`` nearest input points; a candidate where a quadric
+    leaves residuals above ``QUADRIC_NOISE`` noise levels (the projector's measured noise,
+    ``QUADRIC_FLOOR`` spacings at least); the points split by their normals (two clusters
+    seeded by the two most different normals) and then by k-planes (each point to the nearer
+    plane, the planes refitted); accepted when the planes meet at ``MIN_ANGLE`` or more, each
+    side holds ``MIN_SHARE`` of the points, and the two planes explain the points far better
+    than the quadric (``PLANES_GAIN``) and to within the noise (``PLANES_NOISE``).
+
+    Parameters
+    ----------
+    queries : (M, 3) float
+    projector : Projector
+
+    Returns
+    -------
+    Creases
+    """
+    q = np.asarray(queries, dtype=np.float64)
+    pts = projector.points
+    k = min(CREASE_NEIGHBOURS, len(pts))
+    _, index = tree_query(projector.conn.tree, q, k)
+    index = np.reshape(index, (len(q), k))
+    nearest = index[:, 0]
+    spacing = projector.scale[nearest]
+    if projector.noise is None:
+        noise, level = np.zeros(len(q)), 0.0
+    else:
+        noise = projector.noise[nearest]
+        # the measured noise holds the narrow fits' bias too, and that is largest at the
+        # creases themselves (a 90 degree edge with 0.29 spacings of noise: 1.4 times the
+        # flat faces'); the cloud's floor is the noise of its flat faces
+        level = np.percentile(projector.noise, NOISE_FLOOR_PERCENTILE)
+    rel = pts[index] - q[:, None]
+    rms_q = _quadric_rms(rel)
+    floor = QUADRIC_FLOOR * spacing
+    cand = np.flatnonzero(rms_q > QUADRIC_NOISE * level + floor)
+    empty = Creases(np.empty(0, dtype=np.int64), np.empty((0, 2, 3)), np.empty((0, 3)),
+                    np.empty((0, 3)), np.empty((0, 2, 3)))
+    if len(cand) == 0:
+        return empty
+    rel = rel[cand]
+    nrm = projector.normals[index[cand]]  # (C, K, 3), oriented alike
+    # seeds: the neighbour's normal farthest from the mean normal, then the one farthest from
+    # that: across a crease these are two of the sides' own normals
+    mean = nrm.mean(axis=1)
+    rows = np.arange(len(cand))
+    seed_a = nrm[rows, np.argmin(np.einsum("ckj,cj->ck", nrm, mean), axis=1)]
+    seed_b = nrm[rows, np.argmin(np.einsum("ckj,cj->ck", nrm, seed_a), axis=1)]
+    side = np.einsum("ckj,cj->ck", nrm, seed_a) < np.einsum("ckj,cj->ck", nrm, seed_b)
+    for _ in range(PLANE_ITERATIONS):
+        w1 = side.astype(float)
+        n0, c0, _ = _plane_fits(rel, 1.0 - w1)
+        n1, c1, _ = _plane_fits(rel, w1)
+        d0 = np.abs(np.einsum("ckj,cj->ck", rel - c0[:, None], n0))
+        d1 = np.abs(np.einsum("ckj,cj->ck", rel - c1[:, None], n1))
+        side = d1 < d0
+    w1 = side.astype(float)
+    n0, c0, _ = _plane_fits(rel, 1.0 - w1)
+    n1, c1, _ = _plane_fits(rel, w1)
+    r = np.where(side, np.einsum("ckj,cj->ck", rel - c1[:, None], n1),
+                 np.einsum("ckj,cj->ck", rel - c0[:, None], n0))
+    rms_p = np.sqrt((r * r).mean(axis=1))
+    share = np.minimum(w1.sum(axis=1), k - w1.sum(axis=1)) / k
+    # the planes' normals turned like the points' (oriented) ones: a thin wedge (a wing's
+    # trailing edge) has nearly opposite sides, not nearly parallel ones
+    for normal, w in ((n0, 1.0 - w1), (n1, w1)):
+        normal *= np.where(np.einsum("cj,ckj,ck->c", normal, nrm, w) < 0, -1.0, 1.0)[:, None]
+    cos = np.einsum("cj,cj->c", n0, n1)
+    ok = ((cos <= np.cos(MIN_ANGLE)) & (share >= MIN_SHARE)
+          & (rms_p <= PLANES_GAIN * rms_q[cand])
+          & (rms_p <= PLANES_NOISE * noise[cand] + floor[cand]))
+    if not ok.any():
+        return empty
+    rel, side, n0, c0, n1, c1 = rel[ok], side[ok], n0[ok], c0[ok], n1[ok], c1[ok]
+    direction = np.cross(n0, n1)
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    # the line's point nearest the query (the origin of rel): x = a n0 + b n1 with
+    # n0 . x = n0 . c0 and n1 . x = n1 . c1
+    cos = np.einsum("cj,cj->c", n0, n1)
+    e0, e1 = np.einsum("cj,cj->c", n0, c0), np.einsum("cj,cj->c", n1, c1)
+    det = 1.0 - cos * cos
+    a, b = (e0 - cos * e1) / det, (e1 - cos * e0) / det
+    origin = a[:, None] * n0 + b[:, None] * n1
+    inward = []
+    for normal, centroid in ((n0, c0), (n1, c1)):
+        u = np.cross(direction, normal)
+        sign = np.sign(np.einsum("cj,cj->c", centroid - origin, u))
+        inward.append(u * np.where(sign == 0, 1.0, sign)[:, None])
+    ids = cand[ok]
+    return Creases(ids, np.stack([n0, n1], axis=1), origin + q[ids], direction,
+                   np.stack(inward, axis=1))
+
+
+def wedge_feet(points: np.ndarray, creases: Creases):
+    """Nearest points on the two half-planes of each crease (the union of the sides).
+
+    Parameters
+    ----------
+    points : (M, 3), one per row of ``creases``
+    creases : Creases
+
+    Returns
+    -------
+    foot : (M, 3) nearest point on the union of the half-planes
+    side : (M,) int, 0 or 1: the half-plane of the foot
+    across : (M,) float >= 0, the foot's distance from the line
+    """
+    rel = points - creases.origin
+    along = np.einsum("mj,mj->m", rel, creases.direction)
+    t = np.maximum(np.einsum("mj,msj->ms", rel, creases.inward), 0.0)  # (M, 2)
+    feet = (creases.origin + along[:, None] * creases.direction)[:, None] \
+        + t[..., None] * creases.inward
+    dist = np.linalg.norm(feet - points[:, None], axis=2)
+    side = np.argmin(dist, axis=1)
+    rows = np.arange(len(points))
+    return feet[rows, side], side, t[rows, side]
+
+
+def _snap(vertices: np.ndarray, faces: np.ndarray, ids: np.ndarray, line: np.ndarray,
+          across: np.ndarray) -> np.ndarray:
+    """Choose the vertices put on the crease line: nearest the line first, each at least
+    ``SNAP_SPREAD`` of its edge length from every neighbour already on it (two vertices of
+    one edge across the bevel would meet at one point of the line).
+
+    Parameters
+    ----------
+    vertices : (V, 3)
+    faces : (F, 3) int
+    ids : (M,) int, crease vertices
+    line : (M, 3), each one's nearest point of its crease line
+    across : (M,) float, each one's distance from the line in units of its shortest edge
+
+    Returns
+    -------
+    (M,) bool, True where the vertex goes onto the line.
+    """
+    from scipy import sparse
+
+    n = len(vertices)
+    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    adj = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
+    adj = (adj + adj.T).tocsr()
+    row_of = np.full(n, -1)
+    row_of[ids] = np.arange(len(ids))
+    snapped = np.zeros(len(ids), dtype=bool)
+    # sequential: whether a vertex may go depends on its neighbours' choices (the crease
+    # band holds a small share of the vertices)
+    for r in np.argsort(across):
+        if across[r] >= SNAP_EDGE:
+            break
+        i = ids[r]
+        nb = adj.indices[adj.indptr[i]:adj.indptr[i + 1]]
+        rn = row_of[nb]
+        on = rn >= 0
+        nb, rn = nb[on], rn[on]
+        rn_on = snapped[rn]
+        if rn_on.any():
+            gap = np.linalg.norm(line[rn[rn_on]] - line[r], axis=1)
+            edge = np.linalg.norm(vertices[nb[rn_on]] - vertices[i], axis=1)
+            if np.any(gap < SNAP_SPREAD * edge):
+                continue
+        snapped[r] = True
+    return snapped
+
+
+def _interior_edges(faces: np.ndarray, n: int):
+    """Edges with two triangles: ``(a, b, c, d, f1, f2)`` arrays, ``f1 = (a, b, c)`` and
+    ``f2 = (b, a, d)`` cyclically; and the sorted keys ``min * n + max`` of all edges."""
+    f = np.asarray(faces, dtype=np.int64)
+    fid = np.repeat(np.arange(len(f)), 3)
+    a = f.ravel()
+    b = np.roll(f, -1, axis=1).ravel()
+    c = np.roll(f, -2, axis=1).ravel()
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    pair = np.flatnonzero(ks[1:] == ks[:-1])
+    h1, h2 = order[pair], order[pair + 1]
+    return (a[h1], b[h1], c[h1], c[h2], fid[h1], fid[h2]), np.unique(key)
+
+
+def crease_flips(vertices: np.ndarray, faces: np.ndarray, on_line: np.ndarray,
+                 plane: np.ndarray) -> tuple[np.ndarray, int]:
+    """Flip edges that cross a crease into edges along it.
+
+    An interior edge ``(a, b)`` whose two end vertices lie on different sides (their planes'
+    normals apart by more than half ``MIN_ANGLE``) and whose two opposite vertices ``c``,
+    ``d`` both lie on the line is replaced by ``(c, d)``, when each new triangle lies within
+    ``FLIP_PLANE_TILT`` of its side's plane and turns over no triangle.
+
+    Parameters
+    ----------
+    vertices : (V, 3)
+    faces : (F, 3) int
+    on_line : (V,) bool, vertices on a crease line
+    plane : (V, 3) unit normal of each vertex's side plane (NaN where it has none)
+
+    Returns
+    -------
+    faces : (F, 3) int, flipped copy
+    flips : int
+    """
+    f = np.array(faces, dtype=np.int64)
+    n = len(vertices)
+    total = 0
+    for _ in range(FLIP_PASSES):
+        (a, b, c, d, f1, f2), keys = _interior_edges(f, n)
+        has_plane = ~np.isnan(plane[:, 0])
+        sel = on_line[c] & on_line[d] & ~on_line[a] & ~on_line[b] & has_plane[a] & has_plane[b]
+        a, b, c, d, f1, f2 = (x[sel] for x in (a, b, c, d, f1, f2))
+        apart = np.einsum("ij,ij->i", plane[a], plane[b]) < np.cos(0.5 * MIN_ANGLE)
+        new_key = np.minimum(c, d) * n + np.maximum(c, d)
+        fresh = ~np.isin(new_key, keys)
+        old = face_normals(vertices, np.stack([a, b, c], axis=1)) \
+            + face_normals(vertices, np.stack([b, a, d], axis=1))
+        n1 = face_normals(vertices, np.stack([a, d, c], axis=1))
+        n2 = face_normals(vertices, np.stack([d, b, c], axis=1))
+        tilt = np.cos(FLIP_PLANE_TILT)
+        fits = ((np.abs(np.einsum("ij,ij->i", n1, plane[a])) >= tilt)
+                & (np.abs(np.einsum("ij,ij->i", n2, plane[b])) >= tilt)
+                & (np.einsum("ij,ij->i", n1, old) > 0) & (np.einsum("ij,ij->i", n2, old) > 0))
+        ok = np.flatnonzero(apart & fresh & fits)
+        # one flip per triangle and per new edge in a pass
+        _, first = np.unique(np.concatenate([f1[ok], f2[ok]]), return_index=True)
+        once = np.zeros(2 * len(ok), dtype=bool)
+        once[first] = True
+        ok = ok[once[:len(ok)] & once[len(ok):]]
+        _, first = np.unique(new_key[ok], return_index=True)
+        ok = ok[np.sort(first)]
+        if len(ok) == 0:
+            break
+        f[f1[ok]] = np.stack([a[ok], d[ok], c[ok]], axis=1)
+        f[f2[ok]] = np.stack([d[ok], b[ok], c[ok]], axis=1)
+        total += len(ok)
+    return f, total
+
+
+def sharpen(vertices: np.ndarray, faces: np.ndarray, projector):
+    """The feature-preserving projection of a mesh: vertices near a detected crease onto its
+    line, the other vertices of two-sided neighbourhoods onto their own side's plane, then
+    edges flipped to run along the line (:func:`crease_flips`).
+
+    Border vertices stay; a move that turns a triangle by more than a right angle is undone
+    (with the moves of that triangle's other corners).
+
+    Parameters
+    ----------
+    vertices : (V, 3) float, on the projector's surface
+    faces : (F, 3) int
+    projector : Projector
+
+    Returns
+    -------
+    vertices : (V, 3) float64 (a copy)
+    faces : (F, 3) int64
+    on_line : (V,) bool, the vertices put on a crease line
+    flips : int
+    """
+    v = np.array(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    n = len(v)
+    on_line = np.zeros(n, dtype=bool)
+    plane = np.full((n, 3), np.nan)
+    if len(f) == 0:
+        return v, f, on_line, 0
+    used = np.zeros(n, dtype=bool)
+    used[f.ravel()] = True
+    free = np.flatnonzero(used & ~border_vertices(n, f))
+    cr = detect_creases(v[free], projector)
+    if len(cr.ids) == 0:
+        return v, f, on_line, 0
+    ids = free[cr.ids]
+    foot, side, across = wedge_feet(v[ids], cr)
+    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    length = np.linalg.norm(v[e[:, 0]] - v[e[:, 1]], axis=1)
+    shortest = np.full(n, np.inf)
+    np.minimum.at(shortest, e[:, 0], length)
+    np.minimum.at(shortest, e[:, 1], length)
+    line = foot - across[:, None] * cr.inward[np.arange(len(ids)), side]
+    snapped = _snap(v, f, ids, line, across / shortest[ids])
+    target = np.where(snapped[:, None], line, foot)
+    moved = v.copy()
+    moved[ids] = target
+    before = face_normals(v, f)
+    for _ in range(len(f)):
+        turned = np.einsum("ij,ij->i", before, face_normals(moved, f)) < 0.0
+        if not turned.any():
+            break
+        back = f[turned].ravel()
+        moved[back] = v[back]
+    kept = np.all(moved[ids] == target, axis=1)
+    on_line[ids[kept & snapped]] = True
+    plane[ids[kept]] = cr.normals[np.arange(len(ids)), side][kept]
+    faces_out, flips = crease_flips(moved, f, on_line, plane)
+    return moved, faces_out, on_line, flips
