@@ -34,11 +34,11 @@ CREASE_NEIGHBOURS = 32
 QUADRIC_NOISE = 1.2
 #: (clean scans have no noise to measure against)
 QUADRIC_FLOOR = 0.05
-#: the two planes must explain the points this much better (RMS ratio) than one quadric:
-#: a smooth bend is a quadric, a crease is not (on a cube with 0.29 spacings of noise two
-#: planes overfit a flat face's noise to 0.63-0.75 of the quadric's residual, and fit a
-#: crease to 0.35-0.47 of it)
-PLANES_GAIN = 0.55
+#: the wedge of the two sides must explain the points this much better (RMS ratio) than one
+#: quadric: a smooth bend is a quadric, a crease is not (a cube with 0.29 spacings of noise:
+#: 0.6 found 30 % of the vertices within a spacing of its edges, 0.75 80 % but 2 of 3000
+#: vertices of a sphere of 40 spacings' radius with the same noise)
+PLANES_GAIN = 0.7
 #: ... and leave no more than this many noise levels plus ``QUADRIC_FLOOR`` spacings
 PLANES_NOISE = 2.0
 #: smallest angle between the two planes' (oriented) normals of a crease: gentler bends are
@@ -184,28 +184,41 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
     w1 = side.astype(float)
     n0, c0, _ = _plane_fits(rel, 1.0 - w1)
     n1, c1, _ = _plane_fits(rel, w1)
-    r = np.where(side, np.einsum("ckj,cj->ck", rel - c1[:, None], n1),
-                 np.einsum("ckj,cj->ck", rel - c0[:, None], n0))
-    rms_p = np.sqrt((r * r).mean(axis=1))
     share = np.minimum(w1.sum(axis=1), k - w1.sum(axis=1)) / k
     # the planes' normals turned like the points' (oriented) ones: a thin wedge (a wing's
     # trailing edge) has nearly opposite sides, not nearly parallel ones
     for normal, w in ((n0, 1.0 - w1), (n1, w1)):
         normal *= np.where(np.einsum("cj,ckj,ck->c", normal, nrm, w) < 0, -1.0, 1.0)[:, None]
     cos = np.einsum("cj,cj->c", n0, n1)
+    wedge = _wedge(n0, c0, n1, c1)
+    # the residual of the wedge (each point's distance to the nearer half-plane), not of
+    # the two planes: assigning each point to the nearer of two whole planes fits noise
+    # (a noisy sphere's or flat face's two planes leave 0.6-0.7 of the quadric's residual)
+    rows = np.repeat(np.arange(len(cand)), k)
+    foot, _, _ = wedge_feet(rel.reshape(-1, 3), Creases(rows, *(x[rows] for x in wedge)))
+    r = np.linalg.norm(foot - rel.reshape(-1, 3), axis=1).reshape(-1, k)
+    rms_p = np.sqrt((r * r).mean(axis=1))
     ok = ((cos <= np.cos(MIN_ANGLE)) & (share >= MIN_SHARE)
           & (rms_p <= PLANES_GAIN * rms_q[cand])
           & (rms_p <= PLANES_NOISE * noise[cand] + floor[cand]))
     if not ok.any():
         return empty
-    rel, side, n0, c0, n1, c1 = rel[ok], side[ok], n0[ok], c0[ok], n1[ok], c1[ok]
+    ids = cand[ok]
+    normals, origin, direction, inward = (x[ok] for x in wedge)
+    return Creases(ids, normals, origin + q[ids], direction, inward)
+
+
+def _wedge(n0, c0, n1, c1):
+    """The two half-planes of planes ``(n0, c0)`` and ``(n1, c1)`` (unit normals ``(M, 3)``,
+    points ``(M, 3)`` on them, the centroids of their sides' points): ``normals (M, 2, 3)``,
+    the line's point nearest the origin ``(M, 3)``, its unit direction ``(M, 3)`` and the
+    directions ``inward (M, 2, 3)`` from the line towards each centroid within its plane."""
     direction = np.cross(n0, n1)
-    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
-    # the line's point nearest the query (the origin of rel): x = a n0 + b n1 with
-    # n0 . x = n0 . c0 and n1 . x = n1 . c1
+    direction /= np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
+    # x = a n0 + b n1 with n0 . x = n0 . c0 and n1 . x = n1 . c1
     cos = np.einsum("cj,cj->c", n0, n1)
     e0, e1 = np.einsum("cj,cj->c", n0, c0), np.einsum("cj,cj->c", n1, c1)
-    det = 1.0 - cos * cos
+    det = np.maximum(1.0 - cos * cos, 1e-12)
     a, b = (e0 - cos * e1) / det, (e1 - cos * e0) / det
     origin = a[:, None] * n0 + b[:, None] * n1
     inward = []
@@ -213,9 +226,7 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
         u = np.cross(direction, normal)
         sign = np.sign(np.einsum("cj,cj->c", centroid - origin, u))
         inward.append(u * np.where(sign == 0, 1.0, sign)[:, None])
-    ids = cand[ok]
-    return Creases(ids, np.stack([n0, n1], axis=1), origin + q[ids], direction,
-                   np.stack(inward, axis=1))
+    return np.stack([n0, n1], axis=1), origin, direction, np.stack(inward, axis=1)
 
 
 def wedge_feet(points: np.ndarray, creases: Creases):
