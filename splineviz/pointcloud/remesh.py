@@ -123,7 +123,8 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
            min_length: float | None = None, max_length: float | None = None,
            smoothing: float | None = None, optimize_mesh: bool = True,
            projector: Projector | None = None,
-           fixed_degree: int | None = None, report: RemeshReport | None = None):
+           fixed_degree: int | None = None, report: RemeshReport | None = None,
+           sharp_creases: bool = True):
     """Triangulate a point cloud with near-equilateral, curvature-adapted triangles.
 
     Parameters
@@ -145,14 +146,18 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     optimize_mesh : bool
         Run valence flips and tangential relaxation after the front, then fit the vertices
         to the surface in the least-squares sense
-        (:func:`~splineviz.pointcloud.surface_fit.fit_heights`), and put the vertices near
-        sharp creases onto them (:func:`~splineviz.pointcloud.creases.sharpen`).
+        (:func:`~splineviz.pointcloud.surface_fit.fit_heights`).
     projector : Projector, optional
         Reuse a precomputed projector (its own ``smoothing`` applies).
     fixed_degree : int, optional
         Fixed polynomial degree (MLS-style ablation) when no projector is given.
     report : RemeshReport, optional
         Filled with timings and front statistics.
+    sharp_creases : bool
+        With ``optimize_mesh``, find the sharp creases of the points (two planes meeting at
+        an edge) and put the mesh's vertices near them onto the edge, its edges along it
+        (:func:`~splineviz.pointcloud.creases.sharpen`); ``False`` keeps the smooth fits'
+        rounded creases.
 
     Returns
     -------
@@ -176,7 +181,8 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     rep = report if report is not None else RemeshReport()
     rep.parameters = {"edge_length": edge_length, "rho": rho, "min_length": min_length,
                       "max_length": max_length, "smoothing": smoothing,
-                      "fixed_degree": fixed_degree, "optimize_mesh": optimize_mesh}
+                      "fixed_degree": fixed_degree, "optimize_mesh": optimize_mesh,
+                      "sharp_creases": sharp_creases}
 
     def stage(frac, message):
         if progress is not None and progress(frac, message) is False:
@@ -220,8 +226,9 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
         # last: the smooth fits (and the heights fitted to them) round a crease of a
         # scanned part into a band of wrong normals; its vertices go onto the intersection
         # of the two sides' planes and its edges along that line
-        vertices, faces, _, crease_flips = sharpen(vertices, faces, projector)
-        flips += crease_flips
+        if sharp_creases:
+            vertices, faces, _, crease_flips = sharpen(vertices, faces, projector)
+            flips += crease_flips
     t3 = time.perf_counter()
     stage(1.0, "done")
     rep.timings = {"projector_s": t1 - t0, "front_s": t2 - t1, "optimize_s": t3 - t2,
