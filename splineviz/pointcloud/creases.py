@@ -94,6 +94,26 @@ class Creases:
     inward: np.ndarray
 
 
+def _dots(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot products ``(M, K)`` of ``a (M, K, 3)`` with ``b (M, 3)`` (a batched
+    matrix product: several times faster than the equivalent einsum)."""
+    return (a @ b[..., None])[..., 0]
+
+
+def _wedge_distance2(rel, normals, origin, direction, inward) -> np.ndarray:
+    """Squared distances ``(M, K)`` of points ``rel (M, K, 3)`` to the nearer half-plane of
+    their row's wedge (see :func:`_wedge`): the distance to a half-plane is the distance to
+    its plane where the point lies over it, and grows with the distance past the line."""
+    out = None
+    rel_o = rel - origin[:, None]
+    for s in range(2):
+        height = _dots(rel_o, normals[:, s])
+        past = np.minimum(_dots(rel_o, inward[:, s]), 0.0)
+        d2 = height * height + past * past
+        out = d2 if out is None else np.minimum(out, d2)
+    return out
+
+
 def _plane_fits(rel: np.ndarray, w: np.ndarray):
     """Weighted least-squares planes of point sets.
 
@@ -107,9 +127,9 @@ def _plane_fits(rel: np.ndarray, w: np.ndarray):
     normal : (M, 3) unit normals, centroid : (M, 3), rms : (M,) residual
     """
     total = np.maximum(w.sum(axis=1), 1e-300)
-    centroid = np.einsum("mk,mkc->mc", w, rel) / total[:, None]
+    centroid = (w[:, None] @ rel)[:, 0] / total[:, None]
     d = rel - centroid[:, None]
-    cov = np.einsum("mk,mki,mkj->mij", w, d, d) / total[:, None, None]
+    cov = ((d * w[..., None]).transpose(0, 2, 1) @ d) / total[:, None, None]
     ev, evec = np.linalg.eigh(cov)
     return evec[:, :, 0], centroid, np.sqrt(np.maximum(ev[:, 0], 0.0))
 
@@ -124,13 +144,13 @@ def _quadric_rms(rel: np.ndarray) -> np.ndarray:
     ex = np.cross(helper, normal)
     ex /= np.linalg.norm(ex, axis=1, keepdims=True)
     ey = np.cross(normal, ex)
-    x, y, z = (np.einsum("mkc,mc->mk", d, e) for e in (ex, ey, normal))
+    x, y, z = (_dots(d, e) for e in (ex, ey, normal))
     scale = np.maximum(np.sqrt((x * x + y * y).mean(axis=1)), 1e-300)[:, None]
     x, y = x / scale, y / scale  # unit spread: the normal equations stay well conditioned
     b = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=2)  # (M, K, 6)
-    a = np.einsum("mki,mkj->mij", b, b) + 1e-9 * np.eye(6)
-    c = np.linalg.solve(a, np.einsum("mki,mk->mi", b, z)[..., None])[..., 0]
-    r = z - np.einsum("mki,mi->mk", b, c)
+    bt = b.transpose(0, 2, 1)
+    c = np.linalg.solve(bt @ b + 1e-9 * np.eye(6), bt @ z[..., None])
+    r = z - (b @ c)[..., 0]
     return np.sqrt((r * r).mean(axis=1))
 
 
@@ -189,15 +209,15 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
     # that: across a crease these are two of the sides' own normals
     mean = nrm.mean(axis=1)
     rows = np.arange(len(cand))
-    seed_a = nrm[rows, np.argmin(np.einsum("ckj,cj->ck", nrm, mean), axis=1)]
-    seed_b = nrm[rows, np.argmin(np.einsum("ckj,cj->ck", nrm, seed_a), axis=1)]
-    side = np.einsum("ckj,cj->ck", nrm, seed_a) < np.einsum("ckj,cj->ck", nrm, seed_b)
+    seed_a = nrm[rows, np.argmin(_dots(nrm, mean), axis=1)]
+    seed_b = nrm[rows, np.argmin(_dots(nrm, seed_a), axis=1)]
+    side = _dots(nrm, seed_a) < _dots(nrm, seed_b)
     for _ in range(PLANE_ITERATIONS):
         w1 = side.astype(float)
         n0, c0, _ = _plane_fits(rel, 1.0 - w1)
         n1, c1, _ = _plane_fits(rel, w1)
-        d0 = np.abs(np.einsum("ckj,cj->ck", rel - c0[:, None], n0))
-        d1 = np.abs(np.einsum("ckj,cj->ck", rel - c1[:, None], n1))
+        d0 = np.abs(_dots(rel, n0) - np.einsum("cj,cj->c", c0, n0)[:, None])
+        d1 = np.abs(_dots(rel, n1) - np.einsum("cj,cj->c", c1, n1)[:, None])
         side = d1 < d0
     w1 = side.astype(float)
     n0, c0, _ = _plane_fits(rel, 1.0 - w1)
@@ -206,16 +226,13 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
     # the planes' normals turned like the points' (oriented) ones: a thin wedge (a wing's
     # trailing edge) has nearly opposite sides, not nearly parallel ones
     for normal, w in ((n0, 1.0 - w1), (n1, w1)):
-        normal *= np.where(np.einsum("cj,ckj,ck->c", normal, nrm, w) < 0, -1.0, 1.0)[:, None]
+        normal *= np.where((_dots(nrm, normal) * w).sum(axis=1) < 0, -1.0, 1.0)[:, None]
     cos = np.einsum("cj,cj->c", n0, n1)
     wedge = _wedge(n0, c0, n1, c1)
     # the residual of the wedge (each point's distance to the nearer half-plane), not of
     # the two planes: assigning each point to the nearer of two whole planes fits noise
     # (a noisy sphere's or flat face's two planes leave 0.6-0.7 of the quadric's residual)
-    rows = np.repeat(np.arange(len(cand)), k)
-    foot, _, _ = wedge_feet(rel.reshape(-1, 3), Creases(rows, *(x[rows] for x in wedge)))
-    r = np.linalg.norm(foot - rel.reshape(-1, 3), axis=1).reshape(-1, k)
-    rms_p = np.sqrt((r * r).mean(axis=1))
+    rms_p = np.sqrt(_wedge_distance2(rel, *wedge).mean(axis=1))
     ok = ((cos <= np.cos(MIN_ANGLE)) & (share >= MIN_SHARE)
           & (rms_p <= PLANES_GAIN * rms_q[cand])
           & (rms_p <= PLANES_NOISE * noise[cand] + floor[cand]))
