@@ -56,6 +56,8 @@ MIN_ANGLE = np.deg2rad(40.0)
 #: each side holds at least this fraction of the neighbourhood (a few outliers past an edge
 #: are no side)
 MIN_SHARE = 0.15
+#: crease queries per block of :func:`detect_creases`
+CREASE_BLOCK = 16384
 #: k-planes iterations (assign points to the nearer plane, refit)
 PLANE_ITERATIONS = 4
 #: a vertex is put on the crease line when its own side's foot lies within this fraction of
@@ -181,15 +183,34 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
     Creases
     """
     q = np.asarray(queries, dtype=np.float64)
-    pts = projector.points
     level = 0.0
     if projector.noise is not None:
         # the measured noise holds the narrow fits' bias too, and that is largest at the
         # creases themselves (a 90 degree edge with 0.29 spacings of noise: 1.4 times the
         # flat faces'); the cloud's floor is the noise of its flat faces
         level = float(np.percentile(projector.noise, NOISE_FLOOR_PERCENTILE))
-    k = crease_neighbours(level / np.median(projector.scale))
-    k = min(k, len(pts))
+    k = min(crease_neighbours(level / np.median(projector.scale)), len(projector.points))
+    # in blocks: the (B, k, 6) quadric bases and (B, k, 3) neighbourhoods are bounded by the
+    # block, not the mesh
+    parts = [_detect_block(q[lo:lo + CREASE_BLOCK], projector, k, level)
+             for lo in range(0, len(q), CREASE_BLOCK)]
+    if not parts:
+        return _no_creases()
+    starts = range(0, len(q), CREASE_BLOCK)
+    return Creases(np.concatenate([c.ids + lo for c, lo in zip(parts, starts, strict=True)]),
+                   *(np.concatenate([getattr(c, name) for c in parts])
+                     for name in ("normals", "origin", "direction", "inward")))
+
+
+def _no_creases() -> Creases:
+    return Creases(np.empty(0, dtype=np.int64), np.empty((0, 2, 3)), np.empty((0, 3)),
+                   np.empty((0, 3)), np.empty((0, 2, 3)))
+
+
+def _detect_block(q: np.ndarray, projector, k: int, level: float) -> Creases:
+    """:func:`detect_creases` of queries ``q (B, 3)`` with ``k`` neighbours and the cloud's
+    noise floor ``level`` (world units)."""
+    pts = projector.points
     _, index = tree_query(projector.conn.tree, q, k)
     index = np.reshape(index, (len(q), k))
     nearest = index[:, 0]
@@ -199,10 +220,8 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
     rms_q = _quadric_rms(rel)
     floor = QUADRIC_FLOOR * spacing
     cand = np.flatnonzero(rms_q > QUADRIC_NOISE * level + floor)
-    empty = Creases(np.empty(0, dtype=np.int64), np.empty((0, 2, 3)), np.empty((0, 3)),
-                    np.empty((0, 3)), np.empty((0, 2, 3)))
     if len(cand) == 0:
-        return empty
+        return _no_creases()
     rel = rel[cand]
     nrm = projector.normals[index[cand]]  # (C, K, 3), oriented alike
     # seeds: the neighbour's normal farthest from the mean normal, then the one farthest from
@@ -237,7 +256,7 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
           & (rms_p <= PLANES_GAIN * rms_q[cand])
           & (rms_p <= PLANES_NOISE * noise[cand] + floor[cand]))
     if not ok.any():
-        return empty
+        return _no_creases()
     ids = cand[ok]
     normals, origin, direction, inward = (x[ok] for x in wedge)
     return Creases(ids, normals, origin + q[ids], direction, inward)

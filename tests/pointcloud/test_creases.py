@@ -122,3 +122,19 @@ def test_remeshed_cube_keeps_its_edges_and_flat_faces():
     off = _edge_distance(v[near & ~corner])
     assert np.median(off) < 0.005
     assert off.max() < 0.03
+
+
+def test_detection_in_blocks_is_the_same(monkeypatch):
+    import splineviz.pointcloud.creases as creases
+
+    pts = _cube(6000, 0.005, seed=6)
+    pr = Projector(pts)
+    t = np.linspace(-0.8, 0.8, 50)
+    q = np.concatenate([np.stack([np.ones_like(t), -np.ones_like(t), t], axis=1),
+                        np.stack([np.ones_like(t), 0.5 * t, t], axis=1)])
+    whole = detect_creases(q, pr)
+    monkeypatch.setattr(creases, "CREASE_BLOCK", 7)
+    blocks = detect_creases(q, pr)
+    assert len(whole.ids) > 0
+    for name in ("ids", "normals", "origin", "direction", "inward"):
+        np.testing.assert_allclose(getattr(blocks, name), getattr(whole, name), atol=1e-12)
