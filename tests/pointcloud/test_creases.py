@@ -138,3 +138,31 @@ def test_detection_in_blocks_is_the_same(monkeypatch):
     assert len(whole.ids) > 0
     for name in ("ids", "normals", "origin", "direction", "inward"):
         np.testing.assert_allclose(getattr(blocks, name), getattr(whole, name), atol=1e-12)
+
+
+def _profile(n, radius, noise, seed):
+    """``(n, 3)`` points within 0.5 of an edge along y: the top z = 0 (x < 0) and the side
+    x = radius (z < -radius) joined by a quarter cylinder of ``radius`` (0: a sharp edge),
+    and the side of each point (True: the side face or the fillet's lower half)."""
+    rng = np.random.default_rng(seed)
+    arc = 0.5 * np.pi * radius
+    s = rng.uniform(-0.5, 0.5 + arc, n)  # arc length along the profile
+    phi = np.clip(s / max(radius, 1e-12), 0.0, 0.5 * np.pi)
+    x = np.where(s < 0, s, np.where(s <= arc, radius * np.sin(phi), radius))
+    z = np.where(s < 0, 0.0, np.where(s <= arc, radius * (np.cos(phi) - 1.0),
+                                      radius - s + arc - 2 * radius))
+    p = np.stack([x, rng.uniform(-0.3, 0.3, n), z], axis=1)
+    return p + noise * rng.normal(size=p.shape), s > 0.5 * arc
+
+
+def test_a_rounded_edge_is_told_from_a_sharp_one():
+    from splineviz.pointcloud.creases import _rounded, _wedge
+
+    spacing, noise = np.array([0.05]), 0.01
+    for radius, rounded in ((0.0, False), (0.15, True)):
+        rel, side = _profile(400, radius, noise, seed=7)
+        # the planes of the two flat faces, which a wedge fit to a fillet comes close to
+        wedge = _wedge(np.array([[0.0, 0, 1]]), np.array([[-0.3, 0, 0]]),
+                       np.array([[1.0, 0, 0]]), np.array([[radius, 0, -0.3 - radius]]))
+        rms = np.array([noise])
+        assert _rounded(rel[None], side[None], wedge, spacing, rms)[0] == rounded
