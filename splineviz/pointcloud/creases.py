@@ -97,7 +97,8 @@ class Creases:
     Attributes
     ----------
     ids : (M,) int, rows of the queries that lie at a crease
-    normals : (M, 2, 3) unit normals of the two sides' planes
+    normals : (M, 2, 3) unit normals of the two sides' planes, turned like the projector's
+        (oriented) normals
     origin : (M, 3) the point of the crease line nearest the query
     direction : (M, 3) unit direction of the line (``normals[:, 0] x normals[:, 1]``)
     inward : (M, 2, 3) unit directions in each side's plane, across the line, towards that
@@ -180,13 +181,15 @@ def crease_neighbours(noise: float) -> int:
 def detect_creases(queries: np.ndarray, projector) -> Creases:
     """Find the queries whose neighbourhood of input points is two planes meeting at a crease.
 
-    Per query: its ``CREASE_NEIGHBOURS`` nearest input points; a candidate where a quadric
-    leaves residuals above ``QUADRIC_NOISE`` noise levels (the projector's measured noise,
-    ``QUADRIC_FLOOR`` spacings at least); the points split by their normals (two clusters
-    seeded by the two most different normals) and then by k-planes (each point to the nearer
-    plane, the planes refitted); accepted when the planes meet at ``MIN_ANGLE`` or more, each
-    side holds ``MIN_SHARE`` of the points, and the two planes explain the points far better
-    than the quadric (``PLANES_GAIN``) and to within the noise (``PLANES_NOISE``).
+    Per query: its nearest input points (:func:`crease_neighbours`, more in noisier clouds);
+    a candidate where a quadric leaves residuals above ``QUADRIC_NOISE`` times the cloud's
+    noise floor (the projector's measured noise) plus ``QUADRIC_FLOOR`` spacings; the points
+    split by their normals (two clusters seeded by the two most different normals) and then
+    by k-planes (each point to the nearer plane, the planes refitted); accepted when the
+    planes' oriented normals are ``MIN_ANGLE`` or more apart, each side holds ``MIN_SHARE``
+    of the points, the wedge of the two half-planes explains the points far better than the
+    quadric (``PLANES_GAIN``) and to within the noise (``PLANES_NOISE``), and the points
+    near its line show no fillet (:func:`_rounded`).
 
     Parameters
     ----------
