@@ -5,8 +5,15 @@ import numpy as np
 import pc_surfaces as S
 
 import splineviz as sv
-from splineviz.pointcloud.creases import Creases, detect_creases, sharpen, wedge_feet
+from splineviz.pointcloud.creases import (
+    SPOIL_RATIO,
+    Creases,
+    detect_creases,
+    sharpen,
+    wedge_feet,
+)
 from splineviz.pointcloud.projection import Projector
+from splineviz.pointcloud.quality import radius_ratios
 from splineviz.pointcloud.relaxation import face_normals
 
 
@@ -92,6 +99,13 @@ def test_sharpen_puts_vertices_on_the_cube_edges():
         return np.mean(np.abs(n).max(axis=1) < np.cos(np.deg2rad(10.0)))
 
     assert bevelled(moved, faces) < 0.5 * bevelled(v, f)
+    # no triangle turned over or left a sliver by the moves, flips and relaxation
+    assert radius_ratios(moved, faces).min() >= min(SPOIL_RATIO, radius_ratios(v, f).min())
+    def inward(vertices, tris):  # triangles facing into the cube
+        return np.sum(np.einsum("ij,ij->i", face_normals(vertices, tris),
+                                vertices[tris].mean(axis=1)) < 0.0)
+
+    assert inward(moved, faces) <= inward(v, f)
 
 
 def test_remeshed_cube_keeps_its_edges_and_flat_faces():
