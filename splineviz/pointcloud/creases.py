@@ -24,12 +24,7 @@ import numpy as np
 from splineviz.pointcloud.cocone import tree_query
 from splineviz.pointcloud.projection import NOISE_FLOOR_PERCENTILE
 from splineviz.pointcloud.quality import radius_ratios
-from splineviz.pointcloud.relaxation import (
-    FLIP_QUALITY_KEEP,
-    RELAX_STEP,
-    border_vertices,
-    face_normals,
-)
+from splineviz.pointcloud.relaxation import FLIP_QUALITY_KEEP, border_vertices, face_normals
 
 #: input points per neighbourhood of a clean scan: about three spacings around a vertex, so
 #: a vertex of the bevel (within an edge length, at least 1.5 spacings, of the crease) sees
@@ -91,8 +86,6 @@ FLIP_PLANE_TILT = np.deg2rad(20.0)
 #: ``FLIP_QUALITY_KEEP`` of its old one): on the bunny, whose scan has a few sharp rims, the
 #: unguarded moves took the smallest radius ratio from 0.36 to 0.20
 SPOIL_RATIO = 0.3
-#: iterations of the relaxation of the crease vertices within their wedges
-BAND_RELAX_ITERATIONS = 2
 #: passes of the crease flips
 FLIP_PASSES = 3
 
@@ -541,15 +534,7 @@ def sharpen(vertices: np.ndarray, faces: np.ndarray, projector):
     on_line[ids[kept & snapped]] = True
     plane[ids[kept]] = cr.normals[np.arange(len(ids)), side][kept]
     faces_out, flips = crease_flips(moved, f, on_line, plane)
-    moved = _relax_band(moved, faces_out, ids[kept], _rows(cr, kept), side[kept],
-                        snapped[kept])
     return moved, faces_out, on_line, flips
-
-
-def _rows(creases: Creases, keep: np.ndarray) -> Creases:
-    """The rows ``keep`` of ``creases``."""
-    return Creases(*(getattr(creases, name)[keep] for name in
-                     ("ids", "normals", "origin", "direction", "inward")))
 
 
 def _guarded(old: np.ndarray, new: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -569,45 +554,3 @@ def _guarded(old: np.ndarray, new: np.ndarray, faces: np.ndarray) -> np.ndarray:
         back = faces[bad].ravel()
         out[back] = old[back]
     return out
-
-
-def _relax_band(vertices, faces, ids, creases, side, on_line):
-    """Tangential relaxation of the crease vertices within their wedge: those on the line
-    slide along it, the others within their side's half-plane, towards the centroid of their
-    neighbours (``RELAX_STEP`` of the way, ``BAND_RELAX_ITERATIONS`` times).  The moves onto
-    the line and the planes leave the band's triangles uneven (the bunny's radius ratio mean
-    fell from 0.976 to 0.971 without this); the smooth relaxation of
-    :func:`~splineviz.pointcloud.relaxation.relax` would round the crease again.
-
-    Parameters
-    ----------
-    vertices : (V, 3), faces : (F, 3) int
-    ids : (M,) int, vertices on a wedge; creases : Creases, their wedges (M rows)
-    side : (M,) int, each one's side; on_line : (M,) bool, those on the line
-
-    Returns
-    -------
-    (V, 3) relaxed copy.
-    """
-    from scipy import sparse
-
-    v = vertices.copy()
-    if len(ids) == 0:
-        return v
-    n = len(v)
-    e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    adj = sparse.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
-    adj = ((adj + adj.T) > 0).astype(float)[ids]
-    deg = np.maximum(np.asarray(adj.sum(axis=1)).ravel(), 1.0)
-    rows = np.arange(len(ids))
-    inward = creases.inward[rows, side]
-    for _ in range(BAND_RELAX_ITERATIONS):
-        cand = v[ids] + RELAX_STEP * ((adj @ v) / deg[:, None] - v[ids])
-        rel = cand - creases.origin
-        along = creases.origin + np.einsum("mj,mj->m", rel, creases.direction)[:, None] \
-            * creases.direction
-        t = np.maximum(np.einsum("mj,mj->m", rel, inward), 0.0)
-        new = v.copy()
-        new[ids] = np.where(on_line[:, None], along, along + t[:, None] * inward)
-        v = _guarded(v, new, faces)
-    return v
