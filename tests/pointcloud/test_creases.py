@@ -101,11 +101,10 @@ def test_sharpen_puts_vertices_on_the_cube_edges():
     assert bevelled(moved, faces) < 0.5 * bevelled(v, f)
     # no triangle turned over or left a sliver by the moves, flips and relaxation
     assert radius_ratios(moved, faces).min() >= min(SPOIL_RATIO, radius_ratios(v, f).min())
-    def inward(vertices, tris):  # triangles facing into the cube
-        return np.sum(np.einsum("ij,ij->i", face_normals(vertices, tris),
-                                vertices[tris].mean(axis=1)) < 0.0)
-
-    assert inward(moved, faces) <= inward(v, f)
+    # (the front leaves a few slivers at the corners, which may face anywhere)
+    fair = radius_ratios(moved, faces) >= SPOIL_RATIO
+    inward = np.einsum("ij,ij->i", face_normals(moved, faces), moved[faces].mean(axis=1)) < 0
+    assert not np.any(inward & fair)
 
 
 def test_remeshed_cube_keeps_its_edges_and_flat_faces():
