@@ -122,3 +122,30 @@ def test_border_test_far_from_the_cloud():
     up = np.array([[0.0, 0.0, 1.0]])
     n = up if proj.normals[0, 2] > 0 else -up
     np.testing.assert_array_equal(front._outside_flags(xs, n, False), [False, True, False, True])
+
+
+def test_relaxation_makes_no_needles(monkeypatch):
+    """A rough surface (here a projector that pulls points onto lines farther apart than
+    the edges) folds relaxed triangles into needles unless those moves are undone."""
+    from splineviz.pointcloud import relaxation
+    from splineviz.pointcloud.quality import radius_ratios
+
+    class Snap:
+        def project_with_normals(self, points, normals=None):
+            p = np.array(points, dtype=float)
+            line = np.round(p[:, 0] / 0.25) * 0.25
+            p[:, 0] = line + 0.05 * (p[:, 0] - line)  # pulled 95 % of the way to a line
+            return p, np.tile([0.0, 0.0, 1.0], (len(p), 1))
+
+    rng = np.random.default_rng(3)
+    x, y = np.meshgrid(np.linspace(0, 1, 9), np.linspace(0, 1, 9))
+    v = np.c_[x.ravel(), y.ravel(), np.zeros(81)]
+    inner = (v[:, 0] > 0) & (v[:, 0] < 1) & (v[:, 1] > 0) & (v[:, 1] < 1)
+    v[inner, :2] += rng.uniform(-0.03, 0.03, (inner.sum(), 2))
+    q = np.arange(81).reshape(9, 9)[:-1, :-1].ravel()
+    f = np.r_[np.c_[q, q + 1, q + 10], np.c_[q, q + 10, q + 9]]
+    before = radius_ratios(v, f).min()
+    after = radius_ratios(relaxation.relax(v, f, Snap()), f).min()
+    assert after >= min(relaxation.RELAX_MIN_RATIO, before)
+    monkeypatch.setattr(relaxation, "RELAX_MIN_RATIO", 0.0)
+    assert radius_ratios(relaxation.relax(v, f, Snap()), f).min() < 0.05  # the guard's work
