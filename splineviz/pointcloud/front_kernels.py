@@ -19,6 +19,8 @@ import math
 import numba
 import numpy as np
 
+from splineviz.pointcloud.vec3 import cross, dot, norm, row, sub
+
 
 @numba.njit(cache=True, inline="always")
 def _slot(i, j, k, mask):
@@ -334,36 +336,11 @@ def front_clear(head, nxt, cells, cell, V, N, out_adj, out_cnt, in_adj, in_cnt, 
     return True
 
 
-@numba.njit(cache=True, inline="always")
-def _sub(u, v):
-    return (u[0] - v[0], u[1] - v[1], u[2] - v[2])
-
-
-@numba.njit(cache=True, inline="always")
-def _dot(u, v):
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-
-
-@numba.njit(cache=True, inline="always")
-def _cross(u, v):
-    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
-
-
-@numba.njit(cache=True, inline="always")
-def _norm(u):
-    return math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-
-
-@numba.njit(cache=True, inline="always")
-def _row(V, i):
-    return (V[i, 0], V[i, 1], V[i, 2])
-
-
 @numba.njit(cache=True)
 def angle_ccw(d1, d2, n):
     """Counter-clockwise angle (radians, in ``[0, 2 pi)``) from direction ``d1`` to ``d2``
     around the normal ``n`` (3-tuples)."""
-    ang = math.atan2(_dot(_cross(d1, d2), n), _dot(d1, d2))
+    ang = math.atan2(dot(cross(d1, d2), n), dot(d1, d2))
     return ang if ang >= 0 else ang + 2 * math.pi
 
 
@@ -371,12 +348,12 @@ def angle_ccw(d1, d2, n):
 def corner_angles(pa, pb, pc):
     """The interior angles (radians) of the triangle ``pa pb pc`` (3-tuples) at its three
     corners, as a 3-tuple."""
-    d1, d2 = _sub(pb, pa), _sub(pc, pa)
-    at_a = math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2))
-    d1, d2 = _sub(pc, pb), _sub(pa, pb)
-    at_b = math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2))
-    d1, d2 = _sub(pa, pc), _sub(pb, pc)
-    at_c = math.atan2(_norm(_cross(d1, d2)), _dot(d1, d2))
+    d1, d2 = sub(pb, pa), sub(pc, pa)
+    at_a = math.atan2(norm(cross(d1, d2)), dot(d1, d2))
+    d1, d2 = sub(pc, pb), sub(pa, pb)
+    at_b = math.atan2(norm(cross(d1, d2)), dot(d1, d2))
+    d1, d2 = sub(pa, pc), sub(pb, pc)
+    at_c = math.atan2(norm(cross(d1, d2)), dot(d1, d2))
     return (at_a, at_b, at_c)
 
 
@@ -397,14 +374,14 @@ def inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, o, d, n):
     around ``n`` from ``nxt - o`` to ``prv - o``, where ``prv -> o`` is the incoming front edge
     that closes the smallest such angle (a vertex on several front loops has several wedges).
     """
-    po = _row(V, o)
+    po = row(V, o)
     for m in range(out_cnt[o]):
         nxt = out_adj[o, m]
-        d1 = _sub(_row(V, nxt), po)
+        d1 = sub(row(V, nxt), po)
         total = -1.0
         for j in range(in_cnt[o]):
             prv = in_adj[o, j]
-            ang = 2 * math.pi if prv == nxt else angle_ccw(d1, _sub(_row(V, prv), po), n)
+            ang = 2 * math.pi if prv == nxt else angle_ccw(d1, sub(row(V, prv), po), n)
             if total < 0 or ang < total:
                 total = ang
         if total >= 0:
@@ -424,12 +401,12 @@ def front_neighbour(V, adj, cnt, vertex, other, incoming, n):
     k = cnt[vertex]
     if k == 1:
         return adj[vertex, 0]
-    pv = _row(V, vertex)
-    d0 = _sub(_row(V, other), pv)
+    pv = row(V, vertex)
+    d0 = sub(row(V, other), pv)
     best, best_ang = -1, 0.0
     for m in range(k):
         c = adj[vertex, m]
-        ang = angle_ccw(d0, _sub(_row(V, c), pv), n)
+        ang = angle_ccw(d0, sub(row(V, c), pv), n)
         if not incoming:
             ang = 2 * math.pi - ang
         if best < 0 or ang < best_ang:
@@ -495,13 +472,13 @@ def triangle_ok(V, N, fan, out_adj, out_cnt, in_adj, in_cnt, vgrid, vcell, fgrid
     search did not settle a probe's border test (the caller asks a k-d tree, then calls again
     with ``check_outside`` false).
     """
-    xa, xb = _row(V, a), _row(V, b)
-    e0, e1, e2 = _sub(xb, xa), _sub(xv, xb), _sub(xa, xv)
-    tn = _cross(e0, _sub(xv, xa))
-    tl = _norm(tn)
-    if tl <= 0 or _dot(tn, n) < limits[LIMIT_NORMAL_COS] * tl:
+    xa, xb = row(V, a), row(V, b)
+    e0, e1, e2 = sub(xb, xa), sub(xv, xb), sub(xa, xv)
+    tn = cross(e0, sub(xv, xa))
+    tl = norm(tn)
+    if tl <= 0 or dot(tn, n) < limits[LIMIT_NORMAL_COS] * tl:
         return 0, 0
-    la, lb, lc = _norm(e0), _norm(e1), _norm(e2)
+    la, lb, lc = norm(e0), norm(e1), norm(e2)
     # the smallest angle is opposite the shortest side: sin = 2 area / (other two sides)
     low, longest = (la, lb) if la <= lb else (lb, la)
     if lc >= longest:
@@ -518,16 +495,16 @@ def triangle_ok(V, N, fan, out_adj, out_cnt, in_adj, in_cnt, vgrid, vcell, fgrid
     va_new = not in_front(out_adj, out_cnt, v, a)
     # every new edge must leave both its ends into their unmeshed wedges
     if bv_new:
-        if not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, b, _sub(xv, xb), n):
+        if not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, b, sub(xv, xb), n):
             return 0, 0
         if existing and not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, v,
-                                         _sub(xb, xv), n):
+                                         sub(xb, xv), n):
             return 0, 0
     if va_new:
-        if not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, a, _sub(xv, xa), n):
+        if not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, a, sub(xv, xa), n):
             return 0, 0
         if existing and not inside_wedge(V, out_adj, out_cnt, in_adj, in_cnt, v,
-                                         _sub(xa, xv), n):
+                                         sub(xa, xv), n):
             return 0, 0
     count = 1
     for c in range(3):
@@ -577,16 +554,16 @@ def face_added(V, fan, geometry, fgrid, face_start, face_cell, face_radius, f, a
     two edge vectors, unit normal, Gram entries, centroid, corner radius; see :func:`covered`),
     its place in the grid of the smallest size class whose cells are at least twice its corner
     radius, and its corner angles added to ``fan (C,)``.  Returns its area."""
-    pa, pb, pc = _row(V, a), _row(V, b), _row(V, c)
+    pa, pb, pc = row(V, a), row(V, b), row(V, c)
     centroid = ((pa[0] + pb[0] + pc[0]) / 3.0, (pa[1] + pb[1] + pc[1]) / 3.0,
                 (pa[2] + pb[2] + pc[2]) / 3.0)
-    e1, e2 = _sub(pb, pa), _sub(pc, pa)
-    normal = _cross(e1, e2)
-    area2 = _norm(normal)
+    e1, e2 = sub(pb, pa), sub(pc, pa)
+    normal = cross(e1, e2)
+    area2 = norm(normal)
     length = area2 if area2 > 0 else 1.0
-    radius = math.sqrt(max(_dot(_sub(pa, centroid), _sub(pa, centroid)),
-                           _dot(_sub(pb, centroid), _sub(pb, centroid)),
-                           _dot(_sub(pc, centroid), _sub(pc, centroid))))
+    radius = math.sqrt(max(dot(sub(pa, centroid), sub(pa, centroid)),
+                           dot(sub(pb, centroid), sub(pb, centroid)),
+                           dot(sub(pc, centroid), sub(pc, centroid))))
     lev = 0
     while lev < len(face_cell) - 1 and radius > 0.5 * face_cell[lev]:
         lev += 1
@@ -601,7 +578,7 @@ def face_added(V, fan, geometry, fgrid, face_start, face_cell, face_radius, f, a
         g[i], g[3 + i], g[6 + i] = pa[i], e1[i], e2[i]
         g[9 + i] = normal[i] / length
         g[15 + i] = centroid[i]
-    g[12], g[13], g[14] = _dot(e1, e1), _dot(e1, e2), _dot(e2, e2)
+    g[12], g[13], g[14] = dot(e1, e1), dot(e1, e2), dot(e2, e2)
     g[18] = radius
     ang_a, ang_b, ang_c = corner_angles(pa, pb, pc)
     fan[a] += ang_a

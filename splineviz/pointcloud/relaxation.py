@@ -10,13 +10,12 @@ oriented manifold (no edge gains a third triangle, no triangle turns over).
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 from scipy import sparse
 
 from splineviz.pointcloud.quality import radius_ratios
+from splineviz.pointcloud.vec3 import cross, norm, row, sub
 
 #: a flip must keep both new triangle normals within this angle of the old ones
 FLIP_MAX_TURN = np.deg2rad(30.0)
@@ -64,26 +63,11 @@ def border_vertices(n_vertices: int, faces: np.ndarray) -> np.ndarray:
     return out
 
 
-@numba.njit(cache=True, inline="always")
-def _nsub(p, q, u, w):
-    return (p[u, 0] - p[w, 0], p[u, 1] - p[w, 1], p[u, 2] - p[w, 2])
-
-
-@numba.njit(cache=True, inline="always")
-def _ncross(u, v):
-    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
-
-
-@numba.njit(cache=True, inline="always")
-def _nnorm(u):
-    return math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-
-
 @numba.njit(cache=True)
 def _nratio(p, i, j, k):
-    a = _nnorm(_nsub(p, p, j, k))
-    b = _nnorm(_nsub(p, p, k, i))
-    c = _nnorm(_nsub(p, p, i, j))
+    a = norm(sub(row(p, j), row(p, k)))
+    b = norm(sub(row(p, k), row(p, i)))
+    c = norm(sub(row(p, i), row(p, j)))
     den = a * b * c
     if den <= 0:
         return 0.0
@@ -133,13 +117,13 @@ def _flip_pass(p, faces, target, cos_max, keep):
                  + (val[c] + 1 - target[c]) ** 2 + (val[d] + 1 - target[d]) ** 2)
         if after >= before:
             continue
-        x1 = _ncross(_nsub(p, p, b, a), _nsub(p, p, c, a))
-        x2 = _ncross(_nsub(p, p, a, b), _nsub(p, p, d, b))
+        x1 = cross(sub(row(p, b), row(p, a)), sub(row(p, c), row(p, a)))
+        x2 = cross(sub(row(p, a), row(p, b)), sub(row(p, d), row(p, b)))
         n_old = (x1[0] + x2[0], x1[1] + x2[1], x1[2] + x2[2])
-        lo = _nnorm(n_old)
-        n1 = _ncross(_nsub(p, p, d, a), _nsub(p, p, c, a))
-        n2 = _ncross(_nsub(p, p, b, d), _nsub(p, p, c, d))
-        l1, l2 = _nnorm(n1), _nnorm(n2)
+        lo = norm(n_old)
+        n1 = cross(sub(row(p, d), row(p, a)), sub(row(p, c), row(p, a)))
+        n2 = cross(sub(row(p, b), row(p, d)), sub(row(p, c), row(p, d)))
+        l1, l2 = norm(n1), norm(n2)
         if l1 <= 0 or l2 <= 0:
             continue
         if n1[0] * n_old[0] + n1[1] * n_old[1] + n1[2] * n_old[2] < cos_max * l1 * lo or \
