@@ -18,14 +18,22 @@ from splineviz.core.errors import SplinevizError
 DEFAULT_SIZE = (1024, 768)
 
 
-def _scene(args):
+def _scene(args, preferred_model=None):
+    """The scene of the command line: its file or the default data, with ``--iso``,
+    ``--model`` and ``--renderer``; without ``--model`` the isosurfaces take
+    ``preferred_model`` (a point cloud has none to take it)."""
     from splineviz.model.opening import default_scene, override, scene_from_path
 
+    model = args.model or preferred_model
     if args.file:
-        return scene_from_path(args.file, isovalue=args.iso, model=args.model,
-                               renderer=args.renderer)
+        scene = scene_from_path(args.file, isovalue=args.iso, model=args.model,
+                                renderer=args.renderer)
+        if args.model is None and model is not None and scene.isosurfaces:
+            override(scene, model=model)
+            scene.mark_saved()
+        return scene
     scene = default_scene()
-    override(scene, isovalue=args.iso, model=args.model, renderer=args.renderer)
+    override(scene, isovalue=args.iso, model=model, renderer=args.renderer)
     return scene
 
 
@@ -72,8 +80,7 @@ def run_gui(args) -> int:
     from splineviz.gui import preferences
 
     # the preferred model, for the file named on the command line too (--model wins)
-    args.model = args.model or preferences.load().model
-    scene = None if session else _scene(args)
+    scene = None if session else _scene(args, preferences.load().model)
 
     from splineviz.gui.main_window import MainWindow
 

@@ -102,3 +102,25 @@ def test_restore_defaults_and_cancel(window):
     _ok(dialog)
     assert preferences.load() == preferences.Preferences.defaults()
     assert window.spline_scene.max_preview_scale == 1.0
+
+
+def test_the_command_line_file_takes_the_preferred_model_and_a_cloud_opens(tmp_path,
+                                                                          shared_data):
+    """``splineviz FILE``: a volume's isosurface takes the preferred model (``--model``
+    wins), and a point cloud, which has no isosurface for it, opens (it was refused as if
+    ``--model`` had been given)."""
+    from argparse import Namespace
+
+    from splineviz.gui.app import _scene
+    from splineviz.model.scene import PointsNode
+
+    cloud = tmp_path / "cloud.xyz"
+    np.savetxt(cloud, np.random.default_rng(0).random((60, 3)))
+    scene = _scene(Namespace(file=str(cloud), iso=None, model=None, renderer=None), "trilinear")
+    assert len(scene.of_kind(PointsNode)) == 1 and not scene.isosurfaces
+    args = Namespace(file=str(shared_data / "volumes" / "neghip.slc"), iso=None, model=None,
+                     renderer=None)
+    assert [i.model for i in _scene(args, "trilinear").isosurfaces] == ["trilinear"]
+    assert not _scene(args, "trilinear").modified
+    args.model = "super-quadratic"
+    assert [i.model for i in _scene(args, "trilinear").isosurfaces] == ["super-quadratic"]
