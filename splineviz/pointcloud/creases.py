@@ -24,7 +24,12 @@ import numpy as np
 from splineviz.pointcloud.cocone import tree_query
 from splineviz.pointcloud.projection import NOISE_FLOOR_PERCENTILE
 from splineviz.pointcloud.quality import radius_ratios
-from splineviz.pointcloud.relaxation import FLIP_QUALITY_KEEP, border_vertices, face_normals
+from splineviz.pointcloud.relaxation import (
+    FLIP_QUALITY_KEEP,
+    border_vertices,
+    face_normals,
+    undo_spoiling_moves,
+)
 
 #: input points per neighbourhood of a clean scan: about three spacings around a vertex, so
 #: a vertex of the bevel (within an edge length, at least 1.5 spacings, of the crease) sees
@@ -529,28 +534,10 @@ def sharpen(vertices: np.ndarray, faces: np.ndarray, projector):
     snapped &= ~far
     moved = v.copy()
     moved[ids] = target
-    moved = _guarded(v, moved, f)
+    moved = undo_spoiling_moves(v, moved, f, 0.0, SPOIL_RATIO, FLIP_QUALITY_KEEP)
     kept = np.all(moved[ids] == target, axis=1) & ~far
     on_line[ids[kept & snapped]] = True
     plane[ids[kept]] = cr.normals[np.arange(len(ids)), side][kept]
     faces_out, flips = crease_flips(moved, f, on_line, plane)
     return moved, faces_out, on_line, flips
 
-
-def _guarded(old: np.ndarray, new: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """``new`` vertices ``(V, 3)`` with the moves from ``old`` undone, corner by corner, that
-    turn a triangle over or leave it a sliver (see :func:`sharpen`)."""
-    # only the triangles of moved vertices can turn (a small share of the mesh)
-    faces = faces[np.any(new != old, axis=1)[faces].any(axis=1)]
-    before = face_normals(old, faces)
-    ratio = radius_ratios(old, faces)
-    out = new.copy()
-    for _ in range(len(faces)):
-        after = radius_ratios(out, faces)
-        bad = (np.einsum("ij,ij->i", before, face_normals(out, faces)) < 0.0) \
-            | ((after < SPOIL_RATIO) & (after < FLIP_QUALITY_KEEP * ratio))
-        if not bad.any():
-            break
-        back = faces[bad].ravel()
-        out[back] = old[back]
-    return out

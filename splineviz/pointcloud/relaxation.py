@@ -195,7 +195,7 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
     within the tangent plane of the mesh's vertex normal, and is projected back
     (:meth:`Projector.project_with_normals`, with that normal as the hint of its side).  A
     move that would turn a triangle over, or leave it a needle (``RELAX_MIN_RATIO``), is
-    undone.
+    undone (:func:`undo_spoiling_moves`).
 
     Parameters
     ----------
@@ -232,18 +232,32 @@ def relax(vertices: np.ndarray, faces: np.ndarray, projector, iterations: int = 
         # the normals also tell the side of a thin part a vertex belongs to: without them it
         # is projected onto whichever side's samples are nearest
         cand[movable] = projector.project_with_normals(cand[movable], normals[movable])[0]
-        # undo moves that turn a triangle over relative to its old orientation or make a
-        # needle of it
-        old_n = face_normals(v, faces)
-        new_n = face_normals(cand, faces)
-        new_ratio = radius_ratios(cand, faces)
-        bad_faces = (np.einsum("ij,ij->i", old_n, new_n) < 0.5) | \
-            ((new_ratio < RELAX_MIN_RATIO) & (new_ratio < radius_ratios(v, faces)))
-        if bad_faces.any():
-            bad = np.unique(faces[bad_faces])
-            cand[bad] = v[bad]
-        v = cand
+        v = undo_spoiling_moves(v, cand, faces, 0.5, RELAX_MIN_RATIO, 1.0)
     return v
+
+
+def undo_spoiling_moves(old: np.ndarray, new: np.ndarray, faces: np.ndarray, turn_cos: float,
+                        floor: float, keep: float) -> np.ndarray:
+    """``new`` vertices ``(V, 3)`` with the moves from ``old`` undone, all corners of a
+    triangle at once, until no triangle ``(F, 3)`` has turned from its old normal by more
+    than ``acos(turn_cos)`` or is left with a radius ratio under ``floor`` and under ``keep``
+    times its old one (undoing one triangle's corners can spoil a neighbour: repeated)."""
+    # only the triangles of moved vertices can change (often a small share of the mesh)
+    faces = faces[np.any(new != old, axis=1)[faces].any(axis=1)]
+    before = face_normals(old, faces)
+    ratio = radius_ratios(old, faces)
+    out = new.copy()
+    for _ in range(len(faces)):
+        after = radius_ratios(out, faces)
+        bad = (np.einsum("ij,ij->i", before, face_normals(out, faces)) < turn_cos) \
+            | ((after < floor) & (after < keep * ratio))
+        # a triangle with no corner left moved is as it was (a degenerate one stays "turned")
+        bad &= np.any(out != old, axis=1)[faces].any(axis=1)
+        if not bad.any():
+            break
+        back = faces[bad].ravel()
+        out[back] = old[back]
+    return out
 
 
 def optimize(vertices: np.ndarray, faces: np.ndarray, projector, rounds: int = 2,
