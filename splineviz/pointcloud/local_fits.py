@@ -149,16 +149,28 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
                 dof_out):
     """The fits of points ``ids[lo:hi]`` into the outputs of :func:`_fits`."""
     n_scales, n_nb = len(widths), index.shape[1]
-    mono = np.empty((n_nb, _M2))
+    # the monomials up to the highest degree the moments of these fits need, 2 * max(q)
+    top = 2 * max(degrees)
+    n_mono = (top + 1) * (top + 2) // 2
+    mono = np.empty((n_nb, n_mono))
     zs = np.empty(n_nb)
     wt = np.empty((n_scales, n_nb))
-    px = np.empty(2 * MAX_DEGREE + 1)
-    py = np.empty(2 * MAX_DEGREE + 1)
+    px = np.empty(top + 1)
+    py = np.empty(top + 1)
     a = np.empty((_M, _M))
     c2 = np.empty((_M, _M))
     linv = np.empty((_M, _M))
     x0 = np.empty(_M)
     e0 = np.empty(_M)
+    mom = np.empty(n_mono)
+    mom2 = np.empty(n_mono)
+    rhs = np.empty(_M)
+    # the fit runs in coordinates divided by h: (x/h)^a (y/h)^b, so that the condition
+    # number means the same at every width; these are the factors per moment and width
+    unscale = np.empty((n_scales, n_mono))
+    for s in range(n_scales):
+        for c in range(n_mono):
+            unscale[s, c] = widths[s] ** -exponent_sum[c]
     for p in range(lo, hi):
         i = ids[p]
         inv = 1.0 / scale[i]
@@ -171,11 +183,11 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
                 wt[s, k] = np.exp(-d2 / (widths[s] * widths[s])) if valid[i, k] else 0.0
             px[0] = 1.0
             py[0] = 1.0
-            for e in range(1, 2 * MAX_DEGREE + 1):
+            for e in range(1, top + 1):
                 px[e] = px[e - 1] * x
                 py[e] = py[e - 1] * y
             c = 0
-            for t in range(2 * MAX_DEGREE + 1):
+            for t in range(top + 1):
                 for b in range(t + 1):
                     mono[k, c] = px[t - b] * py[b]
                     c += 1
@@ -184,25 +196,27 @@ def _fits_range(lo, hi, points, index, valid, frames, scale, ids, widths, degree
             q = degrees[s]
             m = (q + 1) * (q + 2) // 2
             m2 = (2 * q + 1) * (2 * q + 2) // 2
-            mom = np.zeros(m2)
-            mom2 = np.zeros(m2)
-            rhs = np.zeros(m)
+            mom[:m2] = 0.0
+            mom2[:m2] = 0.0
+            rhs[:m] = 0.0
             sw = 0.0
             for k in range(n_nb):
                 w = wt[s, k]
                 if w == 0.0:
                     continue
                 sw += w
-                for c in range(m2):
-                    mom[c] += w * mono[k, c]
-                for c in range(m):
-                    rhs[c] += w * zs[k] * mono[k, c]
                 if with_noise:
+                    w2 = w * w
                     for c in range(m2):
-                        mom2[c] += w * w * mono[k, c]
-            # the fit runs in coordinates divided by h: (x/h)^a (y/h)^b, so that the
-            # condition number means the same at every width
-            f = h ** -exponent_sum[:m2]
+                        mom[c] += w * mono[k, c]
+                        mom2[c] += w2 * mono[k, c]
+                else:
+                    for c in range(m2):
+                        mom[c] += w * mono[k, c]
+                wz = w * zs[k]
+                for c in range(m):
+                    rhs[c] += wz * mono[k, c]
+            f = unscale[s]
             # weighted centroid of the neighbourhood in the tangent plane, in widths
             balance[s, p] = np.hypot(mom[1], mom[2]) / (h * max(mom[0], 1e-300))
             for r in range(m):
