@@ -141,6 +141,26 @@ def test_void_ratio_in_blocks_is_the_whole_cloud_s(monkeypatch):
     assert conn.void_ratio() == whole
 
 
+def test_void_ratio_of_a_sample_is_the_whole_cloud_s(monkeypatch):
+    """Measured at evenly spread points (a large cloud's every point cost 32 s at 2
+    million), the quantile is the whole cloud's within 3 %, both for a random sampling
+    (~1.4) and for a jittered grid (a scan, below 1); every point is measured where the
+    cloud has no more than the sample."""
+    from splineviz.pointcloud import cocone
+
+    rng = np.random.default_rng(2)
+    g = np.stack(np.meshgrid(np.arange(100.0), np.arange(100.0)), -1).reshape(-1, 2)
+    grid = np.c_[g + 0.1 * rng.uniform(-1, 1, g.shape), 0.01 * rng.normal(size=len(g))]
+    for pts in (S.sphere(20000, seed=4), grid):
+        conn = knn_connectivity(pts)
+        monkeypatch.setattr(cocone, "VOID_SAMPLE", len(pts))
+        whole = conn.void_ratio()
+        monkeypatch.setattr(cocone, "VOID_SAMPLE", 2000)
+        sampled = conn.void_ratio()
+        assert sampled != whole and abs(sampled / whole - 1.0) < 0.03
+    assert whole < 0.9
+
+
 def test_orientation_of_many_components_is_one_search_per_component():
     """Normals oriented by one breadth-first search over all components (from a node joined
     to each component's root) are those of a search per component, which cost O(N) each."""
