@@ -255,7 +255,9 @@ class AdvancingFront:
         self.fgrid = (np.full(int(self.face_start[-1]), -1, dtype=np.int64),
                       np.full(cap, -1, dtype=np.int64), np.full(cap, -1, dtype=np.int64),
                       np.zeros((cap, 3), dtype=np.int64))
-        self.P: list[tuple[float, float, float]] = []  # positions as tuples for scalar math
+        # positions and normals as tuples for scalar math (vertices never move)
+        self.P: list[tuple[float, float, float]] = []
+        self.Pn: list[tuple[float, float, float]] = []
         self.faces: list[tuple[int, int, int]] = []
         self.front: dict[tuple[int, int], int] = {}  # edge -> number of failed attempts
         self.edge_faces: dict[tuple[int, int], int] = {}
@@ -278,6 +280,8 @@ class AdvancingFront:
         # the cloud's points in a grid for the border test's neighbour queries (cells of
         # three spacings: the BORDER_NEIGHBOURS nearest lie within one or two cells)
         self.pgrid = fk.PointGrid(projector.points, 3.0 * float(np.median(projector.scale)))
+        g = self.pgrid
+        self._pgrid_arrays = (g.points, g.cells, g.start, g.order, g.cell)
         # the cloud's arrays in the layout the compiled border test reads
         self._cloud = (np.ascontiguousarray(projector.points, dtype=np.float64),
                        np.ascontiguousarray(projector.normals, dtype=np.float64),
@@ -314,7 +318,8 @@ class AdvancingFront:
             self.vgrid = (head, grow(nxt, -1), grow(prv, -1), grow(cells, 0))
         i = self.nv
         self.V[i], self.N[i] = x, n
-        self.P.append(tuple(float(c) for c in x))
+        self.P.append((float(x[0]), float(x[1]), float(x[2])))
+        self.Pn.append((float(n[0]), float(n[1]), float(n[2])))
         if length is None:
             length = float(self.guide(x[None])[0])
         self.L[i] = self.length_factor * length
@@ -388,13 +393,11 @@ class AdvancingFront:
                 key = (u, w) if u < w else (w, u)
                 if (u, w) not in front and key in self.edge_faces:
                     return False
-        g = self.pgrid
         args = (self.V, self.N, self.fan, self.out_adj, self.out_cnt, self.in_adj, self.in_cnt,
                 self.vgrid, self.cell, self.fgrid, self.face_start, self.face_cell,
-                self.face_radius, self.face_geometry, (g.points, g.cells, g.start, g.order,
-                                                       g.cell),
-                self._cloud[1], self._cloud[2], self._neighbours, self._limits, a, b, v, xv, n,
-                min_angle, existing)
+                self.face_radius, self.face_geometry, self._pgrid_arrays, self._cloud[1],
+                self._cloud[2], self._neighbours, self._limits, a, b, v, xv, n, min_angle,
+                existing)
         status, count = fk.triangle_ok(*args, True, self._probes)
         if status >= 0:
             return bool(status)
@@ -473,7 +476,8 @@ class AdvancingFront:
         attempts = self.front[(a, b)]
         P = self.P
         xa, xb = P[a], P[b]
-        n = _unit(tuple(float(c) for c in self.N[a] + self.N[b]))
+        na, nb = self.Pn[a], self.Pn[b]
+        n = _unit((na[0] + nb[0], na[1] + nb[1], na[2] + nb[2]))
         ab = _sub(xb, xa)
         lab = _norm(ab)
         target = 0.5 * (self.L[a] + self.L[b])
@@ -685,7 +689,7 @@ class AdvancingFront:
             while (a, b) not in seen:
                 seen.add((a, b))
                 loop.append(a)
-                a, b = b, self._neighbour(b, a, False, tuple(self.N[b]))
+                a, b = b, self._neighbour(b, a, False, self.Pn[b])
                 if b < 0:
                     break
             if (a, b) == start:
