@@ -133,8 +133,9 @@ class Scene:
         self.animation = None
         #: True after any change since :meth:`mark_saved`
         self.modified = False
-        #: width / height of the view that shows the scene (set by views; used to frame)
-        self.aspect = 1.0
+        self._aspect = 1.0
+        #: what :meth:`frame` last framed and the camera pose it left (None: nothing yet)
+        self._framed: tuple | None = None
         #: the model a volume's first isosurface starts with, when it names a registered
         #: one (the GUI's preferences set it); else :func:`default_model`
         self.preferred_model: str | None = None
@@ -564,6 +565,25 @@ class Scene:
 
     # -- camera --------------------------------------------------------------------------
 
+    @property
+    def aspect(self) -> float:
+        """Width / height of the view that shows the scene (set by views; used to frame).
+
+        A view whose shape changes while its camera is still where :meth:`frame` left it
+        (the window laid out after a file opened from the command line, a dock shown or
+        closed) is framed again for the new shape: framed for the default square, a
+        portrait view cut the data at its sides."""
+        return self._aspect
+
+    @aspect.setter
+    def aspect(self, value: float) -> None:
+        value = float(value)
+        if value == self._aspect:
+            return
+        self._aspect = value
+        if self._framed is not None and self.camera.pose() == self._framed[1]:
+            self.frame(self._framed[0])
+
     def frame(self, bounds=None, view: str | None = None) -> None:
         """Point the camera at ``bounds`` (default: all data) so that all of it is in view.
 
@@ -594,3 +614,4 @@ class Scene:
                    focal_point=tuple(map(float, centre)),
                    view_up=tuple(map(float, up / np.linalg.norm(up))),
                    parallel_scale=radius)
+        self._framed = (b, cam.pose())

@@ -96,6 +96,39 @@ def test_frame_shows_every_corner(aspect, view):
         assert abs(d @ up) / depth <= t and abs(d @ right) / depth <= t * aspect
 
 
+def _all_corners_in_view(scene):
+    cam = sv.Camera(scene.camera.position, scene.camera.focal_point, scene.camera.view_up,
+                    scene.camera.view_angle)
+    right, up, forward = cam.basis()
+    t = np.tan(np.radians(cam.view_angle) / 2)
+    corners = np.array(np.meshgrid(*scene.bounds(), indexing="ij")).reshape(3, -1).T
+    d = corners - np.asarray(cam.position)
+    depth = d @ forward
+    return bool(np.all(np.abs(d @ up) <= t * depth)
+                and np.all(np.abs(d @ right) <= t * scene.aspect * depth))
+
+
+def test_a_framed_view_that_changes_shape_is_framed_again():
+    """Opened from the command line, the data were framed for a square view; the window's
+    portrait 3-D view then cut a CAD scan at its sides. A camera the user has moved stays."""
+    scene = Scene()
+    scene.add_volume(sv.Volume(np.zeros((20, 8, 6))), "v")
+    scene.frame(view="isometric")
+    scene.aspect = 0.45
+    assert _all_corners_in_view(scene)
+    direction = np.subtract(scene.camera.position, scene.camera.focal_point)
+    scene.aspect = 2.0  # wider: closer again, the same direction
+    assert _all_corners_in_view(scene)
+    moved = np.subtract(scene.camera.position, scene.camera.focal_point)
+    assert np.linalg.norm(moved) < np.linalg.norm(direction)
+    np.testing.assert_allclose(moved / np.linalg.norm(moved),
+                               direction / np.linalg.norm(direction))
+    scene.camera.position = (40.0, 30.0, 20.0)  # the user orbits or zooms
+    pose = scene.camera.pose()
+    scene.aspect = 0.45
+    assert scene.camera.pose() == pose
+
+
 def _every_kind(tmp_path):
     """A scene with every kind of object and every property away from its default."""
     from splineviz.plugins import ensure_loaded
