@@ -230,6 +230,27 @@ def test_pinched_loops_are_split_into_simple_ones():
     assert simple_loops([7, 8, 9]) == [[7, 8, 9]]
 
 
+def test_loops_pinched_at_a_vertex_keep_every_edge():
+    """Two front loops through vertex 0, whose two edges in both prefer the same edge out
+    (the wedge choice at a thin part's rim): each edge is still on exactly one loop, the
+    preferred continuation kept where it is free; an edge out of a vertex that nothing
+    enters stays on no loop."""
+    from splineviz.pointcloud.advancing_front import edge_loops
+
+    edges = [(0, 1), (1, 2), (2, 0), (0, 3), (3, 4), (4, 0), (7, 8)]
+    preferred = {(2, 0): (0, 1), (4, 0): (0, 1), (0, 1): (1, 2), (1, 2): (2, 0),
+                 (0, 3): (3, 4), (3, 4): (4, 0), (7, 8): None}
+    loops = edge_loops(edges, preferred)
+    on = [set(zip(loop, loop[1:] + loop[:1], strict=True)) for loop in loops]
+    assert sorted(len(e) for e in on) == [6] or sorted(len(e) for e in on) == [3, 3]
+    assert set().union(*on) == set(edges) - {(7, 8)}
+    assert sum(len(e) for e in on) == 6
+    assert any((2, 0) in e and (0, 1) in e for e in on)  # the first keeps its choice
+    # a loop whose edges agree is found as it was
+    assert edge_loops([(5, 6), (6, 7), (7, 5)], {(5, 6): (6, 7), (6, 7): (7, 5),
+                                                  (7, 5): (5, 6)}) == [[5, 6, 7]]
+
+
 def test_heap_smallest_is_nsmallest():
     import heapq
 
