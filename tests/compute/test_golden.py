@@ -1,6 +1,7 @@
 """Frames and sessions recorded before the architecture refactor (issue 24) stay the same:
-every model's frame on the shared data bit for bit on the device it was recorded on (a few
-sums within rounding on another), and every schema-4 session loads and saves byte for byte."""
+every model's frame on the shared data bit for bit on the OpenCL device it was recorded on (a
+few sums within rounding on another; the NumPy renderer's hits and colours on any processor),
+and every schema-4 session loads and saves byte for byte."""
 
 from __future__ import annotations
 
@@ -25,8 +26,17 @@ def test_frames_are_those_recorded(case):
     now = golden_frames.digest(frame)
     recorded = RECORDED[case[0]]
     device = rc.stats["device"]
-    if device in recorded:
+    if device in recorded and device != "numpy":
         assert now["sha256"] == recorded[device]["sha256"], (case[0], device)
+        return
+    if device == "numpy":
+        # NumPy and its BLAS pick their vector kernels by the processor at run time, so the
+        # reference renderer's last bits are the processor's: the same hits and colours, the
+        # depths within rounding (a processor with other vector units changed the bytes of
+        # the tricubic blob's frame, and no hit, colour or depth sum)
+        ref = recorded["numpy"]
+        assert (now["hits"], now["color_sum"]) == (ref["hits"], ref["color_sum"]), case[0]
+        assert now["depth_sum"] == pytest.approx(ref["depth_sum"], rel=1e-9)
         return
     # another processor's OpenCL compiler: the same picture within rounding
     ref = next(iter(recorded.values()))
