@@ -148,7 +148,8 @@ def _collapse_one(v, f, a, b, deviation):
     vv_ptr, vv_idx, vf_ptr, vf_idx = _adjacency(len(v), f)
     return _collapse_pass(v.copy(), f.copy(), np.ones(len(f), bool), np.array([a]),
                           np.array([b]), vv_ptr, vv_idx, vf_ptr, vf_idx,
-                          border_vertices(len(v), f), 100.0, -1.0, 100, deviation ** 2,
+                          border_vertices(len(v), f), np.ones(len(v)), 100.0, -1.0, 100,
+                          deviation ** 2,
                           np.zeros(len(v), bool))
 
 
