@@ -98,8 +98,6 @@ SIZE_DEVIATION = 0.2
 MIN_SIZE = 0.4
 #: the target length grows by at most this per unit of distance
 SIZE_GRADING = 0.5
-#: most smoothing passes of the size field
-GRADING_PASSES = 8
 #: spline samples evaluated at once (bounds the memory of the start grid)
 SLAB_POINTS = 2_000_000
 #: points per task of the parallel Newton projection
@@ -520,8 +518,7 @@ def _unit_gradients(spline, points):
 
 
 def target_lengths(spline, vertices, faces, length: float, deviation: float,
-                   min_length: float, grading: float = None, tol: float = None,
-                   iso: float = None):
+                   min_length: float, grading: float = None):
     """Per-vertex target edge lengths from the surface's bend at the scale of the edges.
 
     An edge ``(a, b)`` turns the exact normals (spline gradients) by ``|n_a - n_b|`` over
@@ -553,15 +550,13 @@ def target_lengths(spline, vertices, faces, length: float, deviation: float,
     a, b = e // len(vertices), e % len(vertices)
     d = np.linalg.norm(vertices[a] - vertices[b], axis=1)
     kappa = np.linalg.norm(n[a] - n[b], axis=1) / np.maximum(d, 1e-300)
-    if tol is not None:
-        mid = 0.5 * (vertices[a] + vertices[b])
-        dev = np.linalg.norm(_project(spline, mid, iso, 30, tol)[0] - mid, axis=1)
-        kappa = np.maximum(kappa, 8.0 * dev / np.maximum(d, 1e-300) ** 2)
     k = np.zeros(len(vertices))
     np.maximum.at(k, a, kappa)
     np.maximum.at(k, b, kappa)
     size = np.clip(np.sqrt(8.0 * deviation / np.maximum(k, 1e-300)), min_length, length)
-    for _ in range(GRADING_PASSES):
+    # each pass lowers a target to its neighbours' plus the grading; a few passes until no
+    # target changes (the change travels (length - min_length) / grading, a few edges)
+    while True:
         smaller = size.copy()
         np.minimum.at(smaller, a, size[b] + grading * d)
         np.minimum.at(smaller, b, size[a] + grading * d)
