@@ -22,7 +22,11 @@ vertices or edges at once:
   pair's radius ratio to ``FLIP_KEEP`` of the old one) and tangential relaxation
   (:func:`splineviz.pointcloud.relaxation.optimize`), every moved vertex projected onto the
   spline itself, not onto the start mesh. The splits are woven into the loop, so the flips
-  and the relaxation after them regularise the finer mesh where the surface bends.
+  and the relaxation after them regularise the finer mesh where the surface bends. The whole
+  bonsai (valence-6 share of interior vertices, with the refinement rounds below): 65.4 ->
+  70.8 % (valences 4 / 5 / 7 / 8: 2.3 / 13.3 / 17.2 / 1.4 -> 0.7 / 12.3 / 15.6 / 0.4 %) for
+  2.5 % more triangles, mean radius ratio 0.938 -> 0.941; the leafy 40^3 crop 63.3 -> 69.7 %
+  (its border on the data box, where vertices stay, holds most of its valence-7 vertices).
 * Refinement: edges whose midpoint still lies more than ``REFINE_DEVIATION`` of the target
   length off the surface (where it bends within an edge of the smallest size, the bonsai's
   leaf rims) are split at the midpoint's projection (:func:`refine_deviating_edges`), so no
