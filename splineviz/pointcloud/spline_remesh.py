@@ -33,8 +33,9 @@ vertices or edges at once:
   triangle cuts far across a bend, then flips and relaxation regularise the splits' valence-4
   vertices; twice (``REFINE_ROUNDS``). The last flips and relaxation leave a few edges
   deviating again (the leafy crop: 94 of 34,233 interior edges farther than 0.2 edge lengths
-  from the surface at their midpoints, 15 farther than 0.3, the largest 0.53; ending with a
-  refinement, 11, 7 and 0.49, at a valence-6 share of 67.5 % instead of 69.7 %).
+  from the surface at their midpoints, 15 farther than 0.3, the largest 0.53; 11, 7 and 0.49
+  before the sizing, when a refinement came last; ending with a refinement here costs
+  valence-6 share, 69.7 -> 67.5 %).
 * One sheet (optional): triangles that leave the surface (flying edges' own, where two sheets
   are about a grid step apart; the front's one-sheet test
   :func:`.spline_mesh.triangles_on_surface`) are dropped and their holes closed on the
