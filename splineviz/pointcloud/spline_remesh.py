@@ -9,19 +9,34 @@ vertices or edges at once:
   narrower than an edge (pits and ridges a coarser grid steps over) and so that no edge of
   the start mesh is longer than ``4/3`` of the target; the vertices are moved onto
   ``s = iso`` by Newton steps along the spline gradient (:func:`.spline_mesh.project_onto`).
-* Remeshing (Botsch & Kobbelt's loop, without splits since the start mesh has no long edges):
-  short edges collapsed (:func:`collapse_short_edges`, compiled: an independent set per pass,
-  each collapse keeping the mesh manifold, no edge longer than ``4/3`` of the target, no
-  triangle turned over, and the removed positions within ``COLLAPSE_DEVIATION`` of the new
-  triangles, so the features the start caught stay), valence flips and tangential relaxation
+* Remeshing (Botsch & Kobbelt's loop with a size field), ``ROUNDS`` rounds of: a target
+  length per vertex from the surface's bend at the scale of the edges (:func:`target_lengths`:
+  the curvature along each edge from the exact normals at its ends, the length whose chord
+  leaves its midpoint ``SIZE_DEVIATION`` of the target off the arc, clamped to ``MIN_SIZE`` of
+  it and graded by ``SIZE_GRADING``); edges longer than ``4/3`` of their target split at
+  their midpoints' projections (:func:`split_long_edges`); edges shorter than ``4/5`` of it
+  collapsed (:func:`collapse_short_edges`, compiled: an independent set per pass, each
+  collapse keeping the mesh manifold, no edge longer than ``4/3`` of the target, no triangle
+  turned over, and the removed positions within ``COLLAPSE_DEVIATION`` of the target of the
+  new triangles, so the features the start caught stay); valence flips (which may lower a
+  pair's radius ratio to ``FLIP_KEEP`` of the old one) and tangential relaxation
   (:func:`splineviz.pointcloud.relaxation.optimize`), every moved vertex projected onto the
-  spline itself, not onto the start mesh.
-* Refinement: edges whose midpoint lies more than ``REFINE_DEVIATION`` of the target length
-  off the surface (where it bends within an edge) are split at the midpoint's projection
-  (:func:`refine_deviating_edges`), so no triangle cuts far across a bend; then flips and
-  relaxation and the refinement again (``REFINE_ROUNDS``). The splits cost regularity where
-  the surface bends within an edge (the bonsai's leaves: valence-6 share 72 -> 63 % on a
-  leafy crop, Hausdorff 1.38 -> 0.63 grid steps).
+  spline itself, not onto the start mesh. The splits are woven into the loop, so the flips
+  and the relaxation after them regularise the finer mesh where the surface bends. The whole
+  bonsai (valence-6 share of interior vertices, with the refinement rounds below): 65.4 ->
+  70.8 % (valences 4 / 5 / 7 / 8: 2.3 / 13.3 / 17.2 / 1.4 -> 0.7 / 12.3 / 15.6 / 0.4 %) for
+  2.5 % more triangles, mean radius ratio 0.938 -> 0.941; the whole tooth 75.2 -> 79.0 %;
+  the leafy 40^3 crop 63.3 -> 69.7 % (its border on the data box, where vertices stay, holds
+  most of its valence-7 vertices).
+* Refinement: edges whose midpoint still lies more than ``REFINE_DEVIATION`` of the target
+  length off the surface (where it bends within an edge of the smallest size, the bonsai's
+  leaf rims) are split at the midpoint's projection (:func:`refine_deviating_edges`), so no
+  triangle cuts far across a bend, then flips and relaxation regularise the splits' valence-4
+  vertices; twice (``REFINE_ROUNDS``). The last flips and relaxation leave a few edges
+  deviating again (the leafy crop: 94 of 34,233 interior edges farther than 0.2 edge lengths
+  from the surface at their midpoints, 15 farther than 0.3, the largest 0.53; 11, 7 and 0.49
+  before the sizing, when a refinement came last; ending with a refinement here costs
+  valence-6 share, 69.7 -> 67.5 %).
 * One sheet (optional): triangles that leave the surface (flying edges' own, where two sheets
   are about a grid step apart; the front's one-sheet test
   :func:`.spline_mesh.triangles_on_surface`) are dropped and their holes closed on the
@@ -75,7 +90,7 @@ COLLAPSE_KEEP = 0.5
 COLLAPSE_DEVIATION = 0.15
 #: most valence a collapse may create
 MAX_VALENCE = 9
-#: rounds of collapses, flips and relaxation
+#: rounds of sizing, splits, collapses, flips and relaxation
 ROUNDS = 3
 #: after the rounds, an edge whose midpoint lies farther than this share of the target length
 #: from the surface is split at the midpoint's projection (where the surface bends within an
@@ -84,10 +99,30 @@ ROUNDS = 3
 REFINE_DEVIATION = 0.2
 #: most passes of that refinement
 REFINE_PASSES = 3
-#: rounds of flips and relaxation after the refinement, each followed by the refinement again
-#: (a split edge's new vertex has valence 4, its opposite corners one more): the leafy 40^3
-#: crop of the bonsai, valence-6 share 60 -> 63 %, Hausdorff 0.61 -> 0.63 grid steps
-REFINE_ROUNDS = 1
+#: rounds of the refinement, each followed by flips and relaxation (a split edge's new vertex
+#: has valence 4, its opposite corners one more; the flips and relaxation after the last
+#: refinement mend them: the leafy 40^3 crop of the bonsai, valence-6 share 67.5 -> 69.7 %
+#: for refinement, flips and relaxation, refinement against twice refinement, flips and
+#: relaxation)
+REFINE_ROUNDS = 2
+#: a flip may lower the pair's smallest radius ratio to this share of the old one (the
+#: relaxation after it mends the triangles; :data:`~.relaxation.FLIP_QUALITY_KEEP`, 0.6,
+#: refuses most flips where the surface bends within an edge). The leafy crop: valence-6
+#: share 64.7 / 68.2 / 69.3 / 69.1 % and mean radius ratio 0.933 / 0.925 / 0.923 / 0.921 at
+#: 0.6 / 0.3 / 0.15 / 0
+FLIP_KEEP = 0.15
+#: the chord error the sizing allows, as a share of the target length (:func:`target_lengths`).
+#: The leafy crop: 0.05 / 0.1 / 0.2 give 37,587 / 26,261 / 22,299 triangles at valence-6
+#: shares 66.8 / 64.7 / 66.8 % (after the loop, flips at 0.6; without sizing 21,537
+#: triangles). Sizing by the midpoints' distance to the surface instead of the normals
+#: (what the refinement measures): 68.3 against 69.7 % with 840 more triangles
+SIZE_DEVIATION = 0.2
+#: the smallest target, as a share of the target length (DEFAULT_MIN_LENGTH grid steps at
+#: least)
+MIN_SIZE = 0.4
+#: the target length grows by at most this per unit of distance (the leafy crop, away from
+#: the data box: valence-6 share 70.1 / 70.5 / 70.4 % at 0.3 / 0.5 / 1.0, flips at 0.6)
+SIZE_GRADING = 0.5
 #: spline samples evaluated at once (bounds the memory of the start grid)
 SLAB_POINTS = 2_000_000
 #: points per task of the parallel Newton projection
@@ -280,12 +315,15 @@ def _fan_distance2(p, m, a, b, v, faces, vf_ptr, vf_idx):
 
 
 @numba.njit(cache=True)
-def _collapse_pass(v, faces, alive, ea, eb, vv_ptr, vv_idx, vf_ptr, vf_idx, fixed, long2,
-                   keep, max_valence, deviation2, moved):
+def _collapse_pass(v, faces, alive, ea, eb, vv_ptr, vv_idx, vf_ptr, vf_idx, fixed, size,
+                   long2, keep, max_valence, deviation2, moved):
     """Collapse the edges ``(ea[k], eb[k])`` (shortest first) onto their midpoints where the
-    mesh stays manifold and both ends stay within ``sqrt(deviation2)`` of the triangles around
-    the midpoint; the 1-rings of both ends are locked for the rest of the pass, so the
-    adjacency read from the CSR arrays stays valid. Returns the number of collapses."""
+    mesh stays manifold, no edge at the midpoint is longer than ``sqrt(long2)`` times the
+    edge's target ``(size[a] + size[b]) / 2`` (``size (V,)``: target lengths per vertex) and
+    both ends stay within ``sqrt(deviation2)`` times that target of the triangles around the
+    midpoint; the kept end takes the smaller target. The 1-rings of both ends are locked for
+    the rest of the pass, so the adjacency read from the CSR arrays stays valid. Returns the
+    number of collapses."""
     n = v.shape[0]
     locked = np.zeros(n, dtype=np.bool_)
     m = np.empty(3)
@@ -311,12 +349,13 @@ def _collapse_pass(v, faces, alive, ea, eb, vv_ptr, vv_idx, vf_ptr, vf_idx, fixe
             continue
         for c in range(3):
             m[c] = 0.5 * (v[a, c] + v[b, c])
+        target2 = (0.5 * (size[a] + size[b])) ** 2
         ok = True
         for end in (a, b):
             for i in range(vv_ptr[end], vv_ptr[end + 1]):
                 x = vv_idx[i]
                 d0, d1, d2 = v[x, 0] - m[0], v[x, 1] - m[1], v[x, 2] - m[2]
-                if x != a and x != b and d0 * d0 + d1 * d1 + d2 * d2 > long2:
+                if x != a and x != b and d0 * d0 + d1 * d1 + d2 * d2 > long2 * target2:
                     ok = False
             # no surviving triangle turned over
             for i in range(vf_ptr[end], vf_ptr[end + 1]):
@@ -333,11 +372,13 @@ def _collapse_pass(v, faces, alive, ea, eb, vv_ptr, vv_idx, vf_ptr, vf_idx, fixe
                     ok = False
         if not ok:
             continue
-        if (_fan_distance2(v[a], m, a, b, v, faces, vf_ptr, vf_idx) > deviation2
-                or _fan_distance2(v[b], m, a, b, v, faces, vf_ptr, vf_idx) > deviation2):
+        if (_fan_distance2(v[a], m, a, b, v, faces, vf_ptr, vf_idx) > deviation2 * target2
+                or _fan_distance2(v[b], m, a, b, v, faces, vf_ptr, vf_idx)
+                > deviation2 * target2):
             continue
         for c in range(3):
             v[a, c] = m[c]
+        size[a] = min(size[a], size[b])
         moved[a] = True
         for i in range(vf_ptr[b], vf_ptr[b + 1]):
             f = vf_idx[i]
@@ -362,10 +403,10 @@ def _compact(vertices, faces):
     return vertices[used], remap[faces]
 
 
-def collapse_short_edges(spline, iso, vertices, faces, length: float, tol: float,
-                         passes: int = 8):
-    """Collapse edges shorter than ``SHORT * length`` onto their midpoints, projected onto
-    ``s = iso``; border vertices (the data box) stay.
+def collapse_short_edges(spline, iso, vertices, faces, length, tol: float,
+                         passes: int = 8, return_sizes: bool = False):
+    """Collapse edges shorter than ``SHORT`` times their target length onto their midpoints,
+    projected onto ``s = iso``; border vertices (the data box) stay.
 
     Parameters
     ----------
@@ -373,22 +414,28 @@ def collapse_short_edges(spline, iso, vertices, faces, length: float, tol: float
     iso : float
     vertices : (V, 3) on the surface
     faces : (F, 3)
-    length : float, target edge length
+    length : float or (V,)
+        Target edge length, or one per vertex (an edge's target: the mean of its ends').
     tol : float, Newton tolerance on |s - iso|
     passes : int, most passes (each one an independent set of collapses)
+    return_sizes : bool
+        Also return the per-vertex targets of the kept vertices (a collapse keeps the
+        smaller of its ends').
 
     Returns
     -------
-    vertices : (V', 3), faces : (F', 3), collapses : int
+    vertices : (V', 3), faces : (F', 3), collapses : int[, sizes : (V',)]
     """
     v = np.ascontiguousarray(vertices, dtype=np.float64).copy()
     f = np.ascontiguousarray(faces, dtype=np.int64).copy()
+    size = np.ascontiguousarray(np.broadcast_to(np.asarray(length, dtype=np.float64),
+                                                (len(v),))).copy()
     total = 0
     for _ in range(passes):
         e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
         e = e[e[:, 0] < e[:, 1]]  # each interior edge once (the other side has it reversed)
         d2 = np.einsum("ij,ij->i", v[e[:, 0]] - v[e[:, 1]], v[e[:, 0]] - v[e[:, 1]])
-        short = d2 < (SHORT * length) ** 2
+        short = d2 < (SHORT * 0.5 * (size[e[:, 0]] + size[e[:, 1]])) ** 2
         if not short.any():
             break
         e, d2 = e[short], d2[short]
@@ -399,15 +446,18 @@ def collapse_short_edges(spline, iso, vertices, faces, length: float, tol: float
         moved = np.zeros(len(v), dtype=np.bool_)
         k = _collapse_pass(v, f, alive, np.ascontiguousarray(e[:, 0]),
                            np.ascontiguousarray(e[:, 1]), vv_ptr, vv_idx, vf_ptr, vf_idx,
-                           fixed, (LONG * length) ** 2, COLLAPSE_KEEP, MAX_VALENCE,
-                           (COLLAPSE_DEVIATION * length) ** 2, moved)
+                           fixed, size, LONG ** 2, COLLAPSE_KEEP, MAX_VALENCE,
+                           COLLAPSE_DEVIATION ** 2, moved)
         f = f[alive]
         if moved.any():
             v[moved], _n = _project(spline, v[moved], iso, 30, tol)
         total += k
         if k == 0:
             break
+    used = np.flatnonzero(np.bincount(f.ravel(), minlength=len(v)))
     v, f = _compact(v, f)
+    if return_sizes:
+        return v, f, total, size[used]
     return v, f, total
 
 
@@ -484,6 +534,99 @@ def refine_deviating_edges(spline, iso, vertices, faces, deviation: float, tol: 
     return v, f, total
 
 
+def _unit_gradients(spline, points):
+    """Unit spline gradients ``(N, 3)`` at ``points (N, 3)`` (zero where the gradient is)."""
+    fast = spline_kernels.compiled(spline)
+    g = fast.value_gradient(points)[1] if fast is not None else spline.gradient(points)
+    norm = np.linalg.norm(g, axis=1, keepdims=True)
+    return np.divide(g, norm, out=np.zeros_like(g), where=norm > 0)
+
+
+def target_lengths(spline, vertices, faces, length: float, deviation: float,
+                   min_length: float, grading: float = None):
+    """Per-vertex target edge lengths from the surface's bend at the scale of the edges.
+
+    An edge ``(a, b)`` turns the exact normals (spline gradients) by ``|n_a - n_b|`` over
+    ``|a - b|``: the curvature along it, ``kappa`` (chord estimate ``2 sin(theta/2) / l``,
+    exact on a circle). A chord of length ``L`` on a circle of curvature ``kappa`` leaves its
+    midpoint ``kappa L^2 / 8`` off the arc, so the target ``sqrt(8 deviation / kappa)`` keeps
+    that within ``deviation``; a vertex takes the largest curvature of its edges, clamped to
+    ``[min_length, length]``, and the field is smoothed so that it grows by at most
+    ``grading`` per unit of distance (a sudden change of size costs irregular vertices).
+
+    Parameters
+    ----------
+    spline : Spline
+    vertices : (V, 3) on the surface
+    faces : (F, 3)
+    length : float, the target where the surface is flat
+    deviation : float, world units
+    min_length : float
+    grading : float, optional (default ``SIZE_GRADING``)
+
+    Returns
+    -------
+    (V,) target lengths
+    """
+    grading = SIZE_GRADING if grading is None else grading
+    n = _unit_gradients(spline, vertices)
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    e = np.unique(e[:, 0].astype(np.int64) * len(vertices) + e[:, 1])
+    a, b = e // len(vertices), e % len(vertices)
+    d = np.linalg.norm(vertices[a] - vertices[b], axis=1)
+    kappa = np.linalg.norm(n[a] - n[b], axis=1) / np.maximum(d, 1e-300)
+    k = np.zeros(len(vertices))
+    np.maximum.at(k, a, kappa)
+    np.maximum.at(k, b, kappa)
+    size = np.clip(np.sqrt(8.0 * deviation / np.maximum(k, 1e-300)), min_length, length)
+    # each pass lowers a target to its neighbours' plus the grading; a few passes until no
+    # target changes (the change travels (length - min_length) / grading, a few edges)
+    while True:
+        smaller = size.copy()
+        np.minimum.at(smaller, a, size[b] + grading * d)
+        np.minimum.at(smaller, b, size[a] + grading * d)
+        if np.array_equal(smaller, size):
+            break
+        size = smaller
+    return size
+
+
+def split_long_edges(spline, iso, vertices, faces, size, tol: float):
+    """Split the interior edges longer than ``LONG`` times their target (the mean of their
+    ends' ``size``) at their midpoints' projections onto ``s = iso`` (red-green, as
+    :func:`refine_deviating_edges`; border edges stay on the data box).
+
+    Parameters
+    ----------
+    spline : Spline
+    iso : float
+    vertices : (V, 3) on the surface
+    faces : (F, 3)
+    size : (V,) target lengths
+    tol : float, Newton tolerance on |s - iso|
+
+    Returns
+    -------
+    vertices : (V', 3), faces : (F', 3), sizes : (V',) (a new vertex: its edge's target),
+    splits : int
+    """
+    v, f = vertices, faces
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    key = e[:, 0].astype(np.int64) * len(v) + e[:, 1]
+    uniq, edge_id, counts = np.unique(key, return_inverse=True, return_counts=True)
+    a, b = uniq // len(v), uniq % len(v)
+    target = 0.5 * (size[a] + size[b])
+    split = (np.linalg.norm(v[a] - v[b], axis=1) > LONG * target) & (counts == 2)
+    if not split.any():
+        return v, f, size, 0
+    proj, _n = _project(spline, 0.5 * (v[a[split]] + v[b[split]]), iso, 30, tol)
+    new_vertex = np.full(len(uniq), -1, dtype=np.int64)
+    new_vertex[split] = len(v) + np.arange(int(split.sum()))
+    f = _split_marked(f, edge_id.reshape(3, -1).T, new_vertex)
+    return (np.concatenate([v, proj]), f, np.concatenate([size, target[split]]),
+            int(split.sum()))
+
+
 class _SplineSurface:
     """The projector :func:`splineviz.pointcloud.relaxation.relax` asks: Newton steps onto
     ``s = iso``."""
@@ -512,7 +655,7 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
     edge_length : float, optional
         Target edge length (default ``DEFAULT_EDGE_LENGTH`` grid steps, at least
         ``DEFAULT_MIN_LENGTH`` of one).
-    rounds : int, rounds of collapses, flips and relaxation
+    rounds : int, rounds of sizing, splits, collapses, flips and relaxation
     one_sheet : bool
         Drop the triangles that leave the surface by the front's one-sheet test (flying
         edges' own where two sheets are about a grid step apart, as on thin leaves) and close
@@ -559,14 +702,15 @@ def spline_remesh(spline, iso: float, planes=(), edge_length: float | None = Non
     with _stage(timings, "remesh"):
         for r in range(rounds):
             report(0.1 + 0.8 * r / rounds, f"remeshing (round {r + 1} of {rounds})")
-            v, f, _k = collapse_short_edges(spline, iso, v, f, length, tol)
-            v, f, _flips = optimize(v, f, surface, rounds=1)
-        v, f, _splits = refine_deviating_edges(spline, iso, v, f, REFINE_DEVIATION * length,
-                                               tol)
+            size = target_lengths(spline, v, f, length, SIZE_DEVIATION * length,
+                                  max(DEFAULT_MIN_LENGTH * step, MIN_SIZE * length))
+            v, f, size, _splits = split_long_edges(spline, iso, v, f, size, tol)
+            v, f, _k = collapse_short_edges(spline, iso, v, f, size, tol)
+            v, f, _flips = optimize(v, f, surface, rounds=1, flip_keep=FLIP_KEEP)
         for _ in range(REFINE_ROUNDS):
-            v, f, _flips = optimize(v, f, surface, rounds=1)
             v, f, _splits = refine_deviating_edges(spline, iso, v, f,
                                                    REFINE_DEVIATION * length, tol)
+            v, f, _flips = optimize(v, f, surface, rounds=1, flip_keep=FLIP_KEEP)
     if one_sheet:
         report(0.85, "closing holes")
         with _stage(timings, "holes"):
