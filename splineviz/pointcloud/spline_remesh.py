@@ -517,21 +517,35 @@ def refine_deviating_edges(spline, iso, vertices, faces, deviation: float, tol: 
     v, f = vertices, faces
     total = 0
     for _ in range(passes):
-        e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-        key = e[:, 0].astype(np.int64) * len(v) + e[:, 1]
-        uniq, edge_id, counts = np.unique(key, return_inverse=True, return_counts=True)
-        a, b = uniq // len(v), uniq % len(v)
+        a, b, edge_id, counts = _edges(v, f)
         mid = 0.5 * (v[a] + v[b])
         proj, _n = _project(spline, mid, iso, 30, tol)
         split = (np.linalg.norm(proj - mid, axis=1) > deviation) & (counts == 2)
         if not split.any():
             break
-        new_vertex = np.full(len(uniq), -1, dtype=np.int64)
-        new_vertex[split] = len(v) + np.arange(int(split.sum()))
-        v = np.concatenate([v, proj[split]])
-        f = _split_marked(f, edge_id.reshape(3, -1).T, new_vertex)
+        v, f = _split_at(v, f, edge_id, split, proj[split])
         total += int(split.sum())
     return v, f, total
+
+
+def _edges(vertices, faces):
+    """The mesh's edges: ends ``a (E,)``, ``b (E,)`` (``a < b``), each face corner's edge id
+    ``edge_id (3F,)`` (the edges v0 v1, v1 v2, v2 v0 of all faces in turn) and the faces per
+    edge ``counts (E,)``."""
+    n = len(vertices)
+    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    key = e[:, 0].astype(np.int64) * n + e[:, 1]
+    uniq, edge_id, counts = np.unique(key, return_inverse=True, return_counts=True)
+    return uniq // n, uniq % n, edge_id, counts
+
+
+def _split_at(vertices, faces, edge_id, split, points):
+    """The mesh with the edges ``split (E,)`` bool split at ``points (S, 3)``, one per split
+    edge in order (:func:`_split_marked`)."""
+    new_vertex = np.full(len(split), -1, dtype=np.int64)
+    new_vertex[split] = len(vertices) + np.arange(int(split.sum()))
+    return (np.concatenate([vertices, points]),
+            _split_marked(faces, edge_id.reshape(3, -1).T, new_vertex))
 
 
 def _unit_gradients(spline, points):
@@ -611,20 +625,14 @@ def split_long_edges(spline, iso, vertices, faces, size, tol: float):
     splits : int
     """
     v, f = vertices, faces
-    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    key = e[:, 0].astype(np.int64) * len(v) + e[:, 1]
-    uniq, edge_id, counts = np.unique(key, return_inverse=True, return_counts=True)
-    a, b = uniq // len(v), uniq % len(v)
+    a, b, edge_id, counts = _edges(v, f)
     target = 0.5 * (size[a] + size[b])
     split = (np.linalg.norm(v[a] - v[b], axis=1) > LONG * target) & (counts == 2)
     if not split.any():
         return v, f, size, 0
     proj, _n = _project(spline, 0.5 * (v[a[split]] + v[b[split]]), iso, 30, tol)
-    new_vertex = np.full(len(uniq), -1, dtype=np.int64)
-    new_vertex[split] = len(v) + np.arange(int(split.sum()))
-    f = _split_marked(f, edge_id.reshape(3, -1).T, new_vertex)
-    return (np.concatenate([v, proj]), f, np.concatenate([size, target[split]]),
-            int(split.sum()))
+    v, f = _split_at(v, f, edge_id, split, proj)
+    return v, f, np.concatenate([size, target[split]]), int(split.sum())
 
 
 class _SplineSurface:
