@@ -184,6 +184,14 @@ class View3D(QObject):
         self._camera_timer.setSingleShot(True)
         self._camera_timer.setInterval(0)
         self._camera_timer.timeout.connect(self._camera_to_model)
+        # the view's shape reaches the model after the resize event: a camera framed again
+        # (see Scene.aspect) is then drawn by an ordinary render, not by the render software
+        # OpenGL makes inside the resize
+        self._aspect = None
+        self._aspect_timer = QTimer(self)
+        self._aspect_timer.setSingleShot(True)
+        self._aspect_timer.setInterval(0)
+        self._aspect_timer.timeout.connect(self._aspect_to_model)
         self._syncing_camera = False
         self._refine_job = None
         #: counts the refine jobs started: frames on the way of an older one are dropped
@@ -299,6 +307,10 @@ class View3D(QObject):
             self.scene_view.camera_from_vtk()
         finally:
             self._syncing_camera = False
+
+    def _aspect_to_model(self) -> None:
+        if not self._closed and self._aspect is not None:
+            self.scene.aspect = self._aspect
 
     def _frame_start(self, *_):
         self._t_frame = time.perf_counter()
@@ -531,7 +543,8 @@ class View3D(QObject):
                 self._readout_timer.start()
             elif event.type() == QEvent.Type.Resize:
                 size = event.size()
-                self.scene.aspect = size.width() / max(size.height(), 1)
+                self._aspect = size.width() / max(size.height(), 1)
+                self._aspect_timer.start()
                 if self.spline_scene is not None:
                     self.spline_scene.view_resized()
             elif event.type() == QEvent.Type.Leave:
@@ -591,6 +604,7 @@ class View3D(QObject):
             self._camera_timer.stop()
             self._render_timer.stop()
             self._overlay_timer.stop()
+            self._aspect_timer.stop()
             self._refiner.close()
             if self.scene_view is not None:
                 self.scene.changed.disconnect(self.request_render)
