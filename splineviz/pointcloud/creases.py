@@ -193,9 +193,10 @@ def detect_creases(queries: np.ndarray, projector) -> Creases:
     split by their normals (two clusters seeded by the two most different normals) and then
     by k-planes (each point to the nearer plane, the planes refitted); accepted when the
     planes' oriented normals are ``MIN_ANGLE`` or more apart, each side holds ``MIN_SHARE``
-    of the points, the wedge of the two half-planes explains the points far better than the
-    quadric (``PLANES_GAIN``) and to within the noise (``PLANES_NOISE``), and the points
-    near its line show no fillet (:func:`_rounded`).
+    of the points, the residual of the wedge of the two half-planes, less the noise's share,
+    is far below the quadric's (``PLANES_GAIN``, :func:`_explains_better`) and within the
+    noise (``PLANES_NOISE``), and the points near its line show no fillet
+    (:func:`_rounded`).
 
     Parameters
     ----------
