@@ -1,4 +1,5 @@
-"""``splineviz remesh POINTS -o mesh.ply [--edge-length L | --rho R] [--report report.json]``.
+"""``splineviz remesh POINTS -o mesh.ply [--edge-length L | --rho R] [--no-sharp-creases]
+[--report report.json]``.
 
 Reads a point cloud, runs :func:`~splineviz.pointcloud.remesh.remesh` with a tqdm progress bar
 on stderr, writes the mesh, and optionally a JSON report (parameters, stage timings, front
@@ -60,7 +61,7 @@ def run(args) -> int:
         mesh = remesh(cloud, edge_length=args.edge_length, rho=args.rho, progress=progress,
                       min_length=args.min_length, max_length=args.max_length,
                       smoothing=args.smoothing, optimize_mesh=not args.no_optimize,
-                      report=report)
+                      sharp_creases=not args.no_sharp_creases, report=report)
     finally:
         bar.close()
     if report.front.get("truncated"):
@@ -115,6 +116,9 @@ def register(subparsers) -> None:
                         "point from the noise in the data)")
     p.add_argument("--no-optimize", action="store_true",
                    help="skip the valence flips and tangential relaxation")
+    p.add_argument("--no-sharp-creases", action="store_true",
+                   help="round the sharp edges of scanned parts like the rest of the surface "
+                        "(default: vertices put on them, edges along them)")
     p.add_argument("--report", default=None, help="write a JSON report here")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)

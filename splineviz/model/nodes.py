@@ -433,8 +433,8 @@ class PointsNode(Node):
 class MeshNode(Node):
     """A triangle mesh: read from a file or made by remeshing a point cloud (thesis ch. 7).
 
-    ``points_id``, ``edge_length`` and ``rho`` record how a remeshed mesh was made; ``stats``
-    is its :func:`splineviz.mesh_quality` report.
+    ``points_id``, ``edge_length``, ``rho`` and ``sharp_creases`` record how a remeshed mesh
+    was made; ``stats`` is its :func:`splineviz.mesh_quality` report.
     """
 
     kind: str = Field(default="mesh", exclude=True, frozen=True)
@@ -446,6 +446,7 @@ class MeshNode(Node):
     visible: bool = True
     edge_length: Positive | None = None
     rho: Annotated[float, Field(gt=0.0, le=10.0, allow_inf_nan=False)] | None = None
+    sharp_creases: bool | None = None
     shown_in: Side = per_view("both")
     vertices: np.ndarray | None = Field(default=None, exclude=True, repr=False)
     faces: np.ndarray | None = Field(default=None, exclude=True, repr=False)

@@ -244,7 +244,8 @@ def remesh(pc, edge_length: float | None = None, rho: float | None = None, progr
     return pv.PolyData(vertices, cells)
 
 
-def remesh_with_quality(points, edge_length=None, rho=None, job=None) -> dict:
+def remesh_with_quality(points, edge_length=None, rho=None, job=None, *,
+                        sharp_creases: bool = True) -> dict:
     """:func:`remesh` plus what a viewer shows of the result: ``{"vertices" (V, 3), "faces"
     (F, 3), "normals" (V, 3), "quality"}`` (:func:`~splineviz.pointcloud.quality.mesh_quality`
     against the points). ``job``: an object with ``progress(fraction, message)``, e.g. the
@@ -252,7 +253,8 @@ def remesh_with_quality(points, edge_length=None, rho=None, job=None) -> dict:
     from splineviz.pointcloud.quality import mesh_quality
 
     progress = None if job is None else job.progress
-    mesh = remesh(points, edge_length=edge_length, rho=rho, progress=progress)
+    mesh = remesh(points, edge_length=edge_length, rho=rho, progress=progress,
+                  sharp_creases=sharp_creases)
     if progress is not None:
         progress(None, "measuring the mesh")
     vertices = np.asarray(mesh.points, dtype=np.float64)

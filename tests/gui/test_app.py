@@ -326,6 +326,29 @@ def test_remesh_panel_runs_remesh_in_a_job_and_cancel_acts_at_once(window, share
     assert not window.scene.of_kind(MeshNode) and not window.cancel_button.isVisible()
 
 
+def test_remesh_panel_sharp_creases_box_is_passed_and_recorded(window):
+    from splineviz.core.points import PointCloud
+
+    rng = np.random.default_rng(8)
+    p = rng.uniform(-1.0, 1.0, size=(6000, 3))
+    p[np.arange(6000), rng.integers(0, 3, 6000)] = rng.choice([-1.0, 1.0], 6000)
+    window.scene.add_points(PointCloud(p), "cube")
+    panel = window.remesh_panel
+    assert panel.sharp_creases.isChecked()  # on by default, as sv.remesh
+    on_edge = {}
+    for sharp in (True, False):
+        panel.sharp_creases.setChecked(sharp)
+        panel.run()
+        window.wait_idle(300)
+        assert window.last_error is None
+        mesh = window.scene.of_kind(MeshNode)[-1]
+        assert mesh.sharp_creases is sharp
+        s = np.sort(np.abs(mesh.vertices), axis=1)
+        on_edge[sharp] = int(np.sum(np.hypot(s[:, 1] - 1.0, s[:, 2] - 1.0) < 1e-3))
+    # the box off: the cube's edges are rounded like the rest (no vertex on them)
+    assert on_edge[True] > 100 and on_edge[False] < 0.1 * on_edge[True]
+
+
 @pytest.mark.slow
 def test_bonsai_opens_in_a_worker_and_renders(window, shared_data):
     window.open_path(shared_data / "volumes" / "bonsai.vti", mode="replace", isovalue=40.0)

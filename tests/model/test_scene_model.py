@@ -168,8 +168,8 @@ def _every_kind(tmp_path):
     tri = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
            np.array([[0, 1, 2], [0, 1, 3]]))
     scene.add_mesh(*tri, name="remeshed", normals=np.tile([0, 0, 1.0], (4, 1)),
-                   points_id=pts.id, rho=0.5, color=(0.2, 0.9, 0.2), opacity=0.7,
-                   show_edges=False, visible=False)
+                   points_id=pts.id, rho=0.5, sharp_creases=False, color=(0.2, 0.9, 0.2),
+                   opacity=0.7, show_edges=False, visible=False)
     scene.add_clip_plane((0.1, 0.2, 0.3), (0, 0, -1), volume=va, show_widget=False,
                          name="cut a")
     scene.add_clip_plane((0, 0, 0), (1, 1, 0), enabled=False)

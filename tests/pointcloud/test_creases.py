@@ -199,3 +199,22 @@ def test_a_rounded_edge_is_told_from_a_sharp_one():
                        np.array([[1.0, 0, 0]]), np.array([[radius, 0, -0.3 - radius]]))
         rms = np.array([noise])
         assert _rounded(rel[None], side[None], wedge, spacing, rms)[0] == rounded
+
+
+def test_cli_keeps_creases_unless_told_not_to(tmp_path, capsys):
+    import json
+
+    from splineviz.cli import main as cli_main
+
+    src = tmp_path / "cube.xyz"
+    np.savetxt(src, _cube(6000, 0.0, seed=8))
+    on_edge = {}
+    for flags in ([], ["--no-sharp-creases"]):
+        out, report = tmp_path / f"m{len(flags)}.ply", tmp_path / f"r{len(flags)}.json"
+        assert cli_main(["remesh", str(src), "-o", str(out), "--report", str(report), "-q",
+                         *flags]) == 0
+        v = np.asarray(sv.read_mesh(out).points)
+        on_edge[bool(flags)] = int(np.sum(_edge_distance(v) < 1e-3))
+        assert json.loads(report.read_text())["parameters"]["sharp_creases"] == (not flags)
+    # sharpened: vertices all along the 12 edges (169 here); rounded: next to none (1)
+    assert on_edge[False] > 100 and on_edge[True] < 0.1 * on_edge[False]

@@ -13,6 +13,7 @@ from __future__ import annotations
 import scipy.spatial  # noqa: F401
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import (
+    QCheckBox,
     QComboBox,
     QDoubleSpinBox,
     QFormLayout,
@@ -60,6 +61,11 @@ class RemeshPanel(QWidget):
         self.edge.setRange(1e-6, 1e6)
         self.edge.setValue(1.0)
         self.edge.setToolTip("Target edge length in world units (uniform mode)")
+        self.sharp_creases = QCheckBox("Sharp creases")
+        self.sharp_creases.setChecked(True)
+        self.sharp_creases.setToolTip("Keep the sharp edges of scanned parts (two flat sides "
+                                      "meeting): vertices on the edge, mesh edges along it; "
+                                      "off: the surface is rounded there")
         self.point_size = QSpinBox()
         self.point_size.setRange(1, 20)
         self.point_size.setValue(3)
@@ -74,6 +80,7 @@ class RemeshPanel(QWidget):
         form.addRow("Mode", self.mode)
         form.addRow("rho (rad)", self.rho)
         form.addRow("Edge length", self.edge)
+        form.addRow(self.sharp_creases)
         form.addRow("Point size", self.point_size)
         form.addRow(self.run_button)
         form.addRow(self.stats)
@@ -137,13 +144,14 @@ class RemeshPanel(QWidget):
         adaptive = self.mode.currentIndex() == 0
         edge = None if adaptive else float(self.edge.value())
         rho = float(self.rho.value()) if adaptive else None
+        sharp = self.sharp_creases.isChecked()
 
         def done(out, node=node):
             def add():
                 mesh = self.scene.add_mesh(
                     out["vertices"], out["faces"], name=f"mesh of {node.name}",
                     normals=out["normals"], points_id=node.id if node.id in self.scene else None,
-                    edge_length=edge, rho=rho, stats=out["quality"])
+                    edge_length=edge, rho=rho, sharp_creases=sharp, stats=out["quality"])
                 self.scene.select(mesh)
 
             undo_stack(self.scene).change(f"Remesh {node.name}", add)
@@ -153,4 +161,5 @@ class RemeshPanel(QWidget):
         # remesher is named, not imported here (its imports would freeze the window)
         return self.jobs.run(f"Remeshing {node.name}", call_named,
                              "splineviz.pointcloud.remesh:remesh_with_quality", node.data,
-                             edge_length=edge, rho=rho, on_done=done, process=True)
+                             edge_length=edge, rho=rho, sharp_creases=sharp, on_done=done,
+                             process=True)
