@@ -50,7 +50,7 @@ QUADRIC_NOISE = 1.2
 QUADRIC_FLOOR = 0.05
 #: the wedge of the two sides must explain the points this much better (RMS ratio, the
 #: noise's share taken off both residuals: :func:`_explains_better`) than one quadric: a
-#: smooth bend is a quadric, a crease is not (a cube with 0.58 spacings of noise: 0.7 found
+#: smooth bend is a quadric, a crease is not (a cube with 0.57 spacings of noise: 0.7 found
 #: 58 % of the queries on its edges and none of 2000 on its faces; 0.8 found 65 %, and 0.25 %
 #: of the faces' queries)
 PLANES_GAIN = 0.7
